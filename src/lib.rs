@@ -1,0 +1,29 @@
+//! littoral — out-of-core spectral photon mapping for coastal waters.
+//!
+//! The modules, in data-flow order:
+//! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
+//! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
+//! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
+//! - [`store`]: the map file — streaming tile sort, codec, format, reader
+//!   ([`store::build_map`], [`store::MapFile`]).
+//! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
+//! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
+//!
+//! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
+//! (per-index random streams), [`progress`] (progress hooks), [`size`]
+//! (memory sizes such as `64MiB`).
+
+pub mod cache;
+pub mod error;
+pub mod photon;
+pub mod progress;
+pub mod query;
+pub mod rng;
+pub mod size;
+pub mod spectral;
+pub mod store;
+pub mod synth;
+
+pub use error::{Error, Result};
+pub use photon::Photon;
+pub use spectral::BandGrid;

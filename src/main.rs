@@ -1,0 +1,253 @@
+//! The `littoral` command line. Thin: parsing, progress bars and exit codes;
+//! the library does the work.
+
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use littoral::progress::Progress;
+use littoral::query::{PhotonMap, Search};
+use littoral::store::{build_map, MapFile};
+use littoral::synth::{Distribution, SynthSource};
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Mutex;
+
+#[derive(Parser)]
+#[command(name = "littoral", version, about = "Spectral photon mapping for coastal waters")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Photon map files: build synthetic maps, inspect, verify, query, dump.
+    #[command(subcommand)]
+    Map(MapCommand),
+}
+
+#[derive(Subcommand)]
+enum MapCommand {
+    /// Write a synthetic photon map (for tests, benchmarks and low-memory runs).
+    Synth(SynthArgs),
+    /// Print a JSON summary of a map.
+    Info { file: PathBuf },
+    /// Decode every tile and check every checksum.
+    Verify {
+        file: PathBuf,
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Print the photons near a point as JSON, nearest first.
+    Query(QueryArgs),
+    /// Print every photon as CSV: x,y,z,dx,dy,dz,band,power.
+    Dump { file: PathBuf },
+}
+
+#[derive(Args)]
+struct SynthArgs {
+    /// Number of photons.
+    #[arg(long)]
+    photons: u64,
+    /// Number of spectral bands (evenly spaced over 400-700 nm).
+    #[arg(long, default_value_t = 16)]
+    bands: usize,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, value_enum, default_value_t = Distribution::Water)]
+    distribution: Distribution,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
+    #[arg(long, default_value = "256MiB")]
+    mem_budget: String,
+    /// Producer threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    #[arg(long)]
+    out: PathBuf,
+    /// No progress on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+#[command(group(clap::ArgGroup::new("search").required(true).args(["k", "radius"])))]
+struct QueryArgs {
+    file: PathBuf,
+    /// Query point X,Y,Z in metres.
+    #[arg(long, allow_hyphen_values = true)]
+    at: String,
+    /// Number of nearest photons.
+    #[arg(long)]
+    k: Option<usize>,
+    /// With --k: ignore photons farther than this (m).
+    #[arg(long, requires = "k")]
+    max_radius: Option<f32>,
+    /// All photons within this radius (m).
+    #[arg(long)]
+    radius: Option<f32>,
+    /// Tile cache budget.
+    #[arg(long, default_value = "256MiB")]
+    mem_budget: String,
+}
+
+/// Progress bars on stderr, one per stage.
+struct Bars {
+    quiet: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Bars {
+    fn new(quiet: bool) -> Self {
+        Bars {
+            quiet,
+            bar: Mutex::new(None),
+        }
+    }
+    fn current(&self) -> Option<ProgressBar> {
+        self.bar.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+}
+
+impl Progress for Bars {
+    fn stage(&self, name: &str, total: u64) {
+        if self.quiet {
+            return;
+        }
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>14} [{bar:32}] {human_pos}/{human_len} {per_sec} eta {eta}")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar.set_message(name.to_string());
+        *self.bar.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar);
+    }
+    fn advance(&self, n: u64) {
+        if let Some(b) = self.current() {
+            b.inc(n);
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("littoral: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn run(cli: Cli) -> AnyResult<()> {
+    match cli.command {
+        Command::Map(cmd) => run_map(cmd),
+    }
+}
+
+fn run_map(cmd: MapCommand) -> AnyResult<()> {
+    match cmd {
+        MapCommand::Synth(a) => {
+            let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
+            if a.photons == 0 {
+                return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
+            }
+            let source = SynthSource::new(a.photons, a.bands, a.seed, a.distribution)?;
+            let bars = Bars::new(a.quiet);
+            let summary = build_map(&a.out, &source, a.threads, budget, &bars)?;
+            if !a.quiet {
+                eprintln!(
+                    "wrote {}: {} photons in {} tiles, {} bytes ({:.2} bytes/photon)",
+                    a.out.display(),
+                    summary.photons,
+                    summary.tiles,
+                    summary.file_bytes,
+                    summary.file_bytes as f64 / summary.photons.max(1) as f64
+                );
+            }
+            Ok(())
+        }
+        MapCommand::Info { file } => {
+            let map = MapFile::open(&file)?;
+            print_json(&map.info())
+        }
+        MapCommand::Verify { file, quiet } => {
+            let map = MapFile::open(&file)?;
+            let report = map.verify(&Bars::new(quiet))?;
+            print_json(&report)
+        }
+        MapCommand::Query(a) => {
+            let at = parse_point(&a.at)?;
+            let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
+            let search = match (a.k, a.radius) {
+                (Some(k), None) => Search::Nearest {
+                    k,
+                    max_radius: a.max_radius,
+                },
+                (None, Some(radius)) => Search::Radius { radius },
+                _ => unreachable!("clap enforces exactly one of --k and --radius"),
+            };
+            for (name, v) in [("--radius", a.radius), ("--max-radius", a.max_radius)] {
+                if v.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
+                    return Err(littoral::Error::invalid(name, "must be a finite radius >= 0").into());
+                }
+            }
+            let map = PhotonMap::new(MapFile::open(&a.file)?, budget)?;
+            let found = map.query(at, search)?;
+            let json: Vec<serde_json::Value> = found
+                .iter()
+                .map(|n| {
+                    let p = &n.photon;
+                    serde_json::json!({
+                        "x": p.position.x, "y": p.position.y, "z": p.position.z,
+                        "dx": p.direction.x, "dy": p.direction.y, "dz": p.direction.z,
+                        "band": p.band, "power": p.power,
+                        "distance": n.distance_sq.sqrt(),
+                    })
+                })
+                .collect();
+            print_json(&json)
+        }
+        MapCommand::Dump { file } => {
+            let map = MapFile::open(&file)?;
+            let stdout = std::io::stdout();
+            let mut out = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
+            match map.dump_csv(&mut out).and_then(|_| out.flush()) {
+                Ok(()) => Ok(()),
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+                Err(e) => match e.into_inner() {
+                    Some(inner) => Err(inner),
+                    None => Err("stdout: write failed".into()),
+                },
+            }
+        }
+    }
+}
+
+fn parse_point(text: &str) -> AnyResult<glam::Vec3> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| littoral::Error::invalid("--at", format!("'{text}' is not X,Y,Z")))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(littoral::Error::invalid("--at", format!("'{text}' is not X,Y,Z")).into()),
+    }
+}
+
+fn print_json<T: serde::Serialize>(value: &T) -> AnyResult<()> {
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    serde_json::to_writer_pretty(&mut out, value)?;
+    writeln!(out)?;
+    Ok(())
+}

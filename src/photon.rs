@@ -1,0 +1,181 @@
+//! The photon and its packed on-disk form.
+//!
+//! A photon is a position (m), the direction it was travelling when stored
+//! (unit vector, pointing along the flight, i.e. *incoming* to the site), a
+//! band index and a power (W per photon in its band). On disk a photon is a
+//! 16-byte record: position quantised to 16 bits per axis inside its tile's
+//! box, direction octahedral-encoded in 2 x 16 bits, band as u16, power as
+//! f32. See `store::codec` for the tile layout.
+//!
+//! Quantisation error (tested in this module and in the round-trip tests):
+//! - position: at most half a quantum per axis, `extent / (2 * 65535)`, plus
+//!   f32 rounding (a few ulp of the coordinate);
+//! - direction: at most [`OCT_MAX_ANGLE_ERROR_RAD`];
+//! - band and power: exact.
+
+use glam::Vec3;
+
+/// A stored photon, decoded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Photon {
+    /// Position in scene coordinates (m, z up, sea surface at z = 0).
+    pub position: Vec3,
+    /// Unit direction of flight when the photon was stored.
+    pub direction: Vec3,
+    /// Index into the map's band grid.
+    pub band: u16,
+    /// Power carried, W (spectral power integrated over the band).
+    pub power: f32,
+}
+
+/// Worst-case angle between a unit vector and its 2 x 16-bit octahedral code.
+pub const OCT_MAX_ANGLE_ERROR_RAD: f32 = 5.0e-5;
+
+/// Octahedral encoding of a unit vector into two 16-bit snorm values
+/// (Cigolle et al. 2014, "A Survey of Efficient Representations for
+/// Independent Unit Vectors").
+#[inline]
+pub fn oct_encode(d: Vec3) -> [u16; 2] {
+    let l1 = d.x.abs() + d.y.abs() + d.z.abs();
+    let (mut u, mut v) = if l1 > 0.0 {
+        (d.x / l1, d.y / l1)
+    } else {
+        (0.0, 0.0)
+    };
+    if d.z < 0.0 {
+        let (pu, pv) = (u, v);
+        u = (1.0 - pv.abs()) * sign_not_zero(pu);
+        v = (1.0 - pu.abs()) * sign_not_zero(pv);
+    }
+    [snorm16(u), snorm16(v)]
+}
+
+/// Inverse of [`oct_encode`]; returns a unit vector.
+#[inline]
+pub fn oct_decode(code: [u16; 2]) -> Vec3 {
+    let u = unsnorm16(code[0]);
+    let v = unsnorm16(code[1]);
+    let z = 1.0 - u.abs() - v.abs();
+    let (x, y) = if z < 0.0 {
+        (
+            (1.0 - v.abs()) * sign_not_zero(u),
+            (1.0 - u.abs()) * sign_not_zero(v),
+        )
+    } else {
+        (u, v)
+    };
+    Vec3::new(x, y, z).normalize()
+}
+
+#[inline]
+fn sign_not_zero(x: f32) -> f32 {
+    if x >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+#[inline]
+fn snorm16(x: f32) -> u16 {
+    ((x.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16
+}
+
+#[inline]
+fn unsnorm16(q: u16) -> f32 {
+    (q as i16 as f32 / 32767.0).max(-1.0)
+}
+
+/// Quantisation of one axis of a tile box to 16 bits.
+///
+/// `q = round((p - min) / step)` with `step = (max - min) / 65535`, and the
+/// decoded value is `min + q * step` in f32. A degenerate axis (max == min)
+/// encodes every value as 0 and decodes to `min`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisQuantizer {
+    min: f32,
+    step: f32,
+    inv_step: f64,
+}
+
+impl AxisQuantizer {
+    /// A quantiser for values in `[min, max]`.
+    pub fn new(min: f32, max: f32) -> Self {
+        let step = (max - min) / 65535.0;
+        let inv_step = if step > 0.0 { 1.0 / step as f64 } else { 0.0 };
+        AxisQuantizer {
+            min,
+            step,
+            inv_step,
+        }
+    }
+
+    /// 16-bit code of `p` (clamped into the box).
+    #[inline]
+    pub fn encode(&self, p: f32) -> u16 {
+        ((p as f64 - self.min as f64) * self.inv_step)
+            .round()
+            .clamp(0.0, 65535.0) as u16
+    }
+
+    /// Decoded value of code `q`.
+    #[inline]
+    pub fn decode(&self, q: u16) -> f32 {
+        self.min + q as f32 * self.step
+    }
+
+    /// Quantum size (m).
+    pub fn step(&self) -> f32 {
+        self.step
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    fn random_unit(rng: &mut Pcg32) -> Vec3 {
+        let z = 1.0 - 2.0 * rng.uniform_f32();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * rng.uniform_f32();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+
+    #[test]
+    fn octahedral_error_is_bounded() {
+        let mut rng = Pcg32::new(11, 0);
+        let mut worst = 0.0f32;
+        let mut dirs: Vec<Vec3> = (0..200_000).map(|_| random_unit(&mut rng)).collect();
+        // The poles, the equator and the octant seams are where encodings fold.
+        dirs.extend([Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]);
+        dirs.push(Vec3::new(1.0, 1.0, 0.0).normalize());
+        dirs.push(Vec3::new(-1.0, 1.0, -1e-7).normalize());
+        for d in dirs {
+            let e = oct_decode(oct_encode(d));
+            assert!((e.length() - 1.0).abs() < 1e-6);
+            let angle = d.dot(e).clamp(-1.0, 1.0).acos();
+            // acos loses precision near 1; use the cross product for small angles.
+            let angle = angle.min(d.cross(e).length().asin());
+            worst = worst.max(angle);
+        }
+        assert!(worst <= OCT_MAX_ANGLE_ERROR_RAD, "worst {worst}");
+        assert!(worst > 1e-6, "the bound should be tight-ish, worst {worst}");
+    }
+
+    #[test]
+    fn quantisation_error_is_half_a_step() {
+        let q = AxisQuantizer::new(-12.5, 37.25);
+        let half = q.step() * 0.5;
+        let mut rng = Pcg32::new(5, 1);
+        for _ in 0..100_000 {
+            let p = -12.5 + 49.75 * rng.uniform_f32();
+            let d = q.decode(q.encode(p));
+            assert!((d - p).abs() <= half * 1.0001 + 4.0 * f32::EPSILON * 37.25);
+        }
+        assert_eq!(q.encode(-12.5), 0);
+        assert_eq!(q.encode(37.25), 65535);
+        let flat = AxisQuantizer::new(-10.0, -10.0);
+        assert_eq!(flat.decode(flat.encode(-10.0)), -10.0);
+    }
+}

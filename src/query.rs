@@ -1,0 +1,174 @@
+//! Exact photon queries over a tiled map: k-nearest and fixed-radius.
+//!
+//! A query visits the tiles whose photon bounds meet its search sphere,
+//! nearest box first, and searches each tile's k-d tree; a kNN query stops
+//! when the next box is farther than its current k-th neighbour. The
+//! results are those of one k-d tree over every photon of the map (up to
+//! the order of photons at exactly equal distance). Each query pins one
+//! tile at a time, which is what lets the cache stay inside its budget.
+//!
+//! Not for: radiance estimation (the renderer builds that on these queries).
+
+use crate::cache::{CacheStats, TileCache};
+use crate::error::Result;
+use crate::photon::Photon;
+use crate::store::codec::morton3;
+use crate::store::MapFile;
+use glam::Vec3;
+use kiddo::SquaredEuclidean;
+use rayon::prelude::*;
+use std::num::NonZeroUsize;
+
+/// One neighbour of a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbour {
+    pub photon: Photon,
+    /// Squared distance from the query point (m^2).
+    pub distance_sq: f32,
+}
+
+/// What to search for around a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Search {
+    /// The `k` nearest photons, none farther than `max_radius` (m) if given.
+    Nearest { k: usize, max_radius: Option<f32> },
+    /// Every photon within `radius` (m).
+    Radius { radius: f32 },
+}
+
+/// A map file with its tile cache: the query interface of the store.
+pub struct PhotonMap {
+    file: MapFile,
+    cache: TileCache,
+}
+
+/// Boxes are compared with this slack so that f32 rounding in the box
+/// distance can never prune a tile holding a true neighbour.
+const PRUNE_SLACK: f32 = 1.0 + 1e-5;
+
+impl PhotonMap {
+    /// Queries over `file` with a tile cache of `cache_budget` bytes.
+    pub fn new(file: MapFile, cache_budget: u64) -> Result<PhotonMap> {
+        let cache = TileCache::new(&file, cache_budget)?;
+        Ok(PhotonMap { file, cache })
+    }
+
+    /// The underlying map file.
+    pub fn file(&self) -> &MapFile {
+        &self.file
+    }
+
+    /// Cache counters so far.
+    pub fn cache_stats(&self) -> CacheStats {
+        self.cache.stats()
+    }
+
+    /// The tile cache.
+    pub fn cache(&self) -> &TileCache {
+        &self.cache
+    }
+
+    /// Photons matching `search` around `at`, nearest first.
+    pub fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
+        let mut out = Vec::new();
+        self.query_into(at, search, &mut out)?;
+        Ok(out)
+    }
+
+    /// As [`PhotonMap::query`], reusing `out`.
+    pub fn query_into(&self, at: Vec3, search: Search, out: &mut Vec<Neighbour>) -> Result<()> {
+        out.clear();
+        let (k, limit_sq) = match search {
+            Search::Nearest { k, max_radius } => {
+                (k, max_radius.map_or(f32::INFINITY, |r| r * r))
+            }
+            Search::Radius { radius } => (usize::MAX, radius * radius),
+        };
+        if k == 0 || !(limit_sq >= 0.0) {
+            return Ok(());
+        }
+        let mut order: Vec<(f32, u32)> = self
+            .file
+            .tiles()
+            .iter()
+            .enumerate()
+            .map(|(t, e)| (e.bounds.distance_sq(at), t as u32))
+            .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK)
+            .collect();
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let q = at.to_array();
+        for (box_sq, t) in order {
+            let bound_sq = if out.len() >= k {
+                out[k - 1].distance_sq
+            } else {
+                limit_sq
+            };
+            if box_sq > bound_sq * PRUNE_SLACK {
+                break;
+            }
+            let tile = self.cache.get(&self.file, t)?;
+            let before = out.len();
+            let found = if k == usize::MAX {
+                tile.tree
+                    .query(&q)
+                    .within::<SquaredEuclidean<f32>>(bound_sq)
+                    .unsorted()
+                    .execute()
+            } else {
+                let want = NonZeroUsize::new(k).expect("k > 0");
+                if bound_sq.is_finite() {
+                    tile.tree
+                        .query(&q)
+                        .nearest_n::<SquaredEuclidean<f32>>(want)
+                        .within(bound_sq)
+                        .execute()
+                } else {
+                    tile.tree
+                        .query(&q)
+                        .nearest_n::<SquaredEuclidean<f32>>(want)
+                        .execute()
+                }
+            };
+            out.extend(found.into_iter().map(|r| Neighbour {
+                photon: tile.photons[r.item as usize],
+                distance_sq: r.distance,
+            }));
+            drop(tile);
+            if out.len() > before {
+                out.sort_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                out.truncate(k);
+            }
+        }
+        Ok(())
+    }
+
+    /// Run many queries, reordered along a Morton curve so that consecutive
+    /// queries share tiles, in parallel; results come back in input order.
+    pub fn query_batch(&self, points: &[Vec3], search: Search) -> Result<Vec<Vec<Neighbour>>> {
+        let b = &self.file.header().bounds;
+        let q = crate::store::codec::BoxQuantizer::new(b);
+        let mut order: Vec<(u64, u32)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (morton3(q.encode(p.clamp(b.min, b.max).to_array())), i as u32))
+            .collect();
+        order.sort_unstable();
+        let mut results: Vec<Vec<Neighbour>> = vec![Vec::new(); points.len()];
+        let sorted: Vec<(u32, Vec<Neighbour>)> = order
+            .par_chunks(256)
+            .map(|chunk| {
+                chunk
+                    .iter()
+                    .map(|&(_, i)| Ok((i, self.query(points[i as usize], search)?)))
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        for (i, r) in sorted {
+            results[i as usize] = r;
+        }
+        Ok(results)
+    }
+}

@@ -1,0 +1,28 @@
+//! Byte sizes on the command line: `64MiB`, `2GiB`, `500MB` or plain bytes.
+
+use crate::error::{Error, Result};
+
+/// Parse a size such as `64MiB` (binary), `500MB` (decimal) or `1048576`.
+pub fn parse_size(field: &str, text: &str) -> Result<u64> {
+    parse_size::parse_size(text.trim()).map_err(|e| {
+        Error::invalid(
+            field,
+            format!("'{text}' is not a size ({e}); use e.g. 64MiB, 2GiB, 500MB or plain bytes"),
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("b", "64MiB").unwrap(), 64 << 20);
+        assert_eq!(parse_size("b", "2GiB").unwrap(), 2 << 30);
+        assert_eq!(parse_size("b", "500MB").unwrap(), 500_000_000);
+        assert_eq!(parse_size("b", "12345").unwrap(), 12345);
+        let e = parse_size("--mem-budget", "lots").unwrap_err();
+        assert!(e.to_string().contains("--mem-budget"));
+    }
+}

@@ -1,0 +1,107 @@
+//! The map-building pipeline: parallel producers, one writer thread.
+//!
+//! Producers (rayon workers) turn fixed chunks of source indices into staged
+//! photons and send each chunk's photons as one batch over a bounded
+//! crossbeam channel; a dedicated writer thread owns the [`MapWriter`]. A
+//! pilot sample taken from the same source first fixes the partition. The
+//! channel bound keeps producers from running ahead of the writer, so memory
+//! is bounded by the writer's budget plus a few batches.
+
+use super::codec::StagedPhoton;
+use super::format::Aabb;
+use super::partition::Partition;
+use super::writer::{MapWriter, WriteSummary, WriterPlan};
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::spectral::BandGrid;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::path::Path;
+
+/// Source indices per producer batch.
+pub const BATCH_INDICES: u64 = 4096;
+/// Batches that may wait in the channel.
+const CHANNEL_BATCHES: usize = 4;
+/// Source indices sampled to build the partition.
+const PILOT_INDICES: u64 = 131_072;
+
+/// Anything that produces photons for a map from numbered source indices.
+///
+/// `generate` must be a pure function of the range: the photons of index
+/// `i` may not depend on which thread runs it or on what ran before, and
+/// every staged photon's `id` must be unique across the map.
+pub trait PhotonSource: Sync {
+    /// Number of source indices (e.g. photon paths traced).
+    fn indices(&self) -> u64;
+    /// Append the photons stored by source indices `range` to `out`.
+    fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>);
+    /// The spectral bands of the photons.
+    fn bands(&self) -> BandGrid;
+    /// Bounds of the scene.
+    fn bounds(&self) -> Aabb;
+}
+
+/// Build the map at `path` from `source` with `threads` producer threads
+/// (0 = rayon's default) within `mem_budget` bytes.
+pub fn build_map(
+    path: &Path,
+    source: &dyn PhotonSource,
+    threads: usize,
+    mem_budget: u64,
+    progress: &dyn Progress,
+) -> Result<WriteSummary> {
+    let n = source.indices();
+    // Pilot: evenly strided indices; its photons give the partition and the
+    // expected number of stored photons.
+    let pilot_n = n.min(PILOT_INDICES);
+    let mut pilot = Vec::new();
+    let mut staged = Vec::new();
+    for j in 0..pilot_n {
+        let i = j * n / pilot_n.max(1);
+        staged.clear();
+        source.generate(i..i + 1, &mut staged);
+        pilot.extend(staged.iter().map(|p| p.pos()));
+    }
+    let expected = if pilot_n == 0 {
+        0
+    } else {
+        (pilot.len() as u128 * n as u128 / pilot_n as u128) as u64
+    };
+    let plan = WriterPlan::new(mem_budget, expected)?;
+    let partition = Partition::from_pilot(&mut pilot, plan.cells_for(expected));
+    drop(pilot);
+    let mut writer = MapWriter::create(path, plan, partition, source.bands(), source.bounds())?;
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::invalid("threads", e.to_string()))?;
+    let (tx, rx) = crossbeam_channel::bounded::<Vec<StagedPhoton>>(CHANNEL_BATCHES);
+    progress.stage("trace photons", n);
+    let (write_result, _) = std::thread::scope(|scope| {
+        let handle = scope.spawn(move || -> Result<MapWriter> {
+            for batch in rx {
+                writer.push(&batch)?;
+            }
+            Ok(writer)
+        });
+        let batches = n.div_ceil(BATCH_INDICES);
+        // A send fails only when the writer stopped on an error; its error is
+        // the one reported, so producers just stop.
+        let produced = pool.install(|| {
+            (0..batches).into_par_iter().try_for_each(|b| {
+                let range = b * BATCH_INDICES..((b + 1) * BATCH_INDICES).min(n);
+                let len = range.end - range.start;
+                let mut out = Vec::with_capacity(len as usize);
+                source.generate(range, &mut out);
+                progress.advance(len);
+                tx.send(out).map_err(|_| ())
+            })
+        });
+        drop(tx);
+        (handle.join().expect("writer thread panicked"), produced)
+    });
+    progress.finish();
+    let writer = write_result?;
+    writer.finish(progress)
+}

@@ -1,0 +1,411 @@
+//! Tile blob codec: sorted, quantised, byte-shuffled, zstd-compressed records.
+//!
+//! A tile's photons are quantised to 16 bits per axis inside the tile's box,
+//! sorted by the Morton code of the quantised position (ties by photon id, so
+//! the order — and the blob — is a pure function of the photon set), and laid
+//! out as 16-byte records:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0..6  | Morton code delta from the previous record (48 bits) |
+//! | 6..10 | octahedral direction (2 x u16) |
+//! | 10..12 | band index (u16) |
+//! | 12..16 | power (f32 bits) |
+//!
+//! The records are then byte-shuffled (byte k of every record forms plane k)
+//! and the 16 planes compressed as one zstd frame. Sorting makes the deltas
+//! small and the shuffle puts their zero high bytes — and the few distinct
+//! band and power values — into long runs that zstd removes.
+
+use super::format::Aabb;
+use crate::photon::{oct_decode, AxisQuantizer, Photon};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Bytes per record before compression.
+pub const RECORD_BYTES: usize = 16;
+
+/// zstd level for tile blobs and spill runs: higher levels gain little on
+/// MB-sized tiles of shuffled records and cost compression speed.
+pub const ZSTD_LEVEL: i32 = 1;
+
+/// A photon on its way from the emitter to the map: full-precision position,
+/// encoded direction, and the id that breaks ties in the tile sort.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct StagedPhoton {
+    pub position: [f32; 3],
+    pub oct: [u16; 2],
+    pub band: u16,
+    pub _pad: u16,
+    pub power: f32,
+    /// Unique within a map; photons are sorted by it where positions tie.
+    pub id: u64,
+}
+
+const _: () = assert!(std::mem::size_of::<StagedPhoton>() == 32);
+
+impl StagedPhoton {
+    /// Stage a photon with its unique id.
+    pub fn new(p: &Photon, id: u64) -> Self {
+        StagedPhoton {
+            position: p.position.to_array(),
+            oct: crate::photon::oct_encode(p.direction),
+            band: p.band,
+            _pad: 0,
+            power: p.power,
+            id,
+        }
+    }
+
+    #[inline]
+    pub fn pos(&self) -> Vec3 {
+        Vec3::from_array(self.position)
+    }
+}
+
+/// Bytes of working memory the encoder needs per photon (staged record, sort
+/// key, raw record, compressed output bound), used for budgeting merges.
+pub const ENCODE_BYTES_PER_PHOTON: usize = 32 + 24 + RECORD_BYTES + RECORD_BYTES + 8;
+
+/// Spread the bits of `v` to every third bit (21-bit to 63-bit Morton spread).
+#[inline]
+fn part1by2(v: u16) -> u64 {
+    let mut x = v as u64;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// Inverse of [`part1by2`].
+#[inline]
+fn compact1by2(mut x: u64) -> u16 {
+    x &= 0x1249_2492_4924_9249;
+    x = (x ^ (x >> 2)) & 0x10c3_0c30_c30c_30c3;
+    x = (x ^ (x >> 4)) & 0x100f_00f0_0f00_f00f;
+    x = (x ^ (x >> 8)) & 0x001f_0000_ff00_00ff;
+    x = (x ^ (x >> 16)) & 0x001f_0000_0000_ffff;
+    x = (x ^ (x >> 32)) & 0x001f_ffff;
+    x as u16
+}
+
+/// 48-bit Morton code of a quantised position (x in the lowest bit).
+#[inline]
+pub fn morton3(q: [u16; 3]) -> u64 {
+    part1by2(q[0]) | (part1by2(q[1]) << 1) | (part1by2(q[2]) << 2)
+}
+
+/// Inverse of [`morton3`].
+#[inline]
+pub fn demorton3(m: u64) -> [u16; 3] {
+    [compact1by2(m), compact1by2(m >> 1), compact1by2(m >> 2)]
+}
+
+/// The quantisers of a tile box, one per axis.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxQuantizer([AxisQuantizer; 3]);
+
+impl BoxQuantizer {
+    pub fn new(b: &Aabb) -> Self {
+        BoxQuantizer([
+            AxisQuantizer::new(b.min.x, b.max.x),
+            AxisQuantizer::new(b.min.y, b.max.y),
+            AxisQuantizer::new(b.min.z, b.max.z),
+        ])
+    }
+    #[inline]
+    pub fn encode(&self, p: [f32; 3]) -> [u16; 3] {
+        [
+            self.0[0].encode(p[0]),
+            self.0[1].encode(p[1]),
+            self.0[2].encode(p[2]),
+        ]
+    }
+    #[inline]
+    pub fn decode(&self, q: [u16; 3]) -> Vec3 {
+        Vec3::new(
+            self.0[0].decode(q[0]),
+            self.0[1].decode(q[1]),
+            self.0[2].decode(q[2]),
+        )
+    }
+}
+
+/// An encoded tile, ready to append to a map file.
+#[derive(Clone, Debug)]
+pub struct EncodedTile {
+    pub blob: Vec<u8>,
+    pub count: u32,
+    pub quant: Aabb,
+    pub bounds: Aabb,
+    pub crc: u32,
+}
+
+/// Reusable scratch for [`encode_tile`] (keeps allocations out of the loop).
+#[derive(Default)]
+pub struct TileEncoder {
+    keys: Vec<(u64, u64, u32)>,
+    raw: Vec<u8>,
+    zstd: Option<zstd::bulk::Compressor<'static>>,
+}
+
+impl TileEncoder {
+    /// Encode `photons` (any order) as one tile blob.
+    pub fn encode(&mut self, photons: &[StagedPhoton]) -> std::io::Result<EncodedTile> {
+        let n = photons.len();
+        assert!(n > 0 && n <= u32::MAX as usize, "tile of {n} photons");
+        let mut quant = Aabb::EMPTY;
+        for p in photons {
+            quant.grow(p.pos());
+        }
+        let q = BoxQuantizer::new(&quant);
+        self.keys.clear();
+        self.keys.extend(
+            photons
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (morton3(q.encode(p.position)), p.id, i as u32)),
+        );
+        self.keys.sort_unstable();
+
+        self.raw.clear();
+        self.raw.resize(n * RECORD_BYTES, 0);
+        let mut bounds = Aabb::EMPTY;
+        let mut prev = 0u64;
+        for (i, &(m, _, idx)) in self.keys.iter().enumerate() {
+            let p = &photons[idx as usize];
+            bounds.grow(q.decode(demorton3(m)));
+            let mut rec = [0u8; RECORD_BYTES];
+            rec[0..6].copy_from_slice(&(m - prev).to_le_bytes()[..6]);
+            prev = m;
+            rec[6..8].copy_from_slice(&p.oct[0].to_le_bytes());
+            rec[8..10].copy_from_slice(&p.oct[1].to_le_bytes());
+            rec[10..12].copy_from_slice(&p.band.to_le_bytes());
+            rec[12..16].copy_from_slice(&p.power.to_le_bytes());
+            for (k, &b) in rec.iter().enumerate() {
+                self.raw[k * n + i] = b;
+            }
+        }
+        let zstd = match &mut self.zstd {
+            Some(c) => c,
+            none => none.insert(zstd::bulk::Compressor::new(ZSTD_LEVEL)?),
+        };
+        let blob = zstd.compress(&self.raw)?;
+        let crc = crc32fast::hash(&blob);
+        Ok(EncodedTile {
+            blob,
+            count: n as u32,
+            quant,
+            bounds,
+            crc,
+        })
+    }
+}
+
+/// Why a blob could not be decoded (the caller adds file and tile).
+#[derive(Debug, thiserror::Error)]
+pub enum DecodeError {
+    #[error("checksum mismatch (stored {stored:08x}, computed {computed:08x})")]
+    Checksum { stored: u32, computed: u32 },
+    #[error("zstd frame is corrupt: {0}")]
+    Zstd(std::io::Error),
+    #[error("decompressed to {got} bytes, expected {expected} for {count} photons")]
+    Length {
+        got: usize,
+        expected: usize,
+        count: u32,
+    },
+    #[error("Morton codes do not increase at photon {0}")]
+    Order(usize),
+}
+
+/// Reusable scratch for [`TileDecoder::decode`].
+#[derive(Default)]
+pub struct TileDecoder {
+    raw: Vec<u8>,
+    zstd: Option<zstd::bulk::Decompressor<'static>>,
+}
+
+impl TileDecoder {
+    /// Check `blob` against `crc` and decode its `count` photons into `out`
+    /// (cleared first), in stored (Morton) order.
+    pub fn decode(
+        &mut self,
+        blob: &[u8],
+        crc: u32,
+        count: u32,
+        quant: &Aabb,
+        out: &mut Vec<Photon>,
+    ) -> Result<(), DecodeError> {
+        let computed = crc32fast::hash(blob);
+        if computed != crc {
+            return Err(DecodeError::Checksum {
+                stored: crc,
+                computed,
+            });
+        }
+        self.decode_unchecked(blob, count, quant, out)
+    }
+
+    /// As [`TileDecoder::decode`] without the checksum (for benchmarks of the codec alone).
+    pub fn decode_unchecked(
+        &mut self,
+        blob: &[u8],
+        count: u32,
+        quant: &Aabb,
+        out: &mut Vec<Photon>,
+    ) -> Result<(), DecodeError> {
+        let n = count as usize;
+        let expected = n * RECORD_BYTES;
+        self.raw.clear();
+        // zstd writes at most `capacity()` bytes; a frame longer than
+        // expected fails here or below, never overruns.
+        self.raw.reserve_exact(expected.max(1));
+        let zstd = match &mut self.zstd {
+            Some(d) => d,
+            none => none.insert(zstd::bulk::Decompressor::new().map_err(DecodeError::Zstd)?),
+        };
+        // One spare byte of capacity tells "exactly expected" from "more".
+        let got = zstd
+            .decompress_to_buffer(blob, &mut self.raw)
+            .map_err(DecodeError::Zstd)?;
+        if got != expected {
+            return Err(DecodeError::Length {
+                got,
+                expected,
+                count,
+            });
+        }
+        let q = BoxQuantizer::new(quant);
+        let raw = &self.raw[..];
+        let plane = |k: usize| &raw[k * n..(k + 1) * n];
+        let (d0, d1, d2, d3, d4, d5) = (plane(0), plane(1), plane(2), plane(3), plane(4), plane(5));
+        let (o0, o1, o2, o3) = (plane(6), plane(7), plane(8), plane(9));
+        let (b0, b1) = (plane(10), plane(11));
+        let (p0, p1, p2, p3) = (plane(12), plane(13), plane(14), plane(15));
+        out.clear();
+        out.reserve(n);
+        let mut m = 0u64;
+        for i in 0..n {
+            let delta = u64::from_le_bytes([d0[i], d1[i], d2[i], d3[i], d4[i], d5[i], 0, 0]);
+            m = m.checked_add(delta).ok_or(DecodeError::Order(i))?;
+            if m >> 48 != 0 {
+                return Err(DecodeError::Order(i));
+            }
+            out.push(Photon {
+                position: q.decode(demorton3(m)),
+                direction: oct_decode([
+                    u16::from_le_bytes([o0[i], o1[i]]),
+                    u16::from_le_bytes([o2[i], o3[i]]),
+                ]),
+                band: u16::from_le_bytes([b0[i], b1[i]]),
+                power: f32::from_le_bytes([p0[i], p1[i], p2[i], p3[i]]),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photon::oct_encode;
+    use crate::rng::Pcg32;
+
+    #[test]
+    fn morton_round_trips() {
+        let mut rng = Pcg32::new(1, 2);
+        for _ in 0..10_000 {
+            let q = [rng.next_u32() as u16, rng.next_u32() as u16, rng.next_u32() as u16];
+            assert_eq!(demorton3(morton3(q)), q);
+        }
+        assert_eq!(morton3([1, 0, 0]), 1);
+        assert_eq!(morton3([0, 1, 0]), 2);
+        assert_eq!(morton3([0, 0, 1]), 4);
+        assert_eq!(morton3([0xffff; 3]), (1u64 << 48) - 1);
+    }
+
+    fn staged(n: usize, seed: u64) -> Vec<StagedPhoton> {
+        (0..n)
+            .map(|i| {
+                let mut r = Pcg32::new(seed, i as u64);
+                let p = Photon {
+                    position: Vec3::new(
+                        r.uniform_f32() * 10.0,
+                        r.uniform_f32() * 10.0,
+                        -r.uniform_f32() * 3.0,
+                    ),
+                    direction: Vec3::new(r.uniform_f32() - 0.5, 0.3, -1.0).normalize(),
+                    band: r.below(128) as u16,
+                    power: 0.25,
+                };
+                StagedPhoton::new(&p, i as u64)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tile_round_trips_within_quantisation_error() {
+        let photons = staged(5000, 3);
+        let t = TileEncoder::default().encode(&photons).unwrap();
+        let mut out = Vec::new();
+        TileDecoder::default()
+            .decode(&t.blob, t.crc, t.count, &t.quant, &mut out)
+            .unwrap();
+        assert_eq!(out.len(), photons.len());
+        let step = (t.quant.max - t.quant.min) / 65535.0;
+        // Match decoded photons to inputs by band, power and nearest position.
+        let mut used = vec![false; photons.len()];
+        for d in &out {
+            assert!(t.bounds.distance_sq(d.position) == 0.0);
+            let j = (0..photons.len())
+                .filter(|&j| !used[j] && photons[j].band == d.band)
+                .min_by(|&a, &b| {
+                    let da = photons[a].pos().distance_squared(d.position);
+                    let db = photons[b].pos().distance_squared(d.position);
+                    da.total_cmp(&db)
+                })
+                .unwrap();
+            used[j] = true;
+            let err = (photons[j].pos() - d.position).abs();
+            assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
+            assert_eq!(oct_encode(d.direction), photons[j].oct);
+            assert_eq!(d.power, photons[j].power);
+        }
+    }
+
+    #[test]
+    fn blob_is_independent_of_input_order() {
+        let mut photons = staged(3000, 4);
+        let a = TileEncoder::default().encode(&photons).unwrap();
+        photons.reverse();
+        let b = TileEncoder::default().encode(&photons).unwrap();
+        assert_eq!(a.blob, b.blob);
+        assert_eq!(a.crc, b.crc);
+    }
+
+    #[test]
+    fn corrupt_blobs_are_rejected() {
+        let photons = staged(2000, 5);
+        let t = TileEncoder::default().encode(&photons).unwrap();
+        let mut dec = TileDecoder::default();
+        let mut out = Vec::new();
+        let mut bad = t.blob.clone();
+        bad[t.blob.len() / 2] ^= 0x40;
+        assert!(matches!(
+            dec.decode(&bad, t.crc, t.count, &t.quant, &mut out),
+            Err(DecodeError::Checksum { .. })
+        ));
+        // A valid frame with the wrong count is caught by length.
+        assert!(matches!(
+            dec.decode(&t.blob, t.crc, t.count - 1, &t.quant, &mut out),
+            Err(DecodeError::Length { .. })
+        ));
+        assert!(dec
+            .decode(&t.blob[..t.blob.len() - 3], crc32fast::hash(&t.blob[..t.blob.len() - 3]), t.count, &t.quant, &mut out)
+            .is_err());
+    }
+}

@@ -1,0 +1,19 @@
+//! The out-of-core photon store: file format, tile codec, partition,
+//! streaming writer and memory-mapped reader.
+//!
+//! A map is written once by [`build_map`] (or a [`MapWriter`] fed directly)
+//! and never modified; readers map it read-only with [`MapFile::open`].
+
+pub mod build;
+pub mod codec;
+pub mod format;
+pub mod partition;
+pub mod reader;
+pub mod writer;
+
+pub use build::{build_map, PhotonSource};
+pub use codec::StagedPhoton;
+pub use format::{Aabb, Header, TileEntry};
+pub use partition::Partition;
+pub use reader::MapFile;
+pub use writer::{MapWriter, WriteSummary, WriterPlan};

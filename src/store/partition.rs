@@ -1,0 +1,192 @@
+//! The pilot k-d partition that assigns photons to tiles.
+//!
+//! Photons crowd toward the sea surface and onto the floor, so a uniform grid
+//! makes a few huge tiles and many empty ones. A pilot sample of positions is
+//! split at quantiles along the longest axis of each cell until there is one
+//! cell per intended tile; every photon is then routed by the split planes.
+//! The partition is approximate by design: a cell that still overflows is
+//! split again when the map is finished (see `writer`).
+
+use super::format::{Aabb, PartitionNode};
+use glam::Vec3;
+
+/// A k-d partition of space into cells (tiles), stored in preorder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Partition {
+    nodes: Vec<PartitionNode>,
+    /// For a split node, the index of its right child; for a leaf, its cell number.
+    link: Vec<u32>,
+    cells: u32,
+}
+
+impl Partition {
+    /// Split the pilot `points` into (at most) `cells` cells of nearly equal counts.
+    pub fn from_pilot(points: &mut [Vec3], cells: usize) -> Partition {
+        let mut nodes = Vec::new();
+        build(points, cells.max(1), &mut nodes);
+        Partition::from_nodes(nodes).expect("a built partition is well formed")
+    }
+
+    /// One cell holding everything.
+    pub fn single() -> Partition {
+        Partition::from_nodes(vec![PartitionNode::Leaf]).unwrap()
+    }
+
+    /// Rebuild from a preorder node list (as stored in a map header); `None`
+    /// when the list is not exactly one well-formed tree.
+    pub fn from_nodes(nodes: Vec<PartitionNode>) -> Option<Partition> {
+        let mut link = vec![0u32; nodes.len()];
+        let mut cells = 0u32;
+        // Iterative preorder walk: returns the index just past each subtree.
+        fn walk(nodes: &[PartitionNode], link: &mut [u32], cells: &mut u32, i: usize, depth: usize) -> Option<usize> {
+            if depth > 64 {
+                return None;
+            }
+            match nodes.get(i)? {
+                PartitionNode::Leaf => {
+                    link[i] = *cells;
+                    *cells += 1;
+                    Some(i + 1)
+                }
+                PartitionNode::Split { axis, value } => {
+                    if *axis > 2 || !value.is_finite() {
+                        return None;
+                    }
+                    let right = walk(nodes, link, cells, i + 1, depth + 1)?;
+                    link[i] = right as u32;
+                    walk(nodes, link, cells, right, depth + 1)
+                }
+            }
+        }
+        let end = walk(&nodes, &mut link, &mut cells, 0, 0)?;
+        (end == nodes.len()).then_some(Partition { nodes, link, cells })
+    }
+
+    /// The preorder node list (for the map header).
+    pub fn nodes(&self) -> &[PartitionNode] {
+        &self.nodes
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> u32 {
+        self.cells
+    }
+
+    /// The cell holding `p`.
+    #[inline]
+    pub fn cell_of(&self, p: Vec3) -> u32 {
+        let mut i = 0;
+        loop {
+            match self.nodes[i] {
+                PartitionNode::Leaf => return self.link[i],
+                PartitionNode::Split { axis, value } => {
+                    i = if p[axis as usize] < value {
+                        i + 1
+                    } else {
+                        self.link[i] as usize
+                    };
+                }
+            }
+        }
+    }
+}
+
+fn build(points: &mut [Vec3], cells: usize, nodes: &mut Vec<PartitionNode>) {
+    if cells <= 1 || points.len() < 2 {
+        nodes.push(PartitionNode::Leaf);
+        return;
+    }
+    let mut b = Aabb::EMPTY;
+    for &p in points.iter() {
+        b.grow(p);
+    }
+    let axis = b.longest_axis();
+    if b.max[axis] <= b.min[axis] {
+        nodes.push(PartitionNode::Leaf);
+        return;
+    }
+    let left_cells = cells / 2;
+    let k = (points.len() * left_cells / cells).clamp(1, points.len() - 1);
+    points.select_nth_unstable_by(k, |a, b| a[axis].total_cmp(&b[axis]));
+    let mut value = points[k][axis];
+    if value <= b.min[axis] {
+        // Many pilot points share the minimum (a flat floor): cut just above it.
+        value = next_up(b.min[axis]);
+    }
+    let mid = partition_in_place(points, |p| p[axis] < value);
+    nodes.push(PartitionNode::Split {
+        axis: axis as u8,
+        value,
+    });
+    let (left, right) = points.split_at_mut(mid);
+    build(left, left_cells, nodes);
+    build(right, cells - left_cells, nodes);
+}
+
+fn next_up(x: f32) -> f32 {
+    if x.is_nan() || x == f32::INFINITY {
+        return x;
+    }
+    let bits = x.to_bits();
+    let next = if x == 0.0 {
+        1
+    } else if x > 0.0 {
+        bits + 1
+    } else {
+        bits - 1
+    };
+    f32::from_bits(next)
+}
+
+/// Moves the elements for which `pred` holds to the front; returns their count.
+fn partition_in_place(v: &mut [Vec3], pred: impl Fn(&Vec3) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..v.len() {
+        if pred(&v[j]) {
+            v.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    #[test]
+    fn cells_are_balanced_for_crowded_points() {
+        let mut rng = Pcg32::new(9, 0);
+        let mut pts: Vec<Vec3> = (0..40_000)
+            .map(|_| {
+                let z = if rng.uniform_f32() < 0.25 {
+                    -10.0
+                } else {
+                    -(-(1.0 - rng.uniform_f32()).ln() * 2.0).min(9.99)
+                };
+                Vec3::new(rng.uniform_f32() * 100.0, rng.uniform_f32() * 100.0, z)
+            })
+            .collect();
+        let all = pts.clone();
+        let part = Partition::from_pilot(&mut pts, 16);
+        assert_eq!(part.cells(), 16);
+        let mut counts = vec![0usize; 16];
+        for p in &all {
+            counts[part.cell_of(*p) as usize] += 1;
+        }
+        let (lo, hi) = (counts.iter().min().unwrap(), counts.iter().max().unwrap());
+        assert!(*hi < 2 * *lo + 100, "{counts:?}");
+        let back = Partition::from_nodes(part.nodes().to_vec()).unwrap();
+        assert_eq!(back, part);
+    }
+
+    #[test]
+    fn malformed_node_lists_are_rejected() {
+        use PartitionNode::*;
+        assert!(Partition::from_nodes(vec![]).is_none());
+        assert!(Partition::from_nodes(vec![Split { axis: 0, value: 1.0 }, Leaf]).is_none());
+        assert!(Partition::from_nodes(vec![Leaf, Leaf]).is_none());
+        assert!(Partition::from_nodes(vec![Split { axis: 5, value: 1.0 }, Leaf, Leaf]).is_none());
+    }
+}

@@ -1,0 +1,528 @@
+//! The streaming tile sort: photons in any order in, one map file out,
+//! within a memory budget.
+//!
+//! Photons are routed to the cells of a pilot [`Partition`] and appended to
+//! per-cell buffers made of fixed-size chunks (so growth never copies). When
+//! buffered bytes pass the budget's share, the largest buffers are spilled as
+//! zstd frames to an anonymous scratch file next to the output. At the end
+//! each cell is read back (frames, then what is still buffered), encoded by
+//! the tile codec and appended to the map; a cell holding more than the split
+//! threshold is first split in two at the median of an order-independent
+//! sample, streaming, so no tile ever needs more memory than its share.
+//!
+//! Nothing here depends on the order photons arrive in: the split planes come
+//! from samples chosen by photon id, and the codec sorts each tile by (Morton
+//! code, id). Hence a map is byte-identical for any number of producer threads.
+//!
+//! Not for: reading maps (see `reader`), or choosing which photons to store.
+
+use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON, ZSTD_LEVEL};
+use super::format::{Aabb, ByteWriter, Footer, Header, TileEntry, FORMAT_VERSION};
+use super::partition::Partition;
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::rng::mix64;
+use crate::spectral::BandGrid;
+use bytemuck::Zeroable;
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+const MIB: u64 = 1 << 20;
+const STAGED: usize = std::mem::size_of::<StagedPhoton>();
+
+/// Memory the writer keeps outside its budgeted shares: zstd contexts
+/// (level-1 compressor and a decompressor, about 1.5 MiB together), the
+/// output and scratch I/O buffers, the producer channel and spill metadata.
+pub const WRITER_FIXED_BYTES: u64 = 6 * MIB;
+
+/// Smallest budget the writer accepts.
+pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
+
+/// Photons per tile the writer aims for when the budget allows: large
+/// enough that per-tile overhead is small, small enough that the cache can
+/// page tiles at a fine grain (about 3 MiB decoded with its k-d tree).
+pub const DEFAULT_TILE_PHOTONS: u32 = 65_536;
+
+/// How a memory budget is divided while writing a map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WriterPlan {
+    /// The budget (bytes) this plan divides.
+    pub budget: u64,
+    /// Photons per tile the partition aims for.
+    pub target_tile_photons: u32,
+    /// A cell with more photons than this is split before encoding.
+    pub split_threshold: u32,
+    /// Bytes of per-cell buffers before spilling starts.
+    pub buffer_bytes: u64,
+    /// Records per buffer chunk.
+    pub chunk_records: usize,
+}
+
+impl WriterPlan {
+    /// Divide `budget` bytes: a fixed reserve, a quarter of the rest for
+    /// encoding one tile, the remainder for cell buffers.
+    pub fn new(budget: u64, expected_photons: u64) -> Result<Self> {
+        if budget < MIN_WRITER_BUDGET {
+            return Err(Error::Budget {
+                budget,
+                what: format!(
+                    "writing a map needs at least {} MiB",
+                    MIN_WRITER_BUDGET / MIB
+                ),
+            });
+        }
+        let rest = budget - WRITER_FIXED_BYTES;
+        let merge = rest / 4;
+        let max_tile = (merge / ENCODE_BYTES_PER_PHOTON as u64).min(u32::MAX as u64) as u32;
+        let target = DEFAULT_TILE_PHOTONS.min(max_tile / 2);
+        let buffer_bytes = rest - merge;
+        let cells = expected_photons.div_ceil(target as u64).max(1);
+        // At least 8 chunks per cell fit in the buffers, so spills are sizeable.
+        let chunk_records = ((buffer_bytes / cells / 8) as usize / STAGED).clamp(256, 4096);
+        Ok(WriterPlan {
+            budget,
+            target_tile_photons: target,
+            split_threshold: (2 * target).min(max_tile),
+            buffer_bytes,
+            chunk_records,
+        })
+    }
+
+    /// Number of partition cells for `expected_photons`.
+    pub fn cells_for(&self, expected_photons: u64) -> usize {
+        expected_photons
+            .div_ceil(self.target_tile_photons as u64)
+            .max(1) as usize
+    }
+}
+
+/// What a finished map holds and what writing it took.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct WriteSummary {
+    pub photons: u64,
+    pub tiles: u32,
+    pub file_bytes: u64,
+    /// zstd frames written to the scratch file (0 when everything fit).
+    pub spilled_frames: u64,
+    /// Compressed bytes written to the scratch file.
+    pub spilled_bytes: u64,
+    /// Cells split at the end because they overflowed.
+    pub splits: u32,
+    /// Largest number of buffered bytes at any time.
+    pub peak_buffered_bytes: u64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    offset: u64,
+    len: u32,
+    count: u32,
+}
+
+#[derive(Debug)]
+struct CellBuf {
+    chunks: Vec<Vec<StagedPhoton>>,
+    frames: Vec<Frame>,
+    count: u64,
+    bounds: Aabb,
+}
+
+impl CellBuf {
+    fn new() -> Self {
+        CellBuf {
+            chunks: Vec::new(),
+            frames: Vec::new(),
+            count: 0,
+            bounds: Aabb::EMPTY,
+        }
+    }
+}
+
+/// The scratch file of spilled frames, with reusable zstd contexts.
+struct Scratch {
+    file: File,
+    dir: PathBuf,
+    len: u64,
+    compressor: zstd::bulk::Compressor<'static>,
+    decompressor: zstd::bulk::Decompressor<'static>,
+    frame: Vec<u8>,
+    frames_written: u64,
+}
+
+impl Scratch {
+    fn err(&self, action: &'static str, e: std::io::Error) -> Error {
+        Error::io(self.dir.join("(scratch file)"), action, e)
+    }
+
+    /// Spill every chunk of `cell` as frames and free them.
+    fn spill(&mut self, cell: &mut CellBuf) -> Result<u64> {
+        let mut freed = 0;
+        for chunk in cell.chunks.drain(..) {
+            freed += (chunk.capacity() * STAGED) as u64;
+            if chunk.is_empty() {
+                continue;
+            }
+            self.frame.clear();
+            let bound = zstd::zstd_safe::compress_bound(chunk.len() * STAGED);
+            self.frame.reserve(bound);
+            self.compressor
+                .compress_to_buffer(bytemuck::cast_slice(&chunk), &mut self.frame)
+                .map_err(|e| self.err("compress spill", e))?;
+            self.file
+                .write_all_at(&self.frame, self.len)
+                .map_err(|e| self.err("write", e))?;
+            cell.frames.push(Frame {
+                offset: self.len,
+                len: self.frame.len() as u32,
+                count: chunk.len() as u32,
+            });
+            self.len += self.frame.len() as u64;
+            self.frames_written += 1;
+        }
+        Ok(freed)
+    }
+
+    /// Read frame `f` back into `out` (cleared first).
+    fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<()> {
+        self.frame.clear();
+        self.frame.resize(f.len as usize, 0);
+        self.file
+            .read_exact_at(&mut self.frame, f.offset)
+            .map_err(|e| self.err("read", e))?;
+        out.clear();
+        out.resize(f.count as usize, StagedPhoton::zeroed());
+        let got = self
+            .decompressor
+            .decompress_to_buffer(&self.frame, bytemuck::cast_slice_mut::<_, u8>(out))
+            .map_err(|e| self.err("decompress spill", e))?;
+        if got != f.count as usize * STAGED {
+            return Err(self.err(
+                "read",
+                std::io::Error::new(std::io::ErrorKind::InvalidData, "spill frame length"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Writes one map file from photons pushed in any order.
+pub struct MapWriter {
+    path: PathBuf,
+    plan: WriterPlan,
+    partition: Partition,
+    header: Header,
+    header_len: u64,
+    out: BufWriter<tempfile::NamedTempFile>,
+    offset: u64,
+    cells: Vec<CellBuf>,
+    buffered: u64,
+    scratch: Scratch,
+    summary: WriteSummary,
+}
+
+impl MapWriter {
+    /// Start a map at `path` (written under a temporary name beside it).
+    pub fn create(
+        path: &Path,
+        plan: WriterPlan,
+        partition: Partition,
+        bands: BandGrid,
+        bounds: Aabb,
+    ) -> Result<Self> {
+        if path.is_dir() {
+            return Err(Error::io(
+                path,
+                "create",
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
+            ));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = tempfile::Builder::new()
+            .prefix(&format!(".{name}."))
+            .suffix(".partial")
+            .tempfile_in(&dir)
+            .map_err(|e| Error::io(path, "create", e))?;
+        let scratch_file = tempfile::tempfile_in(&dir)
+            .map_err(|e| Error::io(dir.join("(scratch file)"), "create", e))?;
+        let header = Header {
+            photons: 0,
+            tiles: 0,
+            bands,
+            bounds,
+            partition: partition.nodes().to_vec(),
+        };
+        let bytes = header.encode();
+        let mut out = BufWriter::with_capacity(1 << 20, tmp);
+        out.write_all(&bytes).map_err(|e| Error::io(path, "write", e))?;
+        let cells = (0..partition.cells()).map(|_| CellBuf::new()).collect();
+        let io = |e| Error::io(dir.join("(scratch file)"), "create", e);
+        Ok(MapWriter {
+            path: path.to_path_buf(),
+            plan,
+            partition,
+            header,
+            header_len: bytes.len() as u64,
+            out,
+            offset: bytes.len() as u64,
+            cells,
+            buffered: 0,
+            scratch: Scratch {
+                file: scratch_file,
+                dir: dir.clone(),
+                len: 0,
+                compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL).map_err(io)?,
+                decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
+                frame: Vec::new(),
+                frames_written: 0,
+            },
+            summary: WriteSummary::default(),
+        })
+    }
+
+    /// Add photons (ids must be unique across the whole map).
+    pub fn push(&mut self, photons: &[StagedPhoton]) -> Result<()> {
+        let chunk_bytes = (self.plan.chunk_records * STAGED) as u64;
+        for p in photons {
+            let cell = &mut self.cells[self.partition.cell_of(p.pos()) as usize];
+            match cell.chunks.last_mut() {
+                Some(c) if c.len() < c.capacity() => c.push(*p),
+                _ => {
+                    let mut c = Vec::with_capacity(self.plan.chunk_records);
+                    c.push(*p);
+                    cell.chunks.push(c);
+                    self.buffered += chunk_bytes;
+                }
+            }
+            cell.count += 1;
+            cell.bounds.grow(p.pos());
+            self.summary.photons += 1;
+            if self.buffered > self.plan.buffer_bytes {
+                self.spill_largest()?;
+            }
+        }
+        self.summary.peak_buffered_bytes = self.summary.peak_buffered_bytes.max(self.buffered);
+        Ok(())
+    }
+
+    /// Spill the largest buffers until half the buffer share is free.
+    fn spill_largest(&mut self) -> Result<()> {
+        self.summary.peak_buffered_bytes = self.summary.peak_buffered_bytes.max(self.buffered);
+        let mut order: Vec<usize> = (0..self.cells.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(self.cells[i].chunks.len()));
+        for i in order {
+            if self.buffered <= self.plan.buffer_bytes / 2 {
+                break;
+            }
+            let freed = self.scratch.spill(&mut self.cells[i])?;
+            self.buffered -= freed;
+        }
+        Ok(())
+    }
+
+    /// Encode every cell, write the index and footer, and publish the file
+    /// under its final name.
+    pub fn finish(mut self, progress: &dyn Progress) -> Result<WriteSummary> {
+        progress.stage("encode tiles", self.summary.photons);
+        let mut entries: Vec<TileEntry> = Vec::new();
+        let mut encoder = TileEncoder::default();
+        let mut staged: Vec<StagedPhoton> = Vec::new();
+        let mut frame_buf: Vec<StagedPhoton> = Vec::new();
+        let cells = std::mem::take(&mut self.cells);
+        for cell in cells {
+            let mut stack = vec![cell];
+            while let Some(mut cell) = stack.pop() {
+                if cell.count == 0 {
+                    continue;
+                }
+                if cell.count > self.plan.split_threshold as u64 {
+                    let (left, right) = self.split(cell, &mut frame_buf)?;
+                    self.summary.splits += 1;
+                    stack.push(right);
+                    stack.push(left);
+                    continue;
+                }
+                staged.clear();
+                staged.reserve_exact(cell.count as usize);
+                for f in std::mem::take(&mut cell.frames) {
+                    self.scratch.read(f, &mut frame_buf)?;
+                    staged.extend_from_slice(&frame_buf);
+                }
+                for chunk in cell.chunks.drain(..) {
+                    staged.extend_from_slice(&chunk);
+                    self.buffered -= (chunk.capacity() * STAGED) as u64;
+                }
+                let tile = encoder
+                    .encode(&staged)
+                    .map_err(|e| Error::tile(&self.path, entries.len() as u32, e.to_string()))?;
+                self.out
+                    .write_all(&tile.blob)
+                    .map_err(|e| Error::io(&self.path, "write", e))?;
+                entries.push(TileEntry {
+                    offset: self.offset,
+                    length: tile.blob.len() as u32,
+                    count: tile.count,
+                    quant: tile.quant,
+                    bounds: tile.bounds,
+                    crc: tile.crc,
+                });
+                self.offset += tile.blob.len() as u64;
+                progress.advance(tile.count as u64);
+                // Free the largest encode buffers between tiles.
+                if staged.capacity() > 4 * self.plan.target_tile_photons as usize {
+                    staged = Vec::new();
+                }
+            }
+        }
+        progress.finish();
+        drop(staged);
+
+        let mut index = ByteWriter::default();
+        for e in &entries {
+            e.encode(&mut index);
+        }
+        let footer = Footer {
+            index_offset: self.offset,
+            index_length: index.0.len() as u64,
+            tiles: entries.len() as u32,
+            index_crc: crc32fast::hash(&index.0),
+            version: FORMAT_VERSION,
+        };
+        let io = |e| Error::io(&self.path, "write", e);
+        self.out.write_all(&index.0).map_err(io)?;
+        self.out.write_all(&footer.encode()).map_err(io)?;
+        let mut tmp = self.out.into_inner().map_err(|e| io(e.into_error()))?;
+        self.header.photons = self.summary.photons;
+        self.header.tiles = entries.len() as u32;
+        let header = self.header.encode();
+        debug_assert_eq!(header.len() as u64, self.header_len);
+        tmp.seek(SeekFrom::Start(0)).map_err(io)?;
+        tmp.write_all(&header).map_err(io)?;
+        tmp.as_file().sync_all().map_err(io)?;
+        let file_bytes = self.offset + index.0.len() as u64 + super::format::FOOTER_LEN as u64;
+        tmp.persist(&self.path)
+            .map_err(|e| Error::io(&self.path, "rename into place", e.error))?;
+        self.summary.tiles = entries.len() as u32;
+        self.summary.file_bytes = file_bytes;
+        self.summary.spilled_frames = self.scratch.frames_written;
+        self.summary.spilled_bytes = self.scratch.len;
+        Ok(self.summary)
+    }
+
+    /// Split an overfull cell in two, streaming, without holding it in memory.
+    fn split(
+        &mut self,
+        mut cell: CellBuf,
+        frame_buf: &mut Vec<StagedPhoton>,
+    ) -> Result<(CellBuf, CellBuf)> {
+        // Pass 1: an order-independent sample (chosen by id hash) of positions.
+        let rate = cell.count.div_ceil(32_768).next_power_of_two();
+        let mut sample: Vec<glam::Vec3> = Vec::new();
+        let mut take = |p: &StagedPhoton| {
+            if mix64(p.id) & (rate - 1) == 0 {
+                sample.push(p.pos());
+            }
+        };
+        for f in cell.frames.clone() {
+            self.scratch.read(f, frame_buf)?;
+            frame_buf.iter().for_each(&mut take);
+        }
+        cell.chunks.iter().flatten().for_each(&mut take);
+
+        // The plane: the sample median on the longest axis that separates it.
+        let extent = cell.bounds.max - cell.bounds.min;
+        let mut axes = [0usize, 1, 2];
+        axes.sort_by(|&a, &b| extent[b].total_cmp(&extent[a]));
+        let mut plane = None;
+        for axis in axes {
+            let mut v: Vec<f32> = sample.iter().map(|p| p[axis]).collect();
+            if v.is_empty() {
+                break;
+            }
+            let mid = v.len() / 2;
+            let (_, &mut median, _) = v.select_nth_unstable_by(mid, f32::total_cmp);
+            let below = v.iter().filter(|&&x| x < median).count();
+            if below > 0 {
+                plane = Some((axis, median));
+                break;
+            }
+            // Everything at or above the median: cut just above the minimum
+            // if that separates anything.
+            let above_min = v.iter().filter(|&&x| x > median).count();
+            if above_min > 0 {
+                plane = Some((axis, next_after(median)));
+                break;
+            }
+        }
+        let route = |p: &StagedPhoton| match plane {
+            Some((axis, value)) => p.position[axis] < value,
+            // All sampled positions coincide: halve by id instead.
+            None => mix64(p.id ^ 0x5eed) & 1 == 0,
+        };
+
+        // Pass 2: route every photon to a child, spilling children as they grow.
+        let mut kids = [CellBuf::new(), CellBuf::new()];
+        let limit = (self.plan.budget - WRITER_FIXED_BYTES) / 16;
+        let chunk_records = self.plan.chunk_records;
+        let mut kid_bytes = [0u64; 2];
+        let frames = std::mem::take(&mut cell.frames);
+        for f in frames {
+            self.scratch.read(f, frame_buf)?;
+            let batch = std::mem::take(frame_buf);
+            self.route(&batch, &route, &mut kids, &mut kid_bytes, limit, chunk_records)?;
+            *frame_buf = batch;
+        }
+        for chunk in std::mem::take(&mut cell.chunks) {
+            self.route(&chunk, &route, &mut kids, &mut kid_bytes, limit, chunk_records)?;
+            self.buffered -= (chunk.capacity() * STAGED) as u64;
+        }
+        let [left, right] = kids;
+        self.buffered += kid_bytes[0] + kid_bytes[1];
+        debug_assert!(plane.is_none() || (left.count > 0 && right.count > 0));
+        Ok((left, right))
+    }
+
+    fn route(
+        &mut self,
+        photons: &[StagedPhoton],
+        route: &dyn Fn(&StagedPhoton) -> bool,
+        kids: &mut [CellBuf; 2],
+        kid_bytes: &mut [u64; 2],
+        limit: u64,
+        chunk_records: usize,
+    ) -> Result<()> {
+        for p in photons {
+            let k = if route(p) { 0 } else { 1 };
+            let kid = &mut kids[k];
+            match kid.chunks.last_mut() {
+                Some(c) if c.len() < c.capacity() => c.push(*p),
+                _ => {
+                    let mut c = Vec::with_capacity(chunk_records);
+                    c.push(*p);
+                    kid.chunks.push(c);
+                    kid_bytes[k] += (chunk_records * STAGED) as u64;
+                }
+            }
+            kid.count += 1;
+            kid.bounds.grow(p.pos());
+            if kid_bytes[k] > limit {
+                self.scratch.spill(kid)?;
+                kid_bytes[k] = 0;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn next_after(x: f32) -> f32 {
+    let b = x.to_bits();
+    f32::from_bits(if x >= 0.0 { b + 1 } else { b - 1 })
+}
