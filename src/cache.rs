@@ -59,7 +59,10 @@ pub struct CacheStats {
 
 enum Slot {
     Loading,
-    Ready { tile: Arc<DecodedTile>, last_used: u64 },
+    Ready {
+        tile: Arc<DecodedTile>,
+        last_used: u64,
+    },
 }
 
 struct Inner {
@@ -110,7 +113,12 @@ thread_local! {
 impl TileCache {
     /// A cache of at most `budget` bytes for tiles of `map`.
     pub fn new(map: &MapFile, budget: u64) -> Result<TileCache> {
-        let largest = map.tiles().iter().map(|t| tile_bytes(t.count)).max().unwrap_or(0);
+        let largest = map
+            .tiles()
+            .iter()
+            .map(|t| tile_bytes(t.count))
+            .max()
+            .unwrap_or(0);
         if largest > budget {
             return Err(Error::Budget {
                 budget,

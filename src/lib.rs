@@ -11,10 +11,11 @@
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
-//! (memory sizes such as `64MiB`).
+//! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory).
 
 pub mod cache;
 pub mod error;
+pub mod mem;
 pub mod photon;
 pub mod progress;
 pub mod query;

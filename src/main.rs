@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use littoral::progress::Progress;
 use littoral::query::{PhotonMap, Search};
-use littoral::store::{build_map, MapFile};
+use littoral::store::{build_map, BuildOptions, MapFile};
 use littoral::synth::{Distribution, SynthSource};
 use std::io::Write;
 use std::path::PathBuf;
@@ -13,7 +13,11 @@ use std::process::ExitCode;
 use std::sync::Mutex;
 
 #[derive(Parser)]
-#[command(name = "littoral", version, about = "Spectral photon mapping for coastal waters")]
+#[command(
+    name = "littoral",
+    version,
+    about = "Spectral photon mapping for coastal waters"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -80,10 +84,10 @@ struct QueryArgs {
     #[arg(long)]
     k: Option<usize>,
     /// With --k: ignore photons farther than this (m).
-    #[arg(long, requires = "k")]
+    #[arg(long, requires = "k", allow_hyphen_values = true)]
     max_radius: Option<f32>,
     /// All photons within this radius (m).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     radius: Option<f32>,
     /// Tile cache budget.
     #[arg(long, default_value = "256MiB")]
@@ -115,9 +119,11 @@ impl Progress for Bars {
         }
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
         bar.set_style(
-            ProgressStyle::with_template("{msg:>14} [{bar:32}] {human_pos}/{human_len} {per_sec} eta {eta}")
-                .expect("valid template")
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{msg:>14} [{bar:32}] {human_pos}/{human_len} {per_sec} eta {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
         );
         bar.set_message(name.to_string());
         *self.bar.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar);
@@ -162,15 +168,21 @@ fn run_map(cmd: MapCommand) -> AnyResult<()> {
             }
             let source = SynthSource::new(a.photons, a.bands, a.seed, a.distribution)?;
             let bars = Bars::new(a.quiet);
-            let summary = build_map(&a.out, &source, a.threads, budget, &bars)?;
+            let options = BuildOptions {
+                threads: a.threads,
+                ..BuildOptions::with_budget(budget)
+            };
+            let summary = build_map(&a.out, &source, &options, &bars)?;
             if !a.quiet {
+                let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
                 eprintln!(
-                    "wrote {}: {} photons in {} tiles, {} bytes ({:.2} bytes/photon)",
+                    "wrote {}: {} photons in {} tiles, {} bytes ({:.2} bytes/photon); peak memory {:.1} MiB ({peak} bytes)",
                     a.out.display(),
                     summary.photons,
                     summary.tiles,
                     summary.file_bytes,
-                    summary.file_bytes as f64 / summary.photons.max(1) as f64
+                    summary.file_bytes as f64 / summary.photons.max(1) as f64,
+                    peak as f64 / (1 << 20) as f64,
                 );
             }
             Ok(())
@@ -197,7 +209,9 @@ fn run_map(cmd: MapCommand) -> AnyResult<()> {
             };
             for (name, v) in [("--radius", a.radius), ("--max-radius", a.max_radius)] {
                 if v.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
-                    return Err(littoral::Error::invalid(name, "must be a finite radius >= 0").into());
+                    return Err(
+                        littoral::Error::invalid(name, "must be a finite radius >= 0").into(),
+                    );
                 }
             }
             let map = PhotonMap::new(MapFile::open(&a.file)?, budget)?;

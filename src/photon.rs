@@ -33,7 +33,8 @@ pub const OCT_MAX_ANGLE_ERROR_RAD: f32 = 5.0e-5;
 
 /// Octahedral encoding of a unit vector into two 16-bit snorm values
 /// (Cigolle et al. 2014, "A Survey of Efficient Representations for
-/// Independent Unit Vectors").
+/// Independent Unit Vectors"), choosing among the four neighbouring codes
+/// the one that decodes closest to `d` ("precise" variant).
 #[inline]
 pub fn oct_encode(d: Vec3) -> [u16; 2] {
     let l1 = d.x.abs() + d.y.abs() + d.z.abs();
@@ -47,7 +48,22 @@ pub fn oct_encode(d: Vec3) -> [u16; 2] {
         u = (1.0 - pv.abs()) * sign_not_zero(pu);
         v = (1.0 - pu.abs()) * sign_not_zero(pv);
     }
-    [snorm16(u), snorm16(v)]
+    let (fu, fv) = (snorm16_floor(u) as i32, snorm16_floor(v) as i32);
+    let mut best = [fu as i16 as u16, fv as i16 as u16];
+    // Compare by squared chord: a dot product near 1 has no f32 resolution left.
+    let mut best_err = f32::INFINITY;
+    for (du, dv) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let code = [
+            (fu + du).min(32767) as i16 as u16,
+            (fv + dv).min(32767) as i16 as u16,
+        ];
+        let err = (oct_decode(code) - d).length_squared();
+        if err < best_err {
+            best_err = err;
+            best = code;
+        }
+    }
+    best
 }
 
 /// Inverse of [`oct_encode`]; returns a unit vector.
@@ -77,8 +93,8 @@ fn sign_not_zero(x: f32) -> f32 {
 }
 
 #[inline]
-fn snorm16(x: f32) -> u16 {
-    ((x.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16
+fn snorm16_floor(x: f32) -> i16 {
+    (x.clamp(-1.0, 1.0) * 32767.0).floor() as i16
 }
 
 #[inline]

@@ -79,12 +79,10 @@ impl PhotonMap {
     pub fn query_into(&self, at: Vec3, search: Search, out: &mut Vec<Neighbour>) -> Result<()> {
         out.clear();
         let (k, limit_sq) = match search {
-            Search::Nearest { k, max_radius } => {
-                (k, max_radius.map_or(f32::INFINITY, |r| r * r))
-            }
+            Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
             Search::Radius { radius } => (usize::MAX, radius * radius),
         };
-        if k == 0 || !(limit_sq >= 0.0) {
+        if k == 0 || limit_sq.is_nan() || limit_sq < 0.0 {
             return Ok(());
         }
         let mut order: Vec<(f32, u32)> = self
@@ -150,7 +148,12 @@ impl PhotonMap {
         let mut order: Vec<(u64, u32)> = points
             .iter()
             .enumerate()
-            .map(|(i, p)| (morton3(q.encode(p.clamp(b.min, b.max).to_array())), i as u32))
+            .map(|(i, p)| {
+                (
+                    morton3(q.encode(p.clamp(b.min, b.max).to_array())),
+                    i as u32,
+                )
+            })
             .collect();
         order.sort_unstable();
         let mut results: Vec<Vec<Neighbour>> = vec![Vec::new(); points.len()];

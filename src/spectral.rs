@@ -59,10 +59,7 @@ impl BandGrid {
                 ),
             ));
         }
-        if let Some(i) = centers_nm
-            .iter()
-            .position(|c| !(c.is_finite() && *c > 0.0))
-        {
+        if let Some(i) = centers_nm.iter().position(|c| !(c.is_finite() && *c > 0.0)) {
             return Err(Error::invalid(
                 format!("centers_nm[{i}]"),
                 "must be a positive wavelength",

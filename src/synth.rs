@@ -45,7 +45,12 @@ pub const WATER_SKY_SHARE: f32 = 0.15;
 
 impl SynthSource {
     /// The default synthetic domain: 100 m x 100 m, 10 m deep, surface at z = 0.
-    pub fn new(photons: u64, bands: usize, seed: u64, distribution: Distribution) -> crate::Result<Self> {
+    pub fn new(
+        photons: u64,
+        bands: usize,
+        seed: u64,
+        distribution: Distribution,
+    ) -> crate::Result<Self> {
         Ok(SynthSource {
             photons,
             bands: BandGrid::even(400.0, 700.0, bands)?,

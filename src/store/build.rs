@@ -41,13 +41,34 @@ pub trait PhotonSource: Sync {
     fn bounds(&self) -> Aabb;
 }
 
-/// Build the map at `path` from `source` with `threads` producer threads
-/// (0 = rayon's default) within `mem_budget` bytes.
+/// How to build a map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildOptions {
+    /// Producer threads (0 = one per core).
+    pub threads: usize,
+    /// Memory budget in bytes for the whole build.
+    pub mem_budget: u64,
+    /// Photons per tile to aim for instead of the budget's choice (tests use
+    /// small tiles to exercise many tile borders); capped by the budget.
+    pub tile_photons: Option<u32>,
+}
+
+impl BuildOptions {
+    /// Default threads and tiles with the given budget.
+    pub fn with_budget(mem_budget: u64) -> Self {
+        BuildOptions {
+            threads: 0,
+            mem_budget,
+            tile_photons: None,
+        }
+    }
+}
+
+/// Build the map at `path` from `source`.
 pub fn build_map(
     path: &Path,
     source: &dyn PhotonSource,
-    threads: usize,
-    mem_budget: u64,
+    options: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<WriteSummary> {
     let n = source.indices();
@@ -67,13 +88,16 @@ pub fn build_map(
     } else {
         (pilot.len() as u128 * n as u128 / pilot_n as u128) as u64
     };
-    let plan = WriterPlan::new(mem_budget, expected)?;
+    let mut plan = WriterPlan::new(options.mem_budget, expected)?;
+    if let Some(t) = options.tile_photons {
+        plan = plan.with_tile_photons(t);
+    }
     let partition = Partition::from_pilot(&mut pilot, plan.cells_for(expected));
     drop(pilot);
     let mut writer = MapWriter::create(path, plan, partition, source.bands(), source.bounds())?;
 
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
+        .num_threads(options.threads)
         .build()
         .map_err(|e| Error::invalid("threads", e.to_string()))?;
     let (tx, rx) = crossbeam_channel::bounded::<Vec<StagedPhoton>>(CHANNEL_BATCHES);

@@ -312,14 +312,17 @@ impl TileDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::photon::oct_encode;
     use crate::rng::Pcg32;
 
     #[test]
     fn morton_round_trips() {
         let mut rng = Pcg32::new(1, 2);
         for _ in 0..10_000 {
-            let q = [rng.next_u32() as u16, rng.next_u32() as u16, rng.next_u32() as u16];
+            let q = [
+                rng.next_u32() as u16,
+                rng.next_u32() as u16,
+                rng.next_u32() as u16,
+            ];
             assert_eq!(demorton3(morton3(q)), q);
         }
         assert_eq!(morton3([1, 0, 0]), 1);
@@ -372,7 +375,7 @@ mod tests {
             used[j] = true;
             let err = (photons[j].pos() - d.position).abs();
             assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
-            assert_eq!(oct_encode(d.direction), photons[j].oct);
+            assert_eq!(oct_decode(photons[j].oct), d.direction);
             assert_eq!(d.power, photons[j].power);
         }
     }
@@ -399,13 +402,22 @@ mod tests {
             dec.decode(&bad, t.crc, t.count, &t.quant, &mut out),
             Err(DecodeError::Checksum { .. })
         ));
-        // A valid frame with the wrong count is caught by length.
+        // A valid frame with the wrong count is caught by its length.
+        assert!(dec
+            .decode(&t.blob, t.crc, t.count - 1, &t.quant, &mut out)
+            .is_err());
         assert!(matches!(
-            dec.decode(&t.blob, t.crc, t.count - 1, &t.quant, &mut out),
+            dec.decode(&t.blob, t.crc, t.count + 1, &t.quant, &mut out),
             Err(DecodeError::Length { .. })
         ));
         assert!(dec
-            .decode(&t.blob[..t.blob.len() - 3], crc32fast::hash(&t.blob[..t.blob.len() - 3]), t.count, &t.quant, &mut out)
+            .decode(
+                &t.blob[..t.blob.len() - 3],
+                crc32fast::hash(&t.blob[..t.blob.len() - 3]),
+                t.count,
+                &t.quant,
+                &mut out
+            )
             .is_err());
     }
 }

@@ -301,7 +301,10 @@ impl Header {
         let tiles = r.u32()?;
         let nbands = r.u32()? as usize;
         if nbands.saturating_mul(8) > r.remaining() {
-            return Err(Error::format(path, format!("header band count {nbands} is impossible")));
+            return Err(Error::format(
+                path,
+                format!("header band count {nbands} is impossible"),
+            ));
         }
         let mut centers = Vec::with_capacity(nbands);
         let mut fwhm = Vec::with_capacity(nbands);
@@ -317,7 +320,10 @@ impl Header {
         }
         let nodes = r.u32()? as usize;
         if nodes.saturating_mul(5) != r.remaining() {
-            return Err(Error::format(path, format!("header partition of {nodes} nodes does not match its length")));
+            return Err(Error::format(
+                path,
+                format!("header partition of {nodes} nodes does not match its length"),
+            ));
         }
         let mut partition = Vec::with_capacity(nodes);
         for _ in 0..nodes {
@@ -428,7 +434,10 @@ mod tests {
                 max: Vec3::new(100.0, 100.0, 0.0),
             },
             partition: vec![
-                PartitionNode::Split { axis: 2, value: -1.5 },
+                PartitionNode::Split {
+                    axis: 2,
+                    value: -1.5,
+                },
                 PartitionNode::Leaf,
                 PartitionNode::Leaf,
             ],

@@ -11,7 +11,7 @@ pub mod partition;
 pub mod reader;
 pub mod writer;
 
-pub use build::{build_map, PhotonSource};
+pub use build::{build_map, BuildOptions, PhotonSource};
 pub use codec::StagedPhoton;
 pub use format::{Aabb, Header, TileEntry};
 pub use partition::Partition;

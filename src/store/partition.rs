@@ -38,7 +38,13 @@ impl Partition {
         let mut link = vec![0u32; nodes.len()];
         let mut cells = 0u32;
         // Iterative preorder walk: returns the index just past each subtree.
-        fn walk(nodes: &[PartitionNode], link: &mut [u32], cells: &mut u32, i: usize, depth: usize) -> Option<usize> {
+        fn walk(
+            nodes: &[PartitionNode],
+            link: &mut [u32],
+            cells: &mut u32,
+            i: usize,
+            depth: usize,
+        ) -> Option<usize> {
             if depth > 64 {
                 return None;
             }
@@ -185,8 +191,23 @@ mod tests {
     fn malformed_node_lists_are_rejected() {
         use PartitionNode::*;
         assert!(Partition::from_nodes(vec![]).is_none());
-        assert!(Partition::from_nodes(vec![Split { axis: 0, value: 1.0 }, Leaf]).is_none());
+        assert!(Partition::from_nodes(vec![
+            Split {
+                axis: 0,
+                value: 1.0
+            },
+            Leaf
+        ])
+        .is_none());
         assert!(Partition::from_nodes(vec![Leaf, Leaf]).is_none());
-        assert!(Partition::from_nodes(vec![Split { axis: 5, value: 1.0 }, Leaf, Leaf]).is_none());
+        assert!(Partition::from_nodes(vec![
+            Split {
+                axis: 5,
+                value: 1.0
+            },
+            Leaf,
+            Leaf
+        ])
+        .is_none());
     }
 }

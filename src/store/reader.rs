@@ -87,7 +87,10 @@ impl MapFile {
         if header.tiles != footer.tiles {
             return Err(Error::format(
                 path,
-                format!("header says {} tiles, footer {}", header.tiles, footer.tiles),
+                format!(
+                    "header says {} tiles, footer {}",
+                    header.tiles, footer.tiles
+                ),
             ));
         }
         let mut r = ByteReader::new(index, path, "index");
@@ -98,7 +101,10 @@ impl MapFile {
             let e = TileEntry::decode(&mut r)?;
             let bad = |what: String| Error::tile(path, t, format!("index entry: {what}"));
             if e.offset != expect {
-                return Err(bad(format!("blob at {} where {} was expected", e.offset, expect)));
+                return Err(bad(format!(
+                    "blob at {} where {} was expected",
+                    e.offset, expect
+                )));
             }
             if e.count == 0 || e.length == 0 {
                 return Err(bad("empty tile".into()));
@@ -108,7 +114,10 @@ impl MapFile {
             }
             // A zstd frame expands at most ~128x; larger claims are corrupt.
             if e.count as u64 * RECORD_BYTES as u64 > e.length as u64 * 1024 + 4096 {
-                return Err(bad(format!("{} photons cannot fit in {} bytes", e.count, e.length)));
+                return Err(bad(format!(
+                    "{} photons cannot fit in {} bytes",
+                    e.count, e.length
+                )));
             }
             expect = e.offset + e.length as u64;
             photons += e.count as u64;
@@ -117,13 +126,19 @@ impl MapFile {
         if expect != footer.index_offset {
             return Err(Error::format(
                 path,
-                format!("tile blobs end at {expect} but the index starts at {}", footer.index_offset),
+                format!(
+                    "tile blobs end at {expect} but the index starts at {}",
+                    footer.index_offset
+                ),
             ));
         }
         if photons != header.photons {
             return Err(Error::format(
                 path,
-                format!("tiles hold {photons} photons, header says {}", header.photons),
+                format!(
+                    "tiles hold {photons} photons, header says {}",
+                    header.photons
+                ),
             ));
         }
         // Queries touch tiles in no particular order; read-ahead would waste I/O.
@@ -164,7 +179,12 @@ impl MapFile {
 
     /// Check and decode tile `t` into `out`; photon bands are checked
     /// against the band grid.
-    pub fn decode_tile(&self, t: u32, decoder: &mut TileDecoder, out: &mut Vec<Photon>) -> Result<()> {
+    pub fn decode_tile(
+        &self,
+        t: u32,
+        decoder: &mut TileDecoder,
+        out: &mut Vec<Photon>,
+    ) -> Result<()> {
         let e = &self.tiles[t as usize];
         decoder
             .decode(self.blob(t), e.crc, e.count, &e.quant, out)

@@ -54,6 +54,8 @@ pub struct WriterPlan {
     pub target_tile_photons: u32,
     /// A cell with more photons than this is split before encoding.
     pub split_threshold: u32,
+    /// The most photons the encode share can hold in one tile.
+    pub max_tile_photons: u32,
     /// Bytes of per-cell buffers before spilling starts.
     pub buffer_bytes: u64,
     /// Records per buffer chunk.
@@ -85,9 +87,17 @@ impl WriterPlan {
             budget,
             target_tile_photons: target,
             split_threshold: (2 * target).min(max_tile),
+            max_tile_photons: max_tile,
             buffer_bytes,
             chunk_records,
         })
+    }
+
+    /// Aim for `photons` per tile (at least 1, at most what the encode share allows).
+    pub fn with_tile_photons(mut self, photons: u32) -> Self {
+        self.target_tile_photons = photons.clamp(1, self.max_tile_photons / 2);
+        self.split_threshold = (2 * self.target_tile_photons).min(self.max_tile_photons);
+        self
     }
 
     /// Number of partition cells for `expected_photons`.
@@ -143,7 +153,8 @@ impl CellBuf {
 /// The scratch file of spilled frames, with reusable zstd contexts.
 struct Scratch {
     file: File,
-    dir: PathBuf,
+    /// How errors name the (anonymous) scratch file.
+    name: PathBuf,
     len: u64,
     compressor: zstd::bulk::Compressor<'static>,
     decompressor: zstd::bulk::Decompressor<'static>,
@@ -153,7 +164,7 @@ struct Scratch {
 
 impl Scratch {
     fn err(&self, action: &'static str, e: std::io::Error) -> Error {
-        Error::io(self.dir.join("(scratch file)"), action, e)
+        Error::io(&self.name, action, e)
     }
 
     /// Spill every chunk of `cell` as frames and free them.
@@ -251,8 +262,13 @@ impl MapWriter {
             .suffix(".partial")
             .tempfile_in(&dir)
             .map_err(|e| Error::io(path, "create", e))?;
-        let scratch_file = tempfile::tempfile_in(&dir)
-            .map_err(|e| Error::io(dir.join("(scratch file)"), "create", e))?;
+        let scratch_name = PathBuf::from(format!(
+            "{} (scratch space in {})",
+            path.display(),
+            dir.display()
+        ));
+        let scratch_file =
+            tempfile::tempfile_in(&dir).map_err(|e| Error::io(&scratch_name, "create", e))?;
         let header = Header {
             photons: 0,
             tiles: 0,
@@ -262,9 +278,10 @@ impl MapWriter {
         };
         let bytes = header.encode();
         let mut out = BufWriter::with_capacity(1 << 20, tmp);
-        out.write_all(&bytes).map_err(|e| Error::io(path, "write", e))?;
+        out.write_all(&bytes)
+            .map_err(|e| Error::io(path, "write", e))?;
         let cells = (0..partition.cells()).map(|_| CellBuf::new()).collect();
-        let io = |e| Error::io(dir.join("(scratch file)"), "create", e);
+        let io = |e| Error::io(&scratch_name, "create", e);
         Ok(MapWriter {
             path: path.to_path_buf(),
             plan,
@@ -277,7 +294,7 @@ impl MapWriter {
             buffered: 0,
             scratch: Scratch {
                 file: scratch_file,
-                dir: dir.clone(),
+                name: scratch_name.clone(),
                 len: 0,
                 compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL).map_err(io)?,
                 decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
@@ -406,6 +423,11 @@ impl MapWriter {
         debug_assert_eq!(header.len() as u64, self.header_len);
         tmp.seek(SeekFrom::Start(0)).map_err(io)?;
         tmp.write_all(&header).map_err(io)?;
+        // Published maps are read-only data for everyone (tempfile makes 0600).
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(io)?;
         tmp.as_file().sync_all().map_err(io)?;
         let file_bytes = self.offset + index.0.len() as u64 + super::format::FOOTER_LEN as u64;
         tmp.persist(&self.path)
@@ -477,11 +499,25 @@ impl MapWriter {
         for f in frames {
             self.scratch.read(f, frame_buf)?;
             let batch = std::mem::take(frame_buf);
-            self.route(&batch, &route, &mut kids, &mut kid_bytes, limit, chunk_records)?;
+            self.route(
+                &batch,
+                &route,
+                &mut kids,
+                &mut kid_bytes,
+                limit,
+                chunk_records,
+            )?;
             *frame_buf = batch;
         }
         for chunk in std::mem::take(&mut cell.chunks) {
-            self.route(&chunk, &route, &mut kids, &mut kid_bytes, limit, chunk_records)?;
+            self.route(
+                &chunk,
+                &route,
+                &mut kids,
+                &mut kid_bytes,
+                limit,
+                chunk_records,
+            )?;
             self.buffered -= (chunk.capacity() * STAGED) as u64;
         }
         let [left, right] = kids;

@@ -1,0 +1,34 @@
+//! The process's own memory use, for reports and budget checks.
+
+/// Peak resident set size of this process (VmHWM, bytes): anonymous memory
+/// plus resident file pages (binary text, libraries, mapped files). `None`
+/// where /proc is unavailable.
+pub fn peak_rss_bytes() -> Option<u64> {
+    status_kib("VmHWM:").map(|k| k * 1024)
+}
+
+/// Resident anonymous memory of this process now (RssAnon, bytes).
+pub fn rss_anon_bytes() -> Option<u64> {
+    status_kib("RssAnon:").map(|k| k * 1024)
+}
+
+fn status_kib(key: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    line[key.len()..]
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn reads_own_memory() {
+        let peak = super::peak_rss_bytes().unwrap();
+        let anon = super::rss_anon_bytes().unwrap();
+        assert!(peak > 0 && anon > 0 && anon <= peak + (64 << 20));
+    }
+}

@@ -1,0 +1,278 @@
+//! The command line: the exact forms scripts rely on, and one clear line
+//! with a non-zero exit for every kind of bad input or output.
+
+use crate::common::*;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn littoral(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// The failure is one line on stderr that mentions `needle`.
+fn assert_clean_failure(out: &Output, needle: &str) {
+    assert!(!out.status.success());
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "exit by error, not by signal or panic"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains(needle), "'{needle}' not in: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// No final file and no temporary left behind in `dir`.
+fn assert_nothing_written(dir: &Path) {
+    let left: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+#[test]
+fn synth_info_verify_query_dump() {
+    let dir = tempdir();
+    let map = dir.path().join("w.map");
+    let out = littoral(&[
+        "map",
+        "synth",
+        "--photons",
+        "50000",
+        "--bands",
+        "16",
+        "--seed",
+        "3",
+        "--distribution",
+        "water",
+        "--mem-budget",
+        "64MiB",
+        "--out",
+        p(&map),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stderr.is_empty(), "--quiet prints nothing");
+
+    let info = json(&littoral(&["map", "info", p(&map)]));
+    assert_eq!(info["photons"], 50_000);
+    assert_eq!(info["bands"], 16);
+    assert_eq!(info["format_version"], 1);
+    assert!(info["tiles"].as_u64().unwrap() >= 1);
+    let bytes = std::fs::metadata(&map).unwrap().len();
+    assert_eq!(info["file_bytes"], bytes);
+    assert!((info["bytes_per_photon"].as_f64().unwrap() - bytes as f64 / 50_000.0).abs() < 1e-9);
+    assert_eq!(info["bounds"]["min"][2], -10.0);
+
+    let verify = littoral(&["map", "verify", p(&map), "--quiet"]);
+    assert!(verify.status.success());
+
+    let knn = json(&littoral(&[
+        "map",
+        "query",
+        p(&map),
+        "--at",
+        "50,50,-1",
+        "--k",
+        "7",
+    ]));
+    let arr = knn.as_array().unwrap();
+    assert_eq!(arr.len(), 7);
+    let d: Vec<f64> = arr
+        .iter()
+        .map(|n| n["distance"].as_f64().unwrap())
+        .collect();
+    assert!(d.windows(2).all(|w| w[0] <= w[1]), "nearest first: {d:?}");
+    for key in ["x", "y", "z", "band", "power", "distance"] {
+        assert!(arr[0].get(key).is_some(), "missing {key}");
+    }
+    let within = json(&littoral(&[
+        "map",
+        "query",
+        p(&map),
+        "--at",
+        "50,50,-10",
+        "--radius",
+        "0.5",
+    ]));
+    for n in within.as_array().unwrap() {
+        assert!(n["distance"].as_f64().unwrap() <= 0.5 + 1e-6);
+    }
+    let capped = json(&littoral(&[
+        "map",
+        "query",
+        p(&map),
+        "--at",
+        "50,50,-5",
+        "--k",
+        "500",
+        "--max-radius",
+        "0.3",
+    ]));
+    assert!(capped.as_array().unwrap().len() < 500);
+
+    let dump = littoral(&["map", "dump", p(&map)]);
+    assert!(dump.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&dump.stdout).lines().count(),
+        50_001
+    );
+}
+
+#[test]
+fn sizes_and_arguments_are_validated() {
+    let dir = tempdir();
+    let map = dir.path().join("m.map");
+    for (budget, ok) in [
+        ("64MiB", true),
+        ("500MB", true),
+        ("67108864", true),
+        ("lots", false),
+        ("1KiB", false),
+    ] {
+        let out = littoral(&[
+            "map",
+            "synth",
+            "--photons",
+            "1000",
+            "--mem-budget",
+            budget,
+            "--out",
+            p(&map),
+            "--quiet",
+        ]);
+        if ok {
+            assert!(
+                out.status.success(),
+                "{budget}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        } else {
+            assert_clean_failure(&out, "budget");
+        }
+    }
+    assert_clean_failure(
+        &littoral(&["map", "query", p(&map), "--at", "1,2", "--k", "3"]),
+        "--at",
+    );
+    assert_clean_failure(
+        &littoral(&["map", "query", p(&map), "--at", "1,2,3", "--radius", "-1"]),
+        "--radius",
+    );
+    assert_clean_failure(
+        &littoral(&[
+            "map",
+            "synth",
+            "--photons",
+            "0",
+            "--out",
+            p(&dir.path().join("z.map")),
+        ]),
+        "--photons",
+    );
+    // Neither --k nor --radius: a usage error from the parser (exit 2).
+    assert_eq!(
+        littoral(&["map", "query", p(&map), "--at", "1,2,3"])
+            .status
+            .code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn bad_maps_fail_cleanly() {
+    let dir = tempdir();
+    let src = source(20_000, 8, 1, littoral::synth::Distribution::Uniform);
+    let (good, _) = synth_map(dir.path(), "good.map", &src, Some(4_000), 1, 64 * MIB);
+    let bytes = std::fs::read(&good).unwrap();
+    let bad = dir.path().join("bad.map");
+
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() / 2] ^= 0x04;
+    std::fs::write(&bad, &flipped).unwrap();
+    let out = littoral(&["map", "verify", p(&bad), "--quiet"]);
+    assert_clean_failure(&out, "bad.map");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("tile "));
+    assert_clean_failure(&littoral(&["map", "dump", p(&bad)]), "tile ");
+
+    std::fs::write(&bad, &bytes[..bytes.len() - 10]).unwrap();
+    for cmd in ["info", "verify", "dump"] {
+        assert_clean_failure(&littoral(&["map", cmd, p(&bad)]), "bad.map");
+    }
+    assert_clean_failure(
+        &littoral(&["map", "query", p(&bad), "--at", "0,0,0", "--k", "1"]),
+        "bad.map",
+    );
+    assert_clean_failure(&littoral(&["map", "info", p(dir.path())]), "directory");
+    assert_clean_failure(
+        &littoral(&["map", "info", p(&dir.path().join("nope.map"))]),
+        "nope.map",
+    );
+}
+
+#[test]
+fn unwritable_outputs_fail_cleanly() {
+    let dir = tempdir();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let synth = |out: &str| {
+        littoral(&[
+            "map",
+            "synth",
+            "--photons",
+            "20000",
+            "--out",
+            out,
+            "--quiet",
+        ])
+    };
+    // A missing directory, a file used as a directory, a directory as the output.
+    assert_clean_failure(&synth(p(&out_dir.join("missing/x.map"))), "x.map");
+    let file = out_dir.join("plain");
+    std::fs::write(&file, b"x").unwrap();
+    assert_clean_failure(&synth(p(&file.join("x.map"))), "x.map");
+    std::fs::remove_file(&file).unwrap();
+    assert_clean_failure(&synth(p(&out_dir)), "directory");
+    assert_nothing_written(&out_dir);
+}
+
+/// A full disk, simulated with a file-size limit (the write fails with
+/// EFBIG once the limit is hit): one clear line, and neither the final file
+/// nor a temporary is left behind.
+#[test]
+fn full_disk_leaves_nothing_behind() {
+    let dir = tempdir();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let target = out_dir.join("full.map");
+    let script = format!(
+        "trap '' XFSZ; ulimit -f 512; exec '{}' map synth --photons 2000000 --mem-budget 16MiB --out '{}' --quiet",
+        env!("CARGO_BIN_EXE_littoral"),
+        p(&target)
+    );
+    let out = Command::new("sh").arg("-c").arg(&script).output().unwrap();
+    assert_clean_failure(&out, "full.map");
+    assert_nothing_written(&out_dir);
+}

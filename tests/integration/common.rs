@@ -1,0 +1,64 @@
+//! Helpers shared by the integration tests: synthetic maps and brute force.
+
+use glam::Vec3;
+use littoral::photon::Photon;
+use littoral::progress::Silent;
+use littoral::store::codec::TileDecoder;
+use littoral::store::{build_map, BuildOptions, MapFile, WriteSummary};
+use littoral::synth::{Distribution, SynthSource};
+use std::path::{Path, PathBuf};
+
+pub const MIB: u64 = 1 << 20;
+
+/// Build a synthetic map in `dir`.
+pub fn synth_map(
+    dir: &Path,
+    name: &str,
+    source: &SynthSource,
+    tile_photons: Option<u32>,
+    threads: usize,
+    budget: u64,
+) -> (PathBuf, WriteSummary) {
+    let path = dir.join(name);
+    let options = BuildOptions {
+        threads,
+        mem_budget: budget,
+        tile_photons,
+    };
+    let summary = build_map(&path, source, &options, &Silent).expect("build map");
+    (path, summary)
+}
+
+pub fn source(photons: u64, bands: usize, seed: u64, d: Distribution) -> SynthSource {
+    SynthSource::new(photons, bands, seed, d).unwrap()
+}
+
+/// Every photon of a map, decoded tile by tile.
+pub fn all_photons(map: &MapFile) -> Vec<Photon> {
+    let mut dec = TileDecoder::default();
+    let mut all = Vec::new();
+    let mut tile = Vec::new();
+    for t in 0..map.tiles().len() as u32 {
+        map.decode_tile(t, &mut dec, &mut tile).unwrap();
+        all.extend_from_slice(&tile);
+    }
+    all
+}
+
+/// Squared distance computed the way a k-d tree over f32 points does.
+pub fn dist_sq(a: Vec3, b: Vec3) -> f32 {
+    let d = a - b;
+    d.x * d.x + d.y * d.y + d.z * d.z
+}
+
+/// Brute-force squared distances of all photons, ascending.
+pub fn brute_sorted(photons: &[Photon], at: Vec3) -> Vec<f32> {
+    let mut d: Vec<f32> = photons.iter().map(|p| dist_sq(p.position, at)).collect();
+    d.sort_by(f32::total_cmp);
+    d
+}
+
+/// Temporary directory for a test.
+pub fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}

@@ -1,0 +1,11 @@
+//! littoral's integration tests, compiled as one crate.
+
+mod common;
+
+mod cache;
+mod cli;
+mod corruption;
+mod determinism;
+mod memory;
+mod oracle;
+mod roundtrip;

@@ -1,0 +1,61 @@
+//! Memory: `littoral map synth` of 20 M photons under `--mem-budget 64MiB`
+//! stays under the budget plus a fixed overhead.
+//!
+//! The child reports its own peak resident set (VmHWM, read at the end of
+//! its run) on stderr. getrusage on the child would not do: Linux carries
+//! the parent's resident size into a freshly spawned child's maximum, and
+//! the test process is large. VmHWM counts anonymous memory plus resident
+//! file pages (binary text, libraries); synth maps no data files, so it
+//! bounds the anonymous peak from above. The fixed overhead allowed beyond
+//! the budget is 16 MiB: about 3 MiB of process baseline (binary, libc,
+//! allocator), thread stacks and per-thread allocator arenas of the
+//! producers and the writer, and slack for allocator fragmentation. The
+//! writer's own fixed needs (zstd contexts, I/O buffers, channel, spill
+//! metadata) are inside the budget (`WRITER_FIXED_BYTES`).
+
+use crate::common::*;
+use std::process::Command;
+
+const OVERHEAD: u64 = 16 * MIB;
+
+#[test]
+fn synth_20m_photons_within_64mib() {
+    let dir = tempdir();
+    let out = dir.path().join("big.map");
+    let budget = 64 * MIB;
+    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .args([
+            "map",
+            "synth",
+            "--photons",
+            "20000000",
+            "--bands",
+            "64",
+            "--distribution",
+            "water",
+        ])
+        .args(["--mem-budget", "64MiB", "--out"])
+        .arg(&out)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("peak memory"))
+        .expect("summary line");
+    let peak: u64 = line
+        .rsplit_once('(')
+        .and_then(|(_, b)| b.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no peak in: {line}"));
+    eprintln!("{line}");
+    assert!(peak > MIB, "implausible peak {peak}");
+    assert!(
+        peak <= budget + OVERHEAD,
+        "peak {peak} > budget {budget} + overhead {OVERHEAD}"
+    );
+    let map = littoral::store::MapFile::open(&out).unwrap();
+    assert_eq!(map.header().photons, 20_000_000);
+}

@@ -1,0 +1,262 @@
+//! Query oracle: kNN and radius results from the tiled store equal a brute
+//! force search over every decoded photon — at random points, on and near
+//! tile borders, outside the bounds and on the flat floor layer.
+//!
+//! Distances are compared with a relative slack of 1e-6 (f32 rounding in the
+//! two distance computations); photons at distances within that slack of the
+//! cut-off are ties and may be in either result.
+
+use crate::common::*;
+use glam::Vec3;
+use littoral::photon::Photon;
+use littoral::query::{Neighbour, PhotonMap, Search};
+use littoral::store::MapFile;
+use littoral::synth::Distribution;
+use proptest::prelude::*;
+use std::sync::OnceLock;
+
+const REL: f32 = 1e-6;
+
+struct Fixture {
+    _dir: tempfile::TempDir,
+    map: PhotonMap,
+    photons: Vec<Photon>,
+}
+
+fn fixture(d: Distribution) -> &'static Fixture {
+    static UNIFORM: OnceLock<Fixture> = OnceLock::new();
+    static WATER: OnceLock<Fixture> = OnceLock::new();
+    let cell = match d {
+        Distribution::Uniform => &UNIFORM,
+        Distribution::Water => &WATER,
+    };
+    cell.get_or_init(|| {
+        let dir = tempdir();
+        // Small tiles: ~40 tiles, so most searches cross tile borders.
+        let src = source(30_000, 8, 17, d);
+        let (path, summary) = synth_map(dir.path(), "m.map", &src, Some(800), 2, 64 * MIB);
+        assert!(summary.tiles >= 30, "{summary:?}");
+        let file = MapFile::open(&path).unwrap();
+        let photons = all_photons(&file);
+        let map = PhotonMap::new(file, 1024 * MIB).unwrap();
+        Fixture {
+            _dir: dir,
+            map,
+            photons,
+        }
+    })
+}
+
+fn close(a: f32, b: f32) -> bool {
+    (a - b).abs() <= REL * a.abs().max(b.abs()) + 1e-12
+}
+
+pub fn check_knn(map: &PhotonMap, photons: &[Photon], at: Vec3, k: usize, max_r: Option<f32>) {
+    let got = map
+        .query(
+            at,
+            Search::Nearest {
+                k,
+                max_radius: max_r,
+            },
+        )
+        .unwrap();
+    let mut want = brute_sorted(photons, at);
+    if let Some(r) = max_r {
+        let r_sq = r * r;
+        // Photons within rounding of the radius are ties: accept either count.
+        let lo = want.partition_point(|&d| d < r_sq * (1.0 - REL));
+        let hi = want.partition_point(|&d| d <= r_sq * (1.0 + REL));
+        let n = got.len();
+        assert!(
+            n == k.min(want.len()) || (n >= lo.min(k) && n <= hi.min(k)),
+            "at {at}: {n} neighbours, expected between {} and {}",
+            lo.min(k),
+            hi.min(k)
+        );
+        want.truncate(n);
+    } else {
+        want.truncate(k);
+    }
+    assert_eq!(got.len(), want.len(), "at {at}: neighbour count");
+    check_sorted_and_real(&got, at);
+    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert!(
+            close(g.distance_sq, *w),
+            "at {at}: neighbour {i}: {} vs brute {}",
+            g.distance_sq,
+            w
+        );
+    }
+}
+
+pub fn check_radius(map: &PhotonMap, photons: &[Photon], at: Vec3, r: f32) {
+    let got = map.query(at, Search::Radius { radius: r }).unwrap();
+    let want = brute_sorted(photons, at);
+    let r_sq = r * r;
+    let lo = want.partition_point(|&d| d < r_sq * (1.0 - REL));
+    let hi = want.partition_point(|&d| d <= r_sq * (1.0 + REL));
+    assert!(
+        got.len() >= lo && got.len() <= hi,
+        "at {at} r {r}: {} photons, brute force {lo}..={hi}",
+        got.len()
+    );
+    check_sorted_and_real(&got, at);
+    for (i, g) in got.iter().enumerate().take(lo) {
+        assert!(close(g.distance_sq, want[i]), "at {at}: photon {i}");
+    }
+}
+
+/// Results are ordered and each one's distance is its photon's real distance.
+fn check_sorted_and_real(got: &[Neighbour], at: Vec3) {
+    for w in got.windows(2) {
+        assert!(w[0].distance_sq <= w[1].distance_sq);
+    }
+    for n in got {
+        assert!(close(n.distance_sq, dist_sq(n.photon.position, at)));
+    }
+}
+
+/// Points on, just inside and just outside the faces of every tile.
+fn border_points(map: &MapFile) -> Vec<Vec3> {
+    let mut pts = Vec::new();
+    for t in map.tiles() {
+        let c = (t.bounds.min + t.bounds.max) * 0.5;
+        for axis in 0..3 {
+            for face in [t.bounds.min[axis], t.bounds.max[axis]] {
+                for eps in [0.0, 1e-4, -1e-4, 0.05] {
+                    let mut p = c;
+                    p[axis] = face + eps;
+                    pts.push(p);
+                }
+            }
+        }
+        pts.push(t.bounds.min);
+        pts.push(t.bounds.max);
+    }
+    pts
+}
+
+#[test]
+fn knn_and_radius_at_tile_borders() {
+    for d in [Distribution::Uniform, Distribution::Water] {
+        let f = fixture(d);
+        for at in border_points(f.map.file()) {
+            check_knn(&f.map, &f.photons, at, 10, None);
+            check_knn(&f.map, &f.photons, at, 50, Some(1.5));
+            check_radius(&f.map, &f.photons, at, 1.2);
+        }
+    }
+}
+
+#[test]
+fn knn_on_the_floor_layer_and_far_outside() {
+    let f = fixture(Distribution::Water);
+    for at in [
+        Vec3::new(50.0, 50.0, -10.0),
+        Vec3::new(0.0, 0.0, -10.0),
+        Vec3::new(99.9, 0.1, -10.0),
+        Vec3::new(30.0, 70.0, -9.999),
+        Vec3::new(-500.0, 40.0, 3.0),
+        Vec3::new(50.0, 50.0, 1000.0),
+        Vec3::new(1e6, -1e6, -1e6),
+    ] {
+        check_knn(&f.map, &f.photons, at, 1, None);
+        check_knn(&f.map, &f.photons, at, 64, None);
+        check_radius(&f.map, &f.photons, at, 2.0);
+    }
+    // k larger than the map returns every photon.
+    let all = f
+        .map
+        .query(
+            Vec3::ZERO,
+            Search::Nearest {
+                k: 1_000_000,
+                max_radius: None,
+            },
+        )
+        .unwrap();
+    assert_eq!(all.len(), f.photons.len());
+    // A radius that catches nothing.
+    let none = f
+        .map
+        .query(Vec3::new(1e6, 0.0, 0.0), Search::Radius { radius: 1.0 })
+        .unwrap();
+    assert!(none.is_empty());
+}
+
+/// Many random queries against a larger water map with the default tile size.
+#[test]
+fn large_random_cases() {
+    let dir = tempdir();
+    let src = source(300_000, 32, 99, Distribution::Water);
+    let (path, _) = synth_map(dir.path(), "big.map", &src, Some(20_000), 2, 64 * MIB);
+    let file = MapFile::open(&path).unwrap();
+    let photons = all_photons(&file);
+    assert_eq!(photons.len(), 300_000);
+    let map = PhotonMap::new(file, 1024 * MIB).unwrap();
+    let mut rng = littoral::rng::Pcg32::new(3, 0);
+    for i in 0..400 {
+        let at = Vec3::new(
+            -5.0 + 110.0 * rng.uniform_f32(),
+            -5.0 + 110.0 * rng.uniform_f32(),
+            -11.0 + 12.0 * rng.uniform_f32(),
+        );
+        match i % 3 {
+            0 => check_knn(&map, &photons, at, 50, None),
+            1 => check_knn(&map, &photons, at, 50, Some(0.5)),
+            _ => check_radius(&map, &photons, at, 0.6),
+        }
+    }
+    // The batch API returns the same as one query at a time, in input order.
+    let pts: Vec<Vec3> = (0..300)
+        .map(|_| {
+            Vec3::new(
+                100.0 * rng.uniform_f32(),
+                100.0 * rng.uniform_f32(),
+                -3.0 * rng.uniform_f32(),
+            )
+        })
+        .collect();
+    let search = Search::Nearest {
+        k: 20,
+        max_radius: None,
+    };
+    let batch = map.query_batch(&pts, search).unwrap();
+    for (p, b) in pts.iter().zip(&batch) {
+        assert_eq!(*b, map.query(*p, search).unwrap());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn knn_matches_brute_force(
+        x in -20.0f32..120.0, y in -20.0f32..120.0, z in -14.0f32..4.0,
+        k in 1usize..80, water in any::<bool>(), cap in proptest::option::of(0.05f32..5.0),
+    ) {
+        let f = fixture(if water { Distribution::Water } else { Distribution::Uniform });
+        check_knn(&f.map, &f.photons, Vec3::new(x, y, z), k, cap);
+    }
+
+    #[test]
+    fn radius_matches_brute_force(
+        x in -5.0f32..105.0, y in -5.0f32..105.0, z in -11.0f32..1.0,
+        r in 0.0f32..4.0, water in any::<bool>(),
+    ) {
+        let f = fixture(if water { Distribution::Water } else { Distribution::Uniform });
+        check_radius(&f.map, &f.photons, Vec3::new(x, y, z), r);
+    }
+
+    #[test]
+    fn queries_on_tile_faces(tile in 0usize..30, axis in 0usize..3, upper in any::<bool>(), u in 0.0f32..1.0, v in 0.0f32..1.0) {
+        let f = fixture(Distribution::Water);
+        let tiles = f.map.file().tiles();
+        let b = tiles[tile % tiles.len()].bounds;
+        let mut at = b.min + (b.max - b.min) * Vec3::new(u, v, (u + v) * 0.5);
+        at[axis] = if upper { b.max[axis] } else { b.min[axis] };
+        check_knn(&f.map, &f.photons, at, 16, None);
+        check_radius(&f.map, &f.photons, at, 0.8);
+    }
+}
