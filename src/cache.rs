@@ -14,7 +14,7 @@
 //! Not for: deciding which tiles a query needs (see `query`).
 
 use crate::error::{Error, Result};
-use crate::photon::Photon;
+use crate::photon::PackedPhoton;
 use crate::store::codec::TileDecoder;
 use crate::store::MapFile;
 use kiddo::ImmutableKdTree;
@@ -26,17 +26,17 @@ use std::sync::{Arc, Condvar, Mutex};
 /// A decoded tile: photons in stored (Morton) order and a k-d tree whose
 /// items index them.
 pub struct DecodedTile {
-    pub photons: Vec<Photon>,
+    pub photons: Vec<PackedPhoton>,
     pub tree: ImmutableKdTree<f32, 3>,
 }
 
 /// Upper bound of the bytes a tile of `count` photons occupies in the cache:
-/// 32 B per decoded photon, and for the kiddo tree 16 B per point (12 B of
+/// 24 B per decoded photon, and for the kiddo tree 16 B per point (12 B of
 /// coordinates, 4 B item) plus leaf and stem tables and per-leaf padding.
 /// Checked against a counting allocator in the tests.
 pub fn tile_bytes(count: u32) -> u64 {
     let n = count as u64;
-    let photons = n * std::mem::size_of::<Photon>() as u64;
+    let photons = n * std::mem::size_of::<PackedPhoton>() as u64;
     let tree = 16 * n + 8 * n / 2 + 16 * 1024;
     photons + tree
 }
@@ -209,7 +209,7 @@ impl TileCache {
             Ok(tile) => {
                 self.decodes.fetch_add(1, Ordering::Relaxed);
                 self.decoded_bytes.fetch_add(
-                    (tile.photons.len() * std::mem::size_of::<Photon>()) as u64,
+                    (tile.photons.len() * std::mem::size_of::<PackedPhoton>()) as u64,
                     Ordering::Relaxed,
                 );
                 let tile = Arc::new(tile);
@@ -239,7 +239,7 @@ impl TileCache {
         let mut photons = Vec::new();
         DECODER.with(|d| map.decode_tile(t, &mut d.borrow_mut(), &mut photons))?;
         photons.shrink_to_fit();
-        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
+        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position).collect();
         let tree = ImmutableKdTree::new_from_slice(&points)
             .map_err(|e| Error::tile(map.path(), t, format!("k-d tree: {e:?}")))?;
         Ok(DecodedTile { photons, tree })

@@ -28,6 +28,52 @@ pub struct Photon {
     pub power: f32,
 }
 
+/// A photon as held in memory by the tile cache: position decoded, direction
+/// still octahedral-coded (decoded on use by [`PackedPhoton::unpack`]), so a
+/// cached photon costs 24 bytes instead of 32 and decoding a tile skips the
+/// normalisation of every direction.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PackedPhoton {
+    pub position: [f32; 3],
+    pub oct: [u16; 2],
+    pub band: u16,
+    pub _pad: u16,
+    pub power: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<PackedPhoton>() == 24);
+
+impl PackedPhoton {
+    /// Pack a photon (encodes its direction).
+    pub fn pack(p: &Photon) -> Self {
+        PackedPhoton {
+            position: p.position.to_array(),
+            oct: oct_encode(p.direction),
+            band: p.band,
+            _pad: 0,
+            power: p.power,
+        }
+    }
+
+    /// The photon with its direction decoded.
+    #[inline]
+    pub fn unpack(&self) -> Photon {
+        Photon {
+            position: self.pos(),
+            direction: oct_decode(self.oct),
+            band: self.band,
+            power: self.power,
+        }
+    }
+
+    /// Position as a vector.
+    #[inline]
+    pub fn pos(&self) -> Vec3 {
+        Vec3::from_array(self.position)
+    }
+}
+
 /// Worst-case angle between a unit vector and its 2 x 16-bit octahedral code.
 pub const OCT_MAX_ANGLE_ERROR_RAD: f32 = 5.0e-5;
 
@@ -66,20 +112,17 @@ pub fn oct_encode(d: Vec3) -> [u16; 2] {
     best
 }
 
-/// Inverse of [`oct_encode`]; returns a unit vector.
+/// Inverse of [`oct_encode`]; returns a unit vector. Branch-free (the
+/// lower-hemisphere fold is a subtraction), since stored directions point
+/// up or down at random and a branch would mispredict half the time.
 #[inline]
 pub fn oct_decode(code: [u16; 2]) -> Vec3 {
     let u = unsnorm16(code[0]);
     let v = unsnorm16(code[1]);
     let z = 1.0 - u.abs() - v.abs();
-    let (x, y) = if z < 0.0 {
-        (
-            (1.0 - v.abs()) * sign_not_zero(u),
-            (1.0 - u.abs()) * sign_not_zero(v),
-        )
-    } else {
-        (u, v)
-    };
+    let t = (-z).max(0.0);
+    let x = u - t.copysign(u);
+    let y = v - t.copysign(v);
     Vec3::new(x, y, z).normalize()
 }
 

@@ -128,7 +128,7 @@ impl PhotonMap {
                 }
             };
             out.extend(found.into_iter().map(|r| Neighbour {
-                photon: tile.photons[r.item as usize],
+                photon: tile.photons[r.item as usize].unpack(),
                 distance_sq: r.distance,
             }));
             drop(tile);

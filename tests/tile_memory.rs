@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use littoral::cache::tile_bytes;
-use littoral::Photon;
+use littoral::photon::PackedPhoton;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
@@ -35,24 +35,21 @@ fn tile_bytes_bounds_photons_and_tree() {
     let mut rng = littoral::rng::Pcg32::new(4, 4);
     for n in [1usize, 17, 33, 1000, 4097, 65_536, 131_000] {
         let before = LIVE.load(Ordering::SeqCst);
-        let photons: Vec<Photon> = (0..n)
-            .map(|_| Photon {
+        let photons: Vec<PackedPhoton> = (0..n)
+            .map(|_| {
                 // Many share one z, as on a flat floor.
-                position: Vec3::new(
-                    rng.uniform_f32(),
-                    rng.uniform_f32(),
-                    if rng.uniform_f32() < 0.3 {
-                        -10.0
-                    } else {
-                        rng.uniform_f32()
-                    },
-                ),
-                direction: Vec3::Z,
-                band: 0,
-                power: 1.0,
+                let z = if rng.uniform_f32() < 0.3 {
+                    -10.0
+                } else {
+                    rng.uniform_f32()
+                };
+                PackedPhoton {
+                    position: Vec3::new(rng.uniform_f32(), rng.uniform_f32(), z).to_array(),
+                    ..Default::default()
+                }
             })
             .collect();
-        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
+        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position).collect();
         let tree: kiddo::ImmutableKdTree<f32, 3> =
             kiddo::ImmutableKdTree::new_from_slice(&points).unwrap();
         drop(points);

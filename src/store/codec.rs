@@ -18,7 +18,7 @@
 //! band and power values — into long runs that zstd removes.
 
 use super::format::Aabb;
-use crate::photon::{oct_decode, AxisQuantizer, Photon};
+use crate::photon::{AxisQuantizer, PackedPhoton, Photon};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -34,11 +34,7 @@ pub const ZSTD_LEVEL: i32 = 1;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct StagedPhoton {
-    pub position: [f32; 3],
-    pub oct: [u16; 2],
-    pub band: u16,
-    pub _pad: u16,
-    pub power: f32,
+    pub photon: PackedPhoton,
     /// Unique within a map; photons are sorted by it where positions tie.
     pub id: u64,
 }
@@ -49,18 +45,14 @@ impl StagedPhoton {
     /// Stage a photon with its unique id.
     pub fn new(p: &Photon, id: u64) -> Self {
         StagedPhoton {
-            position: p.position.to_array(),
-            oct: crate::photon::oct_encode(p.direction),
-            band: p.band,
-            _pad: 0,
-            power: p.power,
+            photon: PackedPhoton::pack(p),
             id,
         }
     }
 
     #[inline]
     pub fn pos(&self) -> Vec3 {
-        Vec3::from_array(self.position)
+        self.photon.pos()
     }
 }
 
@@ -103,6 +95,8 @@ pub fn morton3(q: [u16; 3]) -> u64 {
 pub fn demorton3(m: u64) -> [u16; 3] {
     [compact1by2(m), compact1by2(m >> 1), compact1by2(m >> 2)]
 }
+
+const MORTON_MASK: u64 = (1 << 48) - 1;
 
 /// The quantisers of a tile box, one per axis.
 #[derive(Clone, Copy, Debug)]
@@ -167,7 +161,7 @@ impl TileEncoder {
             photons
                 .iter()
                 .enumerate()
-                .map(|(i, p)| (morton3(q.encode(p.position)), p.id, i as u32)),
+                .map(|(i, p)| (morton3(q.encode(p.photon.position)), p.id, i as u32)),
         );
         self.keys.sort_unstable();
 
@@ -176,7 +170,7 @@ impl TileEncoder {
         let mut bounds = Aabb::EMPTY;
         let mut prev = 0u64;
         for (i, &(m, _, idx)) in self.keys.iter().enumerate() {
-            let p = &photons[idx as usize];
+            let p = &photons[idx as usize].photon;
             bounds.grow(q.decode(demorton3(m)));
             let mut rec = [0u8; RECORD_BYTES];
             rec[0..6].copy_from_slice(&(m - prev).to_le_bytes()[..6]);
@@ -218,8 +212,8 @@ pub enum DecodeError {
         expected: usize,
         count: u32,
     },
-    #[error("Morton codes do not increase at photon {0}")]
-    Order(usize),
+    #[error("position codes run past 48 bits")]
+    Order,
 }
 
 /// Reusable scratch for [`TileDecoder::decode`].
@@ -238,7 +232,7 @@ impl TileDecoder {
         crc: u32,
         count: u32,
         quant: &Aabb,
-        out: &mut Vec<Photon>,
+        out: &mut Vec<PackedPhoton>,
     ) -> Result<(), DecodeError> {
         let computed = crc32fast::hash(blob);
         if computed != crc {
@@ -256,7 +250,7 @@ impl TileDecoder {
         blob: &[u8],
         count: u32,
         quant: &Aabb,
-        out: &mut Vec<Photon>,
+        out: &mut Vec<PackedPhoton>,
     ) -> Result<(), DecodeError> {
         let n = count as usize;
         let expected = n * RECORD_BYTES;
@@ -281,29 +275,45 @@ impl TileDecoder {
         }
         let q = BoxQuantizer::new(quant);
         let raw = &self.raw[..];
-        let plane = |k: usize| &raw[k * n..(k + 1) * n];
-        let (d0, d1, d2, d3, d4, d5) = (plane(0), plane(1), plane(2), plane(3), plane(4), plane(5));
-        let (o0, o1, o2, o3) = (plane(6), plane(7), plane(8), plane(9));
-        let (b0, b1) = (plane(10), plane(11));
-        let (p0, p1, p2, p3) = (plane(12), plane(13), plane(14), plane(15));
         out.clear();
-        out.reserve(n);
+        out.reserve_exact(n);
+        // Deltas are below 2^48, so while the running code stays below 2^48
+        // no sum can overflow; `high` remembers any excursion above it.
         let mut m = 0u64;
-        for i in 0..n {
-            let delta = u64::from_le_bytes([d0[i], d1[i], d2[i], d3[i], d4[i], d5[i], 0, 0]);
-            m = m.checked_add(delta).ok_or(DecodeError::Order(i))?;
-            if m >> 48 != 0 {
-                return Err(DecodeError::Order(i));
+        let mut high = 0u64;
+        // Un-shuffle a block at a time into a small record array (contiguous
+        // reads from each plane), then decode records from it.
+        const BLOCK: usize = 64;
+        let mut recs = [[0u8; RECORD_BYTES]; BLOCK];
+        let mut base = 0;
+        while base < n {
+            let len = BLOCK.min(n - base);
+            for k in 0..RECORD_BYTES {
+                let plane = &raw[k * n + base..k * n + base + len];
+                for (rec, &byte) in recs.iter_mut().zip(plane) {
+                    rec[k] = byte;
+                }
             }
-            out.push(Photon {
-                position: q.decode(demorton3(m)),
-                direction: oct_decode([
-                    u16::from_le_bytes([o0[i], o1[i]]),
-                    u16::from_le_bytes([o2[i], o3[i]]),
-                ]),
-                band: u16::from_le_bytes([b0[i], b1[i]]),
-                power: f32::from_le_bytes([p0[i], p1[i], p2[i], p3[i]]),
-            });
+            out.extend(recs[..len].iter().map(|r| {
+                let delta = u64::from_le_bytes([r[0], r[1], r[2], r[3], r[4], r[5], 0, 0]);
+                m += delta;
+                high |= m;
+                PackedPhoton {
+                    position: q.decode(demorton3(m & MORTON_MASK)).to_array(),
+                    oct: [
+                        u16::from_le_bytes([r[6], r[7]]),
+                        u16::from_le_bytes([r[8], r[9]]),
+                    ],
+                    band: u16::from_le_bytes([r[10], r[11]]),
+                    _pad: 0,
+                    power: f32::from_le_bytes([r[12], r[13], r[14], r[15]]),
+                }
+            }));
+            base += len;
+        }
+        if high > MORTON_MASK {
+            out.clear();
+            return Err(DecodeError::Order);
         }
         Ok(())
     }
@@ -362,10 +372,10 @@ mod tests {
         let step = (t.quant.max - t.quant.min) / 65535.0;
         // Match decoded photons to inputs by band, power and nearest position.
         let mut used = vec![false; photons.len()];
-        for d in &out {
+        for d in out.iter().map(|p| p.unpack()) {
             assert!(t.bounds.distance_sq(d.position) == 0.0);
             let j = (0..photons.len())
-                .filter(|&j| !used[j] && photons[j].band == d.band)
+                .filter(|&j| !used[j] && photons[j].photon.band == d.band)
                 .min_by(|&a, &b| {
                     let da = photons[a].pos().distance_squared(d.position);
                     let db = photons[b].pos().distance_squared(d.position);
@@ -375,8 +385,8 @@ mod tests {
             used[j] = true;
             let err = (photons[j].pos() - d.position).abs();
             assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
-            assert_eq!(oct_decode(photons[j].oct), d.direction);
-            assert_eq!(d.power, photons[j].power);
+            assert_eq!(photons[j].photon.unpack().direction, d.direction);
+            assert_eq!(d.power, photons[j].photon.power);
         }
     }
 

@@ -15,7 +15,7 @@
 use super::codec::{TileDecoder, RECORD_BYTES};
 use super::format::*;
 use crate::error::{Error, Result};
-use crate::photon::Photon;
+use crate::photon::PackedPhoton;
 use memmap2::Mmap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -183,7 +183,7 @@ impl MapFile {
         &self,
         t: u32,
         decoder: &mut TileDecoder,
-        out: &mut Vec<Photon>,
+        out: &mut Vec<PackedPhoton>,
     ) -> Result<()> {
         let e = &self.tiles[t as usize];
         decoder
@@ -263,11 +263,11 @@ impl MapFile {
                 |(dec, out), t| {
                     self.decode_tile(t, dec, out)?;
                     let e = &self.tiles[t as usize];
-                    if let Some(p) = out.iter().find(|p| e.bounds.distance_sq(p.position) > 0.0) {
+                    if let Some(p) = out.iter().find(|p| e.bounds.distance_sq(p.pos()) > 0.0) {
                         return Err(Error::tile(
                             &self.path,
                             t,
-                            format!("photon at {} lies outside the tile bounds", p.position),
+                            format!("photon at {} lies outside the tile bounds", p.pos()),
                         ));
                     }
                     progress.advance(out.len() as u64);
@@ -283,7 +283,7 @@ impl MapFile {
         for r in results {
             report.photons += r?;
         }
-        report.decoded_bytes = report.photons * std::mem::size_of::<Photon>() as u64;
+        report.decoded_bytes = report.photons * std::mem::size_of::<PackedPhoton>() as u64;
         Ok(report)
     }
 
@@ -295,7 +295,7 @@ impl MapFile {
         for t in 0..self.tiles.len() as u32 {
             self.decode_tile(t, &mut dec, &mut photons)
                 .map_err(std::io::Error::other)?;
-            for p in &photons {
+            for p in photons.iter().map(PackedPhoton::unpack) {
                 let (x, d) = (p.position, p.direction);
                 writeln!(
                     out,

@@ -485,7 +485,7 @@ impl MapWriter {
             }
         }
         let route = |p: &StagedPhoton| match plane {
-            Some((axis, value)) => p.position[axis] < value,
+            Some((axis, value)) => p.photon.position[axis] < value,
             // All sampled positions coincide: halve by id instead.
             None => mix64(p.id ^ 0x5eed) & 1 == 0,
         };

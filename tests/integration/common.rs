@@ -40,7 +40,7 @@ pub fn all_photons(map: &MapFile) -> Vec<Photon> {
     let mut tile = Vec::new();
     for t in 0..map.tiles().len() as u32 {
         map.decode_tile(t, &mut dec, &mut tile).unwrap();
-        all.extend_from_slice(&tile);
+        all.extend(tile.iter().map(|p| p.unpack()));
     }
     all
 }

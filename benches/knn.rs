@@ -1,0 +1,113 @@
+//! kNN (k = 50) on a 10 M photon water map: one in-memory kiddo tree over
+//! every photon, the store with the whole map cached, and the store with a
+//! cache of 5 % of the decoded map in coherent and in random query order.
+
+mod common;
+
+use common::*;
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use littoral::cache::tile_bytes;
+use littoral::query::{PhotonMap, Search};
+use littoral::store::codec::TileDecoder;
+use littoral::store::MapFile;
+use std::num::NonZeroUsize;
+
+const PHOTONS: u64 = 10_000_000;
+const BANDS: usize = 64;
+const QUERIES: usize = 2_000;
+
+fn knn(c: &mut Criterion) {
+    let path = water_map(PHOTONS, BANDS);
+    let random = query_points(QUERIES, BANDS);
+    let ordered = coherent(&random);
+    let search = Search::Nearest {
+        k: 50,
+        max_radius: None,
+    };
+    let mut g = c.benchmark_group("knn50_10M");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(QUERIES as u64));
+
+    {
+        // (a) one kiddo ImmutableKdTree over all photons, in memory.
+        let file = MapFile::open(&path).unwrap();
+        let mut dec = TileDecoder::default();
+        let mut tile = Vec::new();
+        let mut points: Vec<[f32; 3]> = Vec::with_capacity(PHOTONS as usize);
+        for t in 0..file.tiles().len() as u32 {
+            file.decode_tile(t, &mut dec, &mut tile).unwrap();
+            points.extend(tile.iter().map(|p| p.position));
+        }
+        let tree: kiddo::ImmutableKdTree<f32, 3> =
+            kiddo::ImmutableKdTree::new_from_slice(&points).unwrap();
+        let k = NonZeroUsize::new(50).unwrap();
+        for (name, pts) in [
+            ("a_kiddo_in_memory_random", &random),
+            ("a_kiddo_in_memory_coherent", &ordered),
+        ] {
+            g.bench_function(name, |b| {
+                b.iter(|| {
+                    pts.iter()
+                        .map(|p| {
+                            tree.query(&p.to_array())
+                                .nearest_n::<kiddo::SquaredEuclidean<f32>>(k)
+                                .execute()
+                                .len()
+                        })
+                        .sum::<usize>()
+                })
+            });
+        }
+    }
+
+    let full = PhotonMap::new(MapFile::open(&path).unwrap(), 64 << 30).unwrap();
+    for p in &random {
+        full.query(*p, search).unwrap();
+    }
+    for (name, pts) in [
+        ("b_store_all_cached_random", &random),
+        ("b_store_all_cached_coherent", &ordered),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                pts.iter()
+                    .map(|p| full.query(*p, search).unwrap().len())
+                    .sum::<usize>()
+            })
+        });
+    }
+    drop(full);
+
+    let file = MapFile::open(&path).unwrap();
+    let decoded: u64 = file.tiles().iter().map(|t| tile_bytes(t.count)).sum();
+    let budget = decoded / 20;
+    eprintln!(
+        "decoded map {:.1} MiB; 5 % budget {:.1} MiB",
+        decoded as f64 / MIB as f64,
+        budget as f64 / MIB as f64
+    );
+    let small = PhotonMap::new(file, budget).unwrap();
+    for (name, pts) in [
+        ("c_store_5pct_coherent", &ordered),
+        ("d_store_5pct_random", &random),
+    ] {
+        let before = small.cache_stats();
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                pts.iter()
+                    .map(|p| small.query(*p, search).unwrap().len())
+                    .sum::<usize>()
+            })
+        });
+        let after = small.cache_stats();
+        let (h, m) = (after.hits - before.hits, after.misses - before.misses);
+        eprintln!(
+            "{name}: hit rate {:.3} ({h} hits, {m} misses)",
+            h as f64 / (h + m).max(1) as f64
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(benches, knn);
+criterion_main!(benches);
