@@ -14,6 +14,7 @@ use super::writer::{MapWriter, WriteSummary, WriterPlan};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::spectral::BandGrid;
+use glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::path::Path;
@@ -73,16 +74,25 @@ pub fn build_map(
 ) -> Result<WriteSummary> {
     let n = source.indices();
     // Pilot: evenly strided indices; its photons give the partition and the
-    // expected number of stored photons.
-    let pilot_n = n.min(PILOT_INDICES);
-    let mut pilot = Vec::new();
+    // expected number of stored photons. A probe of the first indices sizes
+    // it so the pilot's positions take at most an eighth of the budget.
     let mut staged = Vec::new();
+    let probe = n.min(1024);
+    source.generate(0..probe, &mut staged);
+    let per_index = (staged.len() as f64 / probe.max(1) as f64).max(1.0 / 64.0);
+    let cap = (options.mem_budget / 8 / std::mem::size_of::<Vec3>() as u64) as f64;
+    let pilot_n = n
+        .min(PILOT_INDICES)
+        .min((cap / per_index) as u64)
+        .max(probe.min(n));
+    let mut pilot = Vec::new();
     for j in 0..pilot_n {
         let i = j * n / pilot_n.max(1);
         staged.clear();
         source.generate(i..i + 1, &mut staged);
         pilot.extend(staged.iter().map(|p| p.pos()));
     }
+    drop(staged);
     let expected = if pilot_n == 0 {
         0
     } else {

@@ -4,7 +4,9 @@
 //! Photons are routed to the cells of a pilot [`Partition`] and appended to
 //! per-cell buffers made of fixed-size chunks (so growth never copies). When
 //! buffered bytes pass the budget's share, the largest buffers are spilled as
-//! zstd frames to an anonymous scratch file next to the output. At the end
+//! zstd frames to an anonymous scratch file next to the output. Each frame
+//! starts with a reference to the previous frame of its cell, so memory
+//! holds one reference per cell however much was spilled. At the end
 //! each cell is read back (frames, then what is still buffered), encoded by
 //! the tile codec and appended to the map; a cell holding more than the split
 //! threshold is first split in two at the median of an order-independent
@@ -124,6 +126,9 @@ pub struct WriteSummary {
     pub peak_buffered_bytes: u64,
 }
 
+/// Where a spilled frame lies in the scratch file. On disk a frame is the
+/// previous frame's reference (16 bytes, or zeros with count 0 for none)
+/// followed by the zstd-compressed records.
 #[derive(Clone, Copy, Debug)]
 struct Frame {
     offset: u64,
@@ -131,10 +136,13 @@ struct Frame {
     count: u32,
 }
 
+const FRAME_LINK: usize = 16;
+
 #[derive(Debug)]
 struct CellBuf {
     chunks: Vec<Vec<StagedPhoton>>,
-    frames: Vec<Frame>,
+    /// The newest spilled frame; each frame links to the one before.
+    last_frame: Option<Frame>,
     count: u64,
     bounds: Aabb,
 }
@@ -143,7 +151,7 @@ impl CellBuf {
     fn new() -> Self {
         CellBuf {
             chunks: Vec::new(),
-            frames: Vec::new(),
+            last_frame: None,
             count: 0,
             bounds: Aabb::EMPTY,
         }
@@ -159,6 +167,7 @@ struct Scratch {
     compressor: zstd::bulk::Compressor<'static>,
     decompressor: zstd::bulk::Decompressor<'static>,
     frame: Vec<u8>,
+    payload: Vec<u8>,
     frames_written: u64,
 }
 
@@ -167,7 +176,8 @@ impl Scratch {
         Error::io(&self.name, action, e)
     }
 
-    /// Spill every chunk of `cell` as frames and free them.
+    /// Spill every chunk of `cell` as frames and free them; returns the
+    /// buffer bytes freed.
     fn spill(&mut self, cell: &mut CellBuf) -> Result<u64> {
         let mut freed = 0;
         for chunk in cell.chunks.drain(..) {
@@ -175,16 +185,26 @@ impl Scratch {
             if chunk.is_empty() {
                 continue;
             }
+            let prev = cell.last_frame.unwrap_or(Frame {
+                offset: 0,
+                len: 0,
+                count: 0,
+            });
             self.frame.clear();
+            self.frame.extend_from_slice(&prev.offset.to_le_bytes());
+            self.frame.extend_from_slice(&prev.len.to_le_bytes());
+            self.frame.extend_from_slice(&prev.count.to_le_bytes());
             let bound = zstd::zstd_safe::compress_bound(chunk.len() * STAGED);
-            self.frame.reserve(bound);
+            self.payload.clear();
+            self.payload.reserve(bound);
             self.compressor
-                .compress_to_buffer(bytemuck::cast_slice(&chunk), &mut self.frame)
+                .compress_to_buffer(bytemuck::cast_slice(&chunk), &mut self.payload)
                 .map_err(|e| self.err("compress spill", e))?;
+            self.frame.extend_from_slice(&self.payload);
             self.file
                 .write_all_at(&self.frame, self.len)
                 .map_err(|e| self.err("write", e))?;
-            cell.frames.push(Frame {
+            cell.last_frame = Some(Frame {
                 offset: self.len,
                 len: self.frame.len() as u32,
                 count: chunk.len() as u32,
@@ -195,24 +215,51 @@ impl Scratch {
         Ok(freed)
     }
 
-    /// Read frame `f` back into `out` (cleared first).
-    fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<()> {
+    /// Read frame `f` back into `out` (cleared first); returns the frame
+    /// before it in the same cell.
+    fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
+        let bad =
+            |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string());
         self.frame.clear();
         self.frame.resize(f.len as usize, 0);
         self.file
             .read_exact_at(&mut self.frame, f.offset)
             .map_err(|e| self.err("read", e))?;
+        if self.frame.len() < FRAME_LINK {
+            return Err(self.err("read", bad("spill frame too short")));
+        }
+        let link = &self.frame[..FRAME_LINK];
+        let prev = Frame {
+            offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
+            len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
+            count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
+        };
         out.clear();
         out.resize(f.count as usize, StagedPhoton::zeroed());
         let got = self
             .decompressor
-            .decompress_to_buffer(&self.frame, bytemuck::cast_slice_mut::<_, u8>(out))
+            .decompress_to_buffer(
+                &self.frame[FRAME_LINK..],
+                bytemuck::cast_slice_mut::<_, u8>(out),
+            )
             .map_err(|e| self.err("decompress spill", e))?;
         if got != f.count as usize * STAGED {
-            return Err(self.err(
-                "read",
-                std::io::Error::new(std::io::ErrorKind::InvalidData, "spill frame length"),
-            ));
+            return Err(self.err("read", bad("spill frame length")));
+        }
+        Ok((prev.count > 0).then_some(prev))
+    }
+
+    /// Call `visit` with the records of every spilled frame of a cell,
+    /// newest first, through the reusable buffer `buf`.
+    fn for_each_frame(
+        &mut self,
+        mut next: Option<Frame>,
+        buf: &mut Vec<StagedPhoton>,
+        mut visit: impl FnMut(&[StagedPhoton]),
+    ) -> Result<()> {
+        while let Some(f) = next {
+            next = self.read(f, buf)?;
+            visit(buf);
         }
         Ok(())
     }
@@ -299,6 +346,7 @@ impl MapWriter {
                 compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL).map_err(io)?,
                 decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
                 frame: Vec::new(),
+                payload: Vec::new(),
                 frames_written: 0,
             },
             summary: WriteSummary::default(),
@@ -369,10 +417,10 @@ impl MapWriter {
                 }
                 staged.clear();
                 staged.reserve_exact(cell.count as usize);
-                for f in std::mem::take(&mut cell.frames) {
-                    self.scratch.read(f, &mut frame_buf)?;
-                    staged.extend_from_slice(&frame_buf);
-                }
+                self.scratch
+                    .for_each_frame(cell.last_frame.take(), &mut frame_buf, |records| {
+                        staged.extend_from_slice(records)
+                    })?;
                 for chunk in cell.chunks.drain(..) {
                     staged.extend_from_slice(&chunk);
                     self.buffered -= (chunk.capacity() * STAGED) as u64;
@@ -453,10 +501,10 @@ impl MapWriter {
                 sample.push(p.pos());
             }
         };
-        for f in cell.frames.clone() {
-            self.scratch.read(f, frame_buf)?;
-            frame_buf.iter().for_each(&mut take);
-        }
+        self.scratch
+            .for_each_frame(cell.last_frame, frame_buf, |records| {
+                records.iter().for_each(&mut take)
+            })?;
         cell.chunks.iter().flatten().for_each(&mut take);
 
         // The plane: the sample median on the longest axis that separates it.
@@ -495,9 +543,11 @@ impl MapWriter {
         let limit = (self.plan.budget - WRITER_FIXED_BYTES) / 16;
         let chunk_records = self.plan.chunk_records;
         let mut kid_bytes = [0u64; 2];
-        let frames = std::mem::take(&mut cell.frames);
-        for f in frames {
-            self.scratch.read(f, frame_buf)?;
+        // Children spill to the end of the scratch file while the parent's
+        // (immutable) frames are read back.
+        let mut next = cell.last_frame.take();
+        while let Some(f) = next {
+            next = self.scratch.read(f, frame_buf)?;
             let batch = std::mem::take(frame_buf);
             self.route(
                 &batch,
