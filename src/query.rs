@@ -36,6 +36,10 @@ pub enum Search {
     Radius { radius: f32 },
 }
 
+thread_local! {
+    static CANDIDATES: std::cell::RefCell<Vec<(f32, u32)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// A map file with its tile cache: the query interface of the store.
 pub struct PhotonMap {
     file: MapFile,
@@ -85,17 +89,40 @@ impl PhotonMap {
         if k == 0 || limit_sq.is_nan() || limit_sq < 0.0 {
             return Ok(());
         }
-        let mut order: Vec<(f32, u32)> = self
-            .file
-            .tiles()
-            .iter()
-            .enumerate()
-            .map(|(t, e)| (e.bounds.distance_sq(at), t as u32))
-            .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK)
-            .collect();
-        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        CANDIDATES.with(|c| {
+            let mut candidates = c.borrow_mut();
+            self.search_tiles(at, k, limit_sq, &mut candidates, out)
+        })
+    }
+
+    /// Visit the tiles in `candidates` nearest box first, as long as a box
+    /// can still hold a result. Picking the nearest box by a linear scan is
+    /// cheaper than sorting: a query visits only a few of the map's tiles.
+    fn search_tiles(
+        &self,
+        at: Vec3,
+        k: usize,
+        limit_sq: f32,
+        candidates: &mut Vec<(f32, u32)>,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        candidates.clear();
+        candidates.extend(
+            self.file
+                .tiles()
+                .iter()
+                .enumerate()
+                .map(|(t, e)| (e.bounds.distance_sq(at), t as u32))
+                .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK),
+        );
         let q = at.to_array();
-        for (box_sq, t) in order {
+        while !candidates.is_empty() {
+            let (i, &(box_sq, t)) = candidates
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(a.1 .1.cmp(&b.1 .1)))
+                .expect("not empty");
+            candidates.swap_remove(i);
             let bound_sq = if out.len() >= k {
                 out[k - 1].distance_sq
             } else {
