@@ -89,9 +89,21 @@ struct QueryArgs {
     /// All photons within this radius (m).
     #[arg(long, allow_hyphen_values = true)]
     radius: Option<f32>,
+    /// Only photons of this layer (default: both).
+    #[arg(long, value_enum)]
+    layer: Option<Layer>,
     /// Tile cache budget.
     #[arg(long, default_value = "256MiB")]
     mem_budget: String,
+}
+
+/// Photon map layers.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Layer {
+    /// Photons stored at scattering events in the water.
+    Volume,
+    /// Photons stored on the floor and targets.
+    Surface,
 }
 
 /// Progress bars on stderr, one per stage.
@@ -215,7 +227,15 @@ fn run_map(cmd: MapCommand) -> AnyResult<()> {
                 }
             }
             let map = PhotonMap::new(MapFile::open(&a.file)?, budget)?;
-            let found = map.query(at, search)?;
+            let found = match a.layer {
+                None => map.query(at, search)?,
+                Some(Layer::Volume) => {
+                    map.query_layer(at, littoral::photon::LAYER_VOLUME, search)?
+                }
+                Some(Layer::Surface) => {
+                    map.query_layer(at, littoral::photon::LAYER_SURFACE, search)?
+                }
+            };
             let json: Vec<serde_json::Value> = found
                 .iter()
                 .map(|n| {

@@ -38,20 +38,28 @@ pub struct PackedPhoton {
     pub position: [f32; 3],
     pub oct: [u16; 2],
     pub band: u16,
-    pub _pad: u16,
+    /// The map layer the photon belongs to ([`LAYER_VOLUME`] or [`LAYER_SURFACE`]).
+    pub layer: u16,
     pub power: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<PackedPhoton>() == 24);
 
+/// Layer of photons stored at scattering events in the water.
+pub const LAYER_VOLUME: u16 = 0;
+/// Layer of photons stored where light meets the floor or a target.
+pub const LAYER_SURFACE: u16 = 1;
+/// Number of layers a map holds.
+pub const LAYERS: usize = 2;
+
 impl PackedPhoton {
-    /// Pack a photon (encodes its direction).
-    pub fn pack(p: &Photon) -> Self {
+    /// Pack a photon of `layer` (encodes its direction).
+    pub fn pack(p: &Photon, layer: u16) -> Self {
         PackedPhoton {
             position: p.position.to_array(),
             oct: oct_encode(p.direction),
             band: p.band,
-            _pad: 0,
+            layer,
             power: p.power,
         }
     }

@@ -72,15 +72,28 @@ impl PhotonMap {
         &self.cache
     }
 
-    /// Photons matching `search` around `at`, nearest first.
+    /// Photons of every layer matching `search` around `at`, nearest first.
     pub fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
         let mut out = Vec::new();
-        self.query_into(at, search, &mut out)?;
+        self.query_into(at, None, search, &mut out)?;
         Ok(out)
     }
 
-    /// As [`PhotonMap::query`], reusing `out`.
-    pub fn query_into(&self, at: Vec3, search: Search, out: &mut Vec<Neighbour>) -> Result<()> {
+    /// Photons of `layer` (`photon::LAYER_*`) matching `search` around `at`.
+    pub fn query_layer(&self, at: Vec3, layer: u16, search: Search) -> Result<Vec<Neighbour>> {
+        let mut out = Vec::new();
+        self.query_into(at, Some(layer), search, &mut out)?;
+        Ok(out)
+    }
+
+    /// As [`PhotonMap::query`] restricted to `layer` if given, reusing `out`.
+    pub fn query_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
         out.clear();
         let (k, limit_sq) = match search {
             Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
@@ -91,7 +104,7 @@ impl PhotonMap {
         }
         CANDIDATES.with(|c| {
             let mut candidates = c.borrow_mut();
-            self.search_tiles(at, k, limit_sq, &mut candidates, out)
+            self.search_tiles(at, layer, k, limit_sq, &mut candidates, out)
         })
     }
 
@@ -101,6 +114,7 @@ impl PhotonMap {
     fn search_tiles(
         &self,
         at: Vec3,
+        layer: Option<u16>,
         k: usize,
         limit_sq: f32,
         candidates: &mut Vec<(f32, u32)>,
@@ -112,6 +126,7 @@ impl PhotonMap {
                 .tiles()
                 .iter()
                 .enumerate()
+                .filter(|(_, e)| layer.is_none_or(|l| e.layer == l as u32))
                 .map(|(t, e)| (e.bounds.distance_sq(at), t as u32))
                 .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK),
         );

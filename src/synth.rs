@@ -8,11 +8,11 @@
 //!   the sphere.
 //! - `water`: what a coastal map looks like — 75 % of photons in the water
 //!   column with depth exponential (scale 2 m) below the surface, directions
-//!   leaning downward; 25 % on a flat floor at the domain's bottom, arriving
-//!   from above. Powers take the two values a Russian-roulette emission from
+//!   leaning downward (volume layer); 25 % on a flat floor at the domain's
+//!   bottom, arriving from above (surface layer). Powers take the two values a Russian-roulette emission from
 //!   sun and sky gives (equal power per source).
 
-use crate::photon::Photon;
+use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use crate::rng::Pcg32;
 use crate::spectral::BandGrid;
 use crate::store::{Aabb, PhotonSource, StagedPhoton};
@@ -65,6 +65,11 @@ impl SynthSource {
 
     /// Photon `i`, as stored.
     pub fn photon(&self, i: u64) -> Photon {
+        self.photon_and_layer(i).0
+    }
+
+    /// Photon `i` and its layer: floor photons of `water` are surface photons.
+    pub fn photon_and_layer(&self, i: u64) -> (Photon, u16) {
         let mut rng = Pcg32::new(self.seed, i);
         let d = &self.domain;
         let ext = d.max - d.min;
@@ -73,12 +78,15 @@ impl SynthSource {
         let band = rng.below(self.bands.len() as u32) as u16;
         let nb = self.bands.len() as f32 / self.photons.max(1) as f32;
         match self.distribution {
-            Distribution::Uniform => Photon {
-                position: Vec3::new(x, y, d.min.z + ext.z * rng.uniform_f32()),
-                direction: uniform_sphere(&mut rng),
-                band,
-                power: nb,
-            },
+            Distribution::Uniform => (
+                Photon {
+                    position: Vec3::new(x, y, d.min.z + ext.z * rng.uniform_f32()),
+                    direction: uniform_sphere(&mut rng),
+                    band,
+                    power: nb,
+                },
+                LAYER_VOLUME,
+            ),
             Distribution::Water => {
                 let on_floor = rng.uniform_f32() < WATER_FLOOR_SHARE;
                 let from_sky = rng.uniform_f32() < WATER_SKY_SHARE;
@@ -94,12 +102,20 @@ impl SynthSource {
                 if !on_floor && dir.z > 0.0 && rng.uniform_f32() < 0.6 {
                     dir.z = -dir.z; // downwelling light dominates
                 }
-                Photon {
-                    position: Vec3::new(x, y, z),
-                    direction: dir,
-                    band,
-                    power: if from_sky { 0.4 * nb } else { nb },
-                }
+                let layer = if on_floor {
+                    LAYER_SURFACE
+                } else {
+                    LAYER_VOLUME
+                };
+                (
+                    Photon {
+                        position: Vec3::new(x, y, z),
+                        direction: dir,
+                        band,
+                        power: if from_sky { 0.4 * nb } else { nb },
+                    },
+                    layer,
+                )
             }
         }
     }
@@ -118,7 +134,10 @@ impl PhotonSource for SynthSource {
     }
 
     fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
-        out.extend(range.map(|i| StagedPhoton::new(&self.photon(i), i)));
+        out.extend(range.map(|i| {
+            let (photon, layer) = self.photon_and_layer(i);
+            StagedPhoton::new(&photon, layer, i)
+        }));
     }
 
     fn bands(&self) -> BandGrid {

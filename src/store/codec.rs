@@ -17,7 +17,7 @@
 //! small and the shuffle puts their zero high bytes — and the few distinct
 //! band and power values — into long runs that zstd removes.
 
-use super::format::Aabb;
+use super::format::{Aabb, TileEntry};
 use crate::photon::{AxisQuantizer, PackedPhoton, Photon};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -42,10 +42,10 @@ pub struct StagedPhoton {
 const _: () = assert!(std::mem::size_of::<StagedPhoton>() == 32);
 
 impl StagedPhoton {
-    /// Stage a photon with its unique id.
-    pub fn new(p: &Photon, id: u64) -> Self {
+    /// Stage a photon of `layer` with its unique id.
+    pub fn new(p: &Photon, layer: u16, id: u64) -> Self {
         StagedPhoton {
-            photon: PackedPhoton::pack(p),
+            photon: PackedPhoton::pack(p, layer),
             id,
         }
     }
@@ -133,6 +133,7 @@ impl BoxQuantizer {
 pub struct EncodedTile {
     pub blob: Vec<u8>,
     pub count: u32,
+    pub layer: u16,
     pub quant: Aabb,
     pub bounds: Aabb,
     pub crc: u32,
@@ -151,6 +152,8 @@ impl TileEncoder {
     pub fn encode(&mut self, photons: &[StagedPhoton]) -> std::io::Result<EncodedTile> {
         let n = photons.len();
         assert!(n > 0 && n <= u32::MAX as usize, "tile of {n} photons");
+        let layer = photons[0].photon.layer;
+        debug_assert!(photons.iter().all(|p| p.photon.layer == layer));
         let mut quant = Aabb::EMPTY;
         for p in photons {
             quant.grow(p.pos());
@@ -192,6 +195,7 @@ impl TileEncoder {
         Ok(EncodedTile {
             blob,
             count: n as u32,
+            layer,
             quant,
             bounds,
             crc,
@@ -224,34 +228,32 @@ pub struct TileDecoder {
 }
 
 impl TileDecoder {
-    /// Check `blob` against `crc` and decode its `count` photons into `out`
-    /// (cleared first), in stored (Morton) order.
+    /// Check `blob` against its index entry's checksum and decode its
+    /// photons into `out` (cleared first), in stored (Morton) order.
     pub fn decode(
         &mut self,
         blob: &[u8],
-        crc: u32,
-        count: u32,
-        quant: &Aabb,
+        entry: &TileEntry,
         out: &mut Vec<PackedPhoton>,
     ) -> Result<(), DecodeError> {
         let computed = crc32fast::hash(blob);
-        if computed != crc {
+        if computed != entry.crc {
             return Err(DecodeError::Checksum {
-                stored: crc,
+                stored: entry.crc,
                 computed,
             });
         }
-        self.decode_unchecked(blob, count, quant, out)
+        self.decode_unchecked(blob, entry, out)
     }
 
     /// As [`TileDecoder::decode`] without the checksum (for benchmarks of the codec alone).
     pub fn decode_unchecked(
         &mut self,
         blob: &[u8],
-        count: u32,
-        quant: &Aabb,
+        entry: &TileEntry,
         out: &mut Vec<PackedPhoton>,
     ) -> Result<(), DecodeError> {
+        let (count, quant, layer) = (entry.count, &entry.quant, entry.layer as u16);
         let n = count as usize;
         let expected = n * RECORD_BYTES;
         self.raw.clear();
@@ -305,7 +307,7 @@ impl TileDecoder {
                         u16::from_le_bytes([r[8], r[9]]),
                     ],
                     band: u16::from_le_bytes([r[10], r[11]]),
-                    _pad: 0,
+                    layer,
                     power: f32::from_le_bytes([r[12], r[13], r[14], r[15]]),
                 }
             }));
@@ -355,9 +357,21 @@ mod tests {
                     band: r.below(128) as u16,
                     power: 0.25,
                 };
-                StagedPhoton::new(&p, i as u64)
+                StagedPhoton::new(&p, 0, i as u64)
             })
             .collect()
+    }
+
+    fn entry(t: &EncodedTile) -> TileEntry {
+        TileEntry {
+            offset: 0,
+            length: t.blob.len() as u32,
+            count: t.count,
+            quant: t.quant,
+            bounds: t.bounds,
+            crc: t.crc,
+            layer: t.layer as u32,
+        }
     }
 
     #[test]
@@ -366,7 +380,7 @@ mod tests {
         let t = TileEncoder::default().encode(&photons).unwrap();
         let mut out = Vec::new();
         TileDecoder::default()
-            .decode(&t.blob, t.crc, t.count, &t.quant, &mut out)
+            .decode(&t.blob, &entry(&t), &mut out)
             .unwrap();
         assert_eq!(out.len(), photons.len());
         let step = (t.quant.max - t.quant.min) / 65535.0;
@@ -409,25 +423,30 @@ mod tests {
         let mut bad = t.blob.clone();
         bad[t.blob.len() / 2] ^= 0x40;
         assert!(matches!(
-            dec.decode(&bad, t.crc, t.count, &t.quant, &mut out),
+            dec.decode(&bad, &entry(&t), &mut out),
             Err(DecodeError::Checksum { .. })
         ));
         // A valid frame with the wrong count is caught by its length.
-        assert!(dec
-            .decode(&t.blob, t.crc, t.count - 1, &t.quant, &mut out)
-            .is_err());
+        let e = entry(&t);
+        let fewer = TileEntry {
+            count: t.count - 1,
+            ..e
+        };
+        assert!(dec.decode(&t.blob, &fewer, &mut out).is_err());
+        let more = TileEntry {
+            count: t.count + 1,
+            ..e
+        };
         assert!(matches!(
-            dec.decode(&t.blob, t.crc, t.count + 1, &t.quant, &mut out),
+            dec.decode(&t.blob, &more, &mut out),
             Err(DecodeError::Length { .. })
         ));
-        assert!(dec
-            .decode(
-                &t.blob[..t.blob.len() - 3],
-                crc32fast::hash(&t.blob[..t.blob.len() - 3]),
-                t.count,
-                &t.quant,
-                &mut out
-            )
-            .is_err());
+        // A truncated frame (with a matching checksum) is caught by zstd.
+        let short = &t.blob[..t.blob.len() - 3];
+        let short_entry = TileEntry {
+            crc: crc32fast::hash(short),
+            ..e
+        };
+        assert!(dec.decode(short, &short_entry, &mut out).is_err());
     }
 }

@@ -6,7 +6,8 @@
 //!                     crc32 of everything before it
 //!            blobs    one zstd frame per tile (see `codec`)
 //!            index    one 72-byte entry per tile (offset, length, count,
-//!                     quantisation box, photon bounds, crc32 of the blob)
+//!                     quantisation box, photon bounds, crc32 of the blob,
+//!                     layer: 0 volume photons, 1 surface photons)
 //! end - 40   footer   index offset u64, index length u64, tile count u32,
 //!                     index crc32, version u32, footer crc32, magic "LTRLEND\0"
 //! ```
@@ -125,6 +126,8 @@ pub struct TileEntry {
     pub bounds: Aabb,
     /// CRC-32 of the blob bytes.
     pub crc: u32,
+    /// The layer of every photon in the tile (`photon::LAYER_*`).
+    pub layer: u32,
 }
 
 /// The trailing fixed-size record that locates the index.
@@ -356,7 +359,7 @@ impl TileEntry {
         w.aabb(&self.quant);
         w.aabb(&self.bounds);
         w.u32(self.crc);
-        w.u32(0);
+        w.u32(self.layer);
     }
 
     pub fn decode(r: &mut ByteReader) -> Result<TileEntry> {
@@ -367,8 +370,8 @@ impl TileEntry {
             quant: r.aabb()?,
             bounds: r.aabb()?,
             crc: r.u32()?,
+            layer: r.u32()?,
         };
-        r.u32()?;
         Ok(e)
     }
 }
@@ -467,6 +470,7 @@ mod tests {
             quant: Aabb::EMPTY,
             bounds: Aabb::EMPTY,
             crc: 4,
+            layer: 1,
         }
         .encode(&mut w);
         assert_eq!(w.0.len(), INDEX_ENTRY_LEN);

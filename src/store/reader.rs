@@ -15,7 +15,7 @@
 use super::codec::{TileDecoder, RECORD_BYTES};
 use super::format::*;
 use crate::error::{Error, Result};
-use crate::photon::PackedPhoton;
+use crate::photon::{PackedPhoton, LAYERS};
 use memmap2::Mmap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -109,6 +109,9 @@ impl MapFile {
             if e.count == 0 || e.length == 0 {
                 return Err(bad("empty tile".into()));
             }
+            if e.layer as usize >= LAYERS {
+                return Err(bad(format!("layer {} is not a known layer", e.layer)));
+            }
             if !e.quant.is_valid() || !e.bounds.is_valid() {
                 return Err(bad("box is not valid".into()));
             }
@@ -187,7 +190,7 @@ impl MapFile {
     ) -> Result<()> {
         let e = &self.tiles[t as usize];
         decoder
-            .decode(self.blob(t), e.crc, e.count, &e.quant, out)
+            .decode(self.blob(t), e, out)
             .map_err(|err| Error::tile(&self.path, t, err.to_string()))?;
         let nbands = self.header.bands.len();
         if let Some(p) = out.iter().find(|p| p.band as usize >= nbands) {
@@ -207,6 +210,10 @@ pub struct MapInfo {
     pub path: String,
     pub format_version: u32,
     pub photons: u64,
+    /// Photons stored at scattering events in the water.
+    pub volume_photons: u64,
+    /// Photons stored on the floor and targets.
+    pub surface_photons: u64,
     pub tiles: u32,
     pub bands: usize,
     pub bands_nm: Vec<f32>,
@@ -227,6 +234,15 @@ pub struct VerifyReport {
 }
 
 impl MapFile {
+    /// Photons in tiles of `layer`.
+    pub fn layer_photons(&self, layer: u16) -> u64 {
+        self.tiles
+            .iter()
+            .filter(|t| t.layer == layer as u32)
+            .map(|t| t.count as u64)
+            .sum()
+    }
+
     /// Summary of the map for `map info`.
     pub fn info(&self) -> MapInfo {
         let h = &self.header;
@@ -234,6 +250,8 @@ impl MapFile {
             path: self.path.display().to_string(),
             format_version: FORMAT_VERSION,
             photons: h.photons,
+            volume_photons: self.layer_photons(crate::photon::LAYER_VOLUME),
+            surface_photons: self.layer_photons(crate::photon::LAYER_SURFACE),
             tiles: h.tiles,
             bands: h.bands.len(),
             bands_nm: h.bands.centers_nm().to_vec(),

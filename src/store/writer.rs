@@ -1,7 +1,8 @@
 //! The streaming tile sort: photons in any order in, one map file out,
 //! within a memory budget.
 //!
-//! Photons are routed to the cells of a pilot [`Partition`] and appended to
+//! Photons are routed by layer (volume, surface) and by the cells of a pilot
+//! [`Partition`] (shared by the layers) and appended to
 //! per-cell buffers made of fixed-size chunks (so growth never copies). When
 //! buffered bytes pass the budget's share, the largest buffers are spilled as
 //! zstd frames to an anonymous scratch file next to the output. Each frame
@@ -22,6 +23,7 @@ use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON, ZSTD_LEVE
 use super::format::{Aabb, ByteWriter, Footer, Header, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
 use crate::error::{Error, Result};
+use crate::photon::LAYERS;
 use crate::progress::Progress;
 use crate::rng::mix64;
 use crate::spectral::BandGrid;
@@ -327,7 +329,9 @@ impl MapWriter {
         let mut out = BufWriter::with_capacity(1 << 20, tmp);
         out.write_all(&bytes)
             .map_err(|e| Error::io(path, "write", e))?;
-        let cells = (0..partition.cells()).map(|_| CellBuf::new()).collect();
+        let cells = (0..partition.cells() as usize * LAYERS)
+            .map(|_| CellBuf::new())
+            .collect();
         let io = |e| Error::io(&scratch_name, "create", e);
         Ok(MapWriter {
             path: path.to_path_buf(),
@@ -355,9 +359,17 @@ impl MapWriter {
 
     /// Add photons (ids must be unique across the whole map).
     pub fn push(&mut self, photons: &[StagedPhoton]) -> Result<()> {
+        if let Some(p) = photons.iter().find(|p| p.photon.layer as usize >= LAYERS) {
+            return Err(Error::invalid(
+                "photon layer",
+                format!("photon {} has layer {}", p.id, p.photon.layer),
+            ));
+        }
         let chunk_bytes = (self.plan.chunk_records * STAGED) as u64;
         for p in photons {
-            let cell = &mut self.cells[self.partition.cell_of(p.pos()) as usize];
+            let index = p.photon.layer as usize * self.partition.cells() as usize
+                + self.partition.cell_of(p.pos()) as usize;
+            let cell = &mut self.cells[index];
             match cell.chunks.last_mut() {
                 Some(c) if c.len() < c.capacity() => c.push(*p),
                 _ => {
@@ -438,6 +450,7 @@ impl MapWriter {
                     quant: tile.quant,
                     bounds: tile.bounds,
                     crc: tile.crc,
+                    layer: tile.layer as u32,
                 });
                 self.offset += tile.blob.len() as u64;
                 progress.advance(tile.count as u64);

@@ -78,6 +78,15 @@ fn synth_info_verify_query_dump() {
 
     let info = json(&littoral(&["map", "info", p(&map)]));
     assert_eq!(info["photons"], 50_000);
+    let (vol, surf) = (
+        info["volume_photons"].as_u64().unwrap(),
+        info["surface_photons"].as_u64().unwrap(),
+    );
+    assert_eq!(vol + surf, 50_000);
+    assert!(
+        surf > 10_000 && surf < 15_000,
+        "a quarter on the floor: {surf}"
+    );
     assert_eq!(info["bands"], 16);
     assert_eq!(info["format_version"], 1);
     assert!(info["tiles"].as_u64().unwrap() >= 1);

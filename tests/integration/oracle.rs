@@ -260,3 +260,51 @@ proptest! {
         check_radius(&f.map, &f.photons, at, 0.8);
     }
 }
+
+/// Queries restricted to one layer equal brute force over that layer's
+/// photons (the water map keeps its floor photons in the surface layer).
+#[test]
+fn layer_queries_match_brute_force() {
+    use littoral::photon::{LAYER_SURFACE, LAYER_VOLUME};
+    use littoral::store::codec::TileDecoder;
+    let f = fixture(Distribution::Water);
+    let file = f.map.file();
+    let mut by_layer: [Vec<Photon>; 2] = [Vec::new(), Vec::new()];
+    let mut dec = TileDecoder::default();
+    let mut tile = Vec::new();
+    for t in 0..file.tiles().len() as u32 {
+        file.decode_tile(t, &mut dec, &mut tile).unwrap();
+        for p in &tile {
+            by_layer[p.layer as usize].push(p.unpack());
+        }
+    }
+    assert!(by_layer[1].iter().all(|p| p.position.z == -10.0));
+    assert!(by_layer[0].len() > 2 * by_layer[1].len() && !by_layer[1].is_empty());
+    assert_eq!(file.layer_photons(LAYER_SURFACE), by_layer[1].len() as u64);
+    let mut rng = littoral::rng::Pcg32::new(8, 8);
+    for _ in 0..200 {
+        let at = Vec3::new(
+            100.0 * rng.uniform_f32(),
+            100.0 * rng.uniform_f32(),
+            -10.5 + 11.0 * rng.uniform_f32(),
+        );
+        for (layer, photons) in [(LAYER_VOLUME, &by_layer[0]), (LAYER_SURFACE, &by_layer[1])] {
+            let got = f
+                .map
+                .query_layer(
+                    at,
+                    layer,
+                    Search::Nearest {
+                        k: 20,
+                        max_radius: None,
+                    },
+                )
+                .unwrap();
+            let want = brute_sorted(photons, at);
+            assert_eq!(got.len(), 20);
+            for (g, w) in got.iter().zip(&want) {
+                assert!(close(g.distance_sq, *w), "layer {layer} at {at}");
+            }
+        }
+    }
+}
