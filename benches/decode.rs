@@ -23,7 +23,7 @@ fn decode(c: &mut Criterion) {
     });
     g.bench_function("decode_no_checksum", |b| {
         b.iter(|| {
-            dec.decode_unchecked(file.blob(t), e.count, &e.quant, &mut out)
+            dec.decode_unchecked(file.blob(t), &e, &mut out)
                 .unwrap()
         })
     });
