@@ -40,6 +40,14 @@ pub enum Error {
     /// An argument or configuration value is out of range.
     #[error("{field}: {what}")]
     Invalid { field: String, what: String },
+    /// A scene file is malformed or holds an impossible value.
+    #[error("{path}:{line}: {key}: {what}")]
+    Scene {
+        path: PathBuf,
+        line: usize,
+        key: String,
+        what: String,
+    },
     /// The memory budget cannot hold what the operation needs.
     #[error("memory budget of {budget} bytes is too small: {what}")]
     Budget { budget: u64, what: String },

@@ -1,6 +1,10 @@
 //! littoral — out-of-core spectral photon mapping for coastal waters.
 //!
 //! The modules, in data-flow order:
+//! - [`scene`]: the scene file, validated ([`scene::Scene`]).
+//! - [`optics`]: data tables, IOPs, phase functions, the sea surface.
+//! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
+//! - [`emit`]: photon tracing into the store, tallies, energy ([`emit::Emitter`]).
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
@@ -11,15 +15,19 @@
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
-//! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory).
+//! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory),
+//! [`output`] (files written whole or not at all).
 
 pub mod cache;
+pub mod emit;
 pub mod error;
 pub mod mem;
+pub mod output;
 pub mod photon;
 pub mod progress;
 pub mod query;
 pub mod rng;
+pub mod scene;
 pub mod size;
 pub mod spectral;
 pub mod store;

@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use littoral::progress::Progress;
 use littoral::query::{PhotonMap, Search};
 use littoral::store::{build_map, BuildOptions, MapFile};
+use littoral::scene::{Overrides, Scene};
 use littoral::synth::{Distribution, SynthSource};
 use std::io::Write;
 use std::path::PathBuf;
@@ -25,9 +26,49 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Trace a scene's photons into a photon map, with irradiance tallies.
+    Emit(EmitArgs),
+    /// Scene files: print the built-in scene, validate a file.
+    #[command(subcommand)]
+    Scene(SceneCommand),
     /// Photon map files: build synthetic maps, inspect, verify, query, dump.
     #[command(subcommand)]
     Map(MapCommand),
+}
+
+#[derive(Subcommand)]
+enum SceneCommand {
+    /// Print the built-in coastal scene (TOML).
+    Default,
+    /// Validate a scene file; prints a summary on success.
+    Check { file: PathBuf },
+}
+
+#[derive(Args)]
+struct EmitArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Photon map to write.
+    #[arg(long)]
+    map: PathBuf,
+    /// Write the emission report (JSON) here.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Photons to trace (overrides the scene).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Worker threads (default: all cores); the map is identical for any number.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Random seed (overrides the scene).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
+    #[arg(long, default_value = "256MiB")]
+    mem_budget: String,
+    /// No progress on stderr.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -168,7 +209,93 @@ type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
 fn run(cli: Cli) -> AnyResult<()> {
     match cli.command {
         Command::Map(cmd) => run_map(cmd),
+        Command::Scene(SceneCommand::Default) => {
+            print!("{}", littoral::scene::COASTAL_TOML);
+            Ok(())
+        }
+        Command::Scene(SceneCommand::Check { file }) => {
+            let scene = Scene::load(&file, &Overrides::default())?;
+            println!(
+                "{}: scene '{}' is valid: {} bands {:.1}-{:.1} nm, {} photons, {} triangles, {} tally depths",
+                file.display(),
+                scene.name,
+                scene.bands.len(),
+                scene.bands.centers_nm()[0],
+                scene.bands.centers_nm()[scene.bands.len() - 1],
+                scene.photons,
+                scene.geometry.triangle_count(),
+                scene.tally_depths.len()
+            );
+            Ok(())
+        }
+        Command::Emit(a) => run_emit(a),
     }
+}
+
+fn run_emit(a: EmitArgs) -> AnyResult<()> {
+    let start = std::time::Instant::now();
+    let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
+    if a.photons == Some(0) {
+        return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
+    }
+    let overrides = Overrides {
+        photons: a.photons,
+        bands: None,
+        seed: a.seed,
+    };
+    let scene = Scene::load(&a.scene, &overrides)?;
+    let parsed = start.elapsed().as_secs_f64();
+    let bars = Bars::new(a.quiet);
+    let options = BuildOptions {
+        threads: a.threads,
+        ..BuildOptions::with_budget(budget)
+    };
+    let emission = littoral::emit::emit(&scene, &a.map, &options, &bars)?;
+    let total = start.elapsed().as_secs_f64();
+    let physics = littoral::emit::report::EmissionReport::new(&scene, &emission.totals, &emission.photon_power);
+    let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
+    let report = serde_json::json!({
+        "report": physics,
+        "map": {
+            "path": a.map.display().to_string(),
+            "photons": emission.map.photons,
+            "tiles": emission.map.tiles,
+            "file_bytes": emission.map.file_bytes,
+            "bytes_per_photon": emission.map.file_bytes as f64 / emission.map.photons.max(1) as f64,
+            "spilled_bytes": emission.map.spilled_bytes,
+        },
+        "timings_s": { "scene": parsed, "emit_and_store": total - parsed, "total": total },
+        "peak_rss_bytes": peak,
+    });
+    // The physics fields sit at the top level of the report.
+    let mut report = report;
+    if let Some(obj) = report.as_object_mut() {
+        if let Some(serde_json::Value::Object(p)) = obj.remove("report") {
+            for (k, v) in p {
+                obj.insert(k, v);
+            }
+        }
+    }
+    let text = serde_json::to_string_pretty(&report)? + "\n";
+    match &a.report {
+        Some(path) => littoral::output::write_atomic(path, text.as_bytes())?,
+        None => print!("{text}"),
+    }
+    if !a.quiet {
+        eprintln!(
+            "emitted {} photons: {} volume + {} surface photons stored in {} ({} tiles, {:.2} bytes/photon); energy closure {:.2} sigma; {:.1} s, peak memory {:.1} MiB",
+            physics.photons.traced,
+            physics.photons.stored_volume,
+            physics.photons.stored_surface,
+            a.map.display(),
+            emission.map.tiles,
+            emission.map.file_bytes as f64 / emission.map.photons.max(1) as f64,
+            physics.energy.closure_sigma,
+            total,
+            peak as f64 / (1 << 20) as f64
+        );
+    }
+    Ok(())
 }
 
 fn run_map(cmd: MapCommand) -> AnyResult<()> {

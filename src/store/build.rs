@@ -36,6 +36,11 @@ pub trait PhotonSource: Sync {
     fn indices(&self) -> u64;
     /// Append the photons stored by source indices `range` to `out`.
     fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>);
+    /// As `generate`, for the pilot sample only: a source that keeps
+    /// statistics of its run must not count these.
+    fn sample(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
+        self.generate(range, out)
+    }
     /// The spectral bands of the photons.
     fn bands(&self) -> BandGrid;
     /// Bounds of the scene.
@@ -78,7 +83,7 @@ pub fn build_map(
     // it so the pilot's positions take at most an eighth of the budget.
     let mut staged = Vec::new();
     let probe = n.min(1024);
-    source.generate(0..probe, &mut staged);
+    source.sample(0..probe, &mut staged);
     let per_index = (staged.len() as f64 / probe.max(1) as f64).max(1.0 / 64.0);
     let cap = (options.mem_budget / 8 / std::mem::size_of::<Vec3>() as u64) as f64;
     let pilot_n = n
@@ -89,7 +94,7 @@ pub fn build_map(
     for j in 0..pilot_n {
         let i = j * n / pilot_n.max(1);
         staged.clear();
-        source.generate(i..i + 1, &mut staged);
+        source.sample(i..i + 1, &mut staged);
         pilot.extend(staged.iter().map(|p| p.pos()));
     }
     drop(staged);

@@ -8,4 +8,6 @@ mod corruption;
 mod determinism;
 mod memory;
 mod oracle;
+mod physics;
+mod scenes;
 mod roundtrip;

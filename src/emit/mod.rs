@@ -1,0 +1,177 @@
+//! Photon emission: sun and sky light traced in parallel through the scene
+//! and streamed into the photon store, with irradiance tallies and energy
+//! accounting.
+//!
+//! Photon `i` owns the random stream (scene seed, i): it picks its source
+//! and band jointly in proportion to the horizontal spectral irradiance
+//! times the band width, so every photon of a band carries the same power
+//! P_b = A sum(E w) / (N w_b) (W nm^-1; A the domain area, w_b the FWHM).
+//! The map is therefore a pure function of the scene and the seed, whatever
+//! the thread count (see `store::build`), and so is the report: tallies are
+//! summed as integers.
+//!
+//! Not for: rendering (the map and report are this stage's outputs).
+
+pub mod report;
+pub mod tally;
+pub mod trace;
+
+use crate::error::Result;
+use crate::progress::Progress;
+use crate::rng::Pcg32;
+use crate::scene::Scene;
+use crate::spectral::BandGrid;
+use crate::store::{build_map, Aabb, BuildOptions, PhotonSource, StagedPhoton, WriteSummary};
+use glam::Vec3;
+use std::ops::Range;
+use std::path::Path;
+use std::sync::Mutex;
+use tally::{PhotonTally, Totals};
+use trace::Source;
+
+/// Emits the photons of a scene.
+pub struct Emitter<'s> {
+    scene: &'s Scene,
+    /// Cumulative distribution over (source, band): sun bands then sky bands.
+    cdf: Vec<f64>,
+    /// Power per photon of each band (W nm^-1).
+    photon_power: Vec<f64>,
+    totals: Mutex<Totals>,
+}
+
+impl<'s> Emitter<'s> {
+    pub fn new(scene: &'s Scene) -> Result<Self> {
+        let nb = scene.bands.len();
+        let w: Vec<f64> = scene.bands.fwhm_nm().iter().map(|&f| f as f64).collect();
+        let mut weights = Vec::with_capacity(2 * nb);
+        weights.extend((0..nb).map(|b| scene.sun.horizontal_irradiance(b) * w[b]));
+        weights.extend((0..nb).map(|b| scene.sky.irradiance[b] * w[b]));
+        let total: f64 = weights.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Err(crate::Error::invalid(
+                "sun/sky",
+                "the scene emits no light in any band (all irradiances are zero)",
+            ));
+        }
+        let mut acc = 0.0;
+        let cdf = weights
+            .iter()
+            .map(|x| {
+                acc += x / total;
+                acc
+            })
+            .collect();
+        let n = scene.photons as f64;
+        let area = scene.domain.area_m2();
+        let photon_power = w.iter().map(|wb| area * total / (n * wb)).collect();
+        Ok(Emitter {
+            scene,
+            cdf,
+            photon_power,
+            totals: Mutex::new(Totals::new(nb, scene.tally_depths.len())),
+        })
+    }
+
+    /// Power carried by each photon of `band` (W nm^-1).
+    pub fn photon_power(&self, band: usize) -> f64 {
+        self.photon_power[band]
+    }
+
+    /// Trace photon `i`; appends what it stores to `out`.
+    fn trace_one(&self, i: u64, tally: &mut PhotonTally, out: &mut Vec<StagedPhoton>) -> (usize, trace::Traced) {
+        let mut rng = Pcg32::new(self.scene.seed, i);
+        let u = rng.uniform_f64();
+        let k = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+        let nb = self.scene.bands.len();
+        let (source, band) = if k < nb { (Source::Sun, k) } else { (Source::Sky, k - nb) };
+        tally.clear();
+        let t = trace::trace(self.scene, i, &mut rng, source, band, self.photon_power[band] as f32, tally, out);
+        (band, t)
+    }
+
+    /// Trace indices `range`, adding to the run totals.
+    fn run(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
+        let mut local = Totals::new(self.scene.bands.len(), self.scene.tally_depths.len());
+        let mut tally = PhotonTally::new(self.scene.tally_depths.len());
+        for i in range {
+            let (band, t) = self.trace_one(i, &mut tally, out);
+            local.record(band, t.fate, &tally);
+            local.stored_volume += t.stored_volume as u64;
+            local.stored_surface += t.stored_surface as u64;
+            local.truncated += t.truncated as u64;
+        }
+        self.totals.lock().unwrap_or_else(|e| e.into_inner()).merge(&local);
+    }
+
+    /// The totals so far.
+    pub fn totals(&self) -> Totals {
+        self.totals.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Trace every photon without storing any (validation runs and tallies).
+    pub fn trace_all(&self, threads: usize) -> Result<Totals> {
+        use rayon::prelude::*;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| crate::Error::invalid("threads", e.to_string()))?;
+        let n = self.scene.photons;
+        let batch = crate::store::build::BATCH_INDICES;
+        pool.install(|| {
+            (0..n.div_ceil(batch)).into_par_iter().for_each(|b| {
+                let mut sink = Vec::new();
+                self.run(b * batch..((b + 1) * batch).min(n), &mut sink);
+            })
+        });
+        Ok(self.totals())
+    }
+}
+
+impl PhotonSource for Emitter<'_> {
+    fn indices(&self) -> u64 {
+        self.scene.photons
+    }
+
+    fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
+        self.run(range, out);
+    }
+
+    fn sample(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
+        let mut tally = PhotonTally::new(self.scene.tally_depths.len());
+        for i in range {
+            self.trace_one(i, &mut tally, out);
+        }
+    }
+
+    fn bands(&self) -> BandGrid {
+        self.scene.bands.clone()
+    }
+
+    fn bounds(&self) -> Aabb {
+        let d = &self.scene.domain;
+        let g = self.scene.geometry.bounds();
+        let deepest = if g.is_valid() { g.min.z.min(-1.0) } else { -1.0 };
+        Aabb {
+            min: Vec3::new(0.0, 0.0, deepest),
+            max: Vec3::new(d.size_m[0] as f32, d.size_m[1] as f32, 0.0),
+        }
+    }
+}
+
+/// What `emit` produced.
+pub struct Emission {
+    pub map: WriteSummary,
+    pub totals: Totals,
+    pub photon_power: Vec<f64>,
+}
+
+/// Trace the scene's photons into the map at `map_path`.
+pub fn emit(scene: &Scene, map_path: &Path, options: &BuildOptions, progress: &dyn Progress) -> Result<Emission> {
+    let emitter = Emitter::new(scene)?;
+    let map = build_map(map_path, &emitter, options, progress)?;
+    Ok(Emission {
+        map,
+        totals: emitter.totals(),
+        photon_power: emitter.photon_power.clone(),
+    })
+}

@@ -1,0 +1,189 @@
+//! The emission report: irradiance profiles, apparent optical properties
+//! and the energy budget, per band, in absolute units.
+
+use super::tally::{Totals, ED, EOD, EOU, EU};
+use crate::scene::Scene;
+use serde::Serialize;
+
+/// Irradiances at one tally depth (W m^-2 nm^-1 per band).
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct DepthTally {
+    pub depth_m: f64,
+    pub Ed: Vec<f64>,
+    pub Eu: Vec<f64>,
+    pub Eod: Vec<f64>,
+    pub Eou: Vec<f64>,
+    pub Ed_stderr: Vec<f64>,
+    pub Eu_stderr: Vec<f64>,
+    pub Eod_stderr: Vec<f64>,
+    pub Eou_stderr: Vec<f64>,
+    /// Irradiance reflectance Eu / Ed.
+    pub R: Vec<f64>,
+}
+
+/// Just above the surface (Eu includes light reflected by the surface).
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct AboveSurface {
+    pub Ed: Vec<f64>,
+    pub Eu: Vec<f64>,
+    pub Ed_stderr: Vec<f64>,
+    pub Eu_stderr: Vec<f64>,
+}
+
+/// Diffuse attenuation of Ed between two tally depths (1/m).
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct KdLayer {
+    pub from_m: f64,
+    pub to_m: f64,
+    pub Kd: Vec<f64>,
+}
+
+/// Where the emitted power went, per band (W nm^-1).
+#[derive(Clone, Debug, Serialize)]
+pub struct Energy {
+    pub units: &'static str,
+    pub emitted: Vec<f64>,
+    pub escaped: Vec<f64>,
+    pub absorbed_water: Vec<f64>,
+    pub absorbed_surfaces: Vec<f64>,
+    pub lost_edges: Vec<f64>,
+    /// emitted - (escaped + absorbed + lost), per band.
+    pub residual: Vec<f64>,
+    /// residual / its standard error, per band.
+    pub closure_sigma_per_band: Vec<f64>,
+    /// The largest |residual / standard error| over the bands.
+    pub closure_sigma: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PhotonCounts {
+    pub traced: u64,
+    pub stored_volume: u64,
+    pub stored_surface: u64,
+    /// Paths stopped at the event limit (counted as absorbed in water).
+    pub truncated: u64,
+}
+
+/// The physics part of the emission report.
+#[derive(Clone, Debug, Serialize)]
+pub struct EmissionReport {
+    pub scene: String,
+    pub bands_nm: Vec<f32>,
+    pub fwhm_nm: Vec<f32>,
+    pub tally: Vec<DepthTally>,
+    pub above_surface: AboveSurface,
+    pub kd: Vec<KdLayer>,
+    pub energy: Energy,
+    pub photons: PhotonCounts,
+    /// Power carried by one photon of each band (W nm^-1).
+    pub photon_power: Vec<f64>,
+}
+
+impl EmissionReport {
+    /// Turn run totals into absolute quantities.
+    pub fn new(scene: &Scene, totals: &Totals, photon_power: &[f64]) -> Self {
+        let nb = scene.bands.len();
+        let n = totals.traced as f64;
+        let area = scene.domain.area_m2();
+        // A tally mean per traced photon m becomes irradiance m N P_b / A.
+        let scale: Vec<f64> = (0..nb).map(|b| n * photon_power[b] / area).collect();
+        let series = |slot: usize| -> (Vec<f64>, Vec<f64>) {
+            (0..nb)
+                .map(|b| {
+                    let (m, se) = totals.mean_and_stderr(slot, b);
+                    (m * scale[b], se * scale[b])
+                })
+                .unzip()
+        };
+        let mut tally = Vec::new();
+        for (d, &depth) in scene.tally_depths.iter().enumerate() {
+            let (ed, ed_se) = series(totals.slot(d, ED));
+            let (eu, eu_se) = series(totals.slot(d, EU));
+            let (eod, eod_se) = series(totals.slot(d, EOD));
+            let (eou, eou_se) = series(totals.slot(d, EOU));
+            let r = ed.iter().zip(&eu).map(|(d, u)| if *d > 0.0 { u / d } else { 0.0 }).collect();
+            tally.push(DepthTally {
+                depth_m: depth,
+                Ed: ed,
+                Eu: eu,
+                Eod: eod,
+                Eou: eou,
+                Ed_stderr: ed_se,
+                Eu_stderr: eu_se,
+                Eod_stderr: eod_se,
+                Eou_stderr: eou_se,
+                R: r,
+            });
+        }
+        let kd = tally
+            .windows(2)
+            .map(|w| KdLayer {
+                from_m: w[0].depth_m,
+                to_m: w[1].depth_m,
+                Kd: w[0]
+                    .Ed
+                    .iter()
+                    .zip(&w[1].Ed)
+                    .map(|(a, b)| {
+                        if *a > 0.0 && *b > 0.0 {
+                            (a / b).ln() / (w[1].depth_m - w[0].depth_m)
+                        } else {
+                            f64::NAN
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        let (up, uu) = totals.above_slots();
+        let (ed, ed_se) = series(up);
+        let (eu, eu_se) = series(uu);
+
+        let power = |counts: &[u64]| -> Vec<f64> { counts.iter().zip(photon_power).map(|(&c, p)| c as f64 * p).collect() };
+        let emitted: Vec<f64> = (0..nb).map(|b| scene.incident_irradiance(b) * area).collect();
+        let escaped = power(&totals.escaped);
+        let absorbed_water = power(&totals.absorbed_water);
+        let absorbed_surfaces = power(&totals.absorbed_surfaces);
+        let lost_edges = power(&totals.lost_edges);
+        let mut residual = Vec::with_capacity(nb);
+        let mut sigma = Vec::with_capacity(nb);
+        for b in 0..nb {
+            let sinks = escaped[b] + absorbed_water[b] + absorbed_surfaces[b] + lost_edges[b];
+            let res = emitted[b] - sinks;
+            // The band's photon count is binomial: sd = P_b sqrt(N p (1 - p)).
+            let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
+            let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
+            residual.push(res);
+            sigma.push(if sd > 0.0 { res / sd } else if res == 0.0 { 0.0 } else { f64::INFINITY });
+        }
+        let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+        EmissionReport {
+            scene: scene.name.clone(),
+            bands_nm: scene.bands.centers_nm().to_vec(),
+            fwhm_nm: scene.bands.fwhm_nm().to_vec(),
+            tally,
+            above_surface: AboveSurface { Ed: ed, Eu: eu, Ed_stderr: ed_se, Eu_stderr: eu_se },
+            kd,
+            energy: Energy {
+                units: "W nm^-1",
+                emitted,
+                escaped,
+                absorbed_water,
+                absorbed_surfaces,
+                lost_edges,
+                residual,
+                closure_sigma_per_band: sigma,
+                closure_sigma,
+            },
+            photons: PhotonCounts {
+                traced: totals.traced,
+                stored_volume: totals.stored_volume,
+                stored_surface: totals.stored_surface,
+                truncated: totals.truncated,
+            },
+            photon_power: photon_power.to_vec(),
+        }
+    }
+}

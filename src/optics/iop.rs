@@ -1,0 +1,328 @@
+//! Inherent optical properties of the water, per band and per position.
+//!
+//! a = a_w + a_phi + a_g + a_nap and b = b_w + b_p (1/m), with
+//! - a_w pure water (Pope & Fry 1997 composite), b_w pure seawater
+//!   (Smith & Baker 1981), pure-water phase function Rayleigh-like with
+//!   q = 0.835;
+//! - a_phi = A_phi(l) Chl^E_phi(l) (Bricaud et al. 1998), Chl in mg m^-3;
+//! - a_g = CDOM(440) exp(-S_g (l - 440)), a_nap = NAP(440) exp(-S_nap (l - 440));
+//! - b_p = b_p(550) (550 / l)^n with b_p(550) = 0.30 Chl^0.62 (case-1
+//!   water) unless given, and the scene's particle phase function.
+//! In explicit mode a and b are given directly (the same in every band)
+//! and all scattering uses the scene's phase function.
+//!
+//! Constituents may vary in space (`ConstituentField`). Every IOP grows
+//! with every constituent, so the per-band majorant (for delta tracking) is
+//! the extinction at the field's largest concentrations.
+//!
+//! Not for: the sampling of free paths (see `emit`).
+
+use glam::Vec3;
+
+/// Concentrations at a point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Constituents {
+    /// Chlorophyll a, mg m^-3.
+    pub chl: f64,
+    /// CDOM absorption at 440 nm, 1/m.
+    pub cdom_440: f64,
+    /// Non-algal particle absorption at 440 nm, 1/m.
+    pub nap_440: f64,
+}
+
+impl Constituents {
+    fn lerp(&self, o: &Constituents, t: f64) -> Constituents {
+        Constituents {
+            chl: self.chl + (o.chl - self.chl) * t,
+            cdom_440: self.cdom_440 + (o.cdom_440 - self.cdom_440) * t,
+            nap_440: self.nap_440 + (o.nap_440 - self.nap_440) * t,
+        }
+    }
+    fn max(&self, o: &Constituents) -> Constituents {
+        Constituents {
+            chl: self.chl.max(o.chl),
+            cdom_440: self.cdom_440.max(o.cdom_440),
+            nap_440: self.nap_440.max(o.nap_440),
+        }
+    }
+}
+
+/// A regular 3-D grid of constituents, trilinear between nodes and clamped
+/// at its faces.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstituentGrid {
+    /// Node coordinates: x (m), y (m), depth (m, positive down).
+    pub xs: Vec<f64>,
+    pub ys: Vec<f64>,
+    pub depths: Vec<f64>,
+    /// Values, x fastest, then y, then depth.
+    pub values: Vec<Constituents>,
+}
+
+impl ConstituentGrid {
+    fn at(&self, p: Vec3) -> Constituents {
+        let (ix, tx) = cell(&self.xs, p.x as f64);
+        let (iy, ty) = cell(&self.ys, p.y as f64);
+        let (iz, tz) = cell(&self.depths, -(p.z as f64));
+        let (nx, ny) = (self.xs.len(), self.ys.len());
+        let v = |i: usize, j: usize, k: usize| &self.values[i + nx * (j + ny * k)];
+        let i1 = (ix + 1).min(nx - 1);
+        let j1 = (iy + 1).min(ny - 1);
+        let k1 = (iz + 1).min(self.depths.len() - 1);
+        let x0 = v(ix, iy, iz).lerp(v(i1, iy, iz), tx);
+        let x1 = v(ix, j1, iz).lerp(v(i1, j1, iz), tx);
+        let x2 = v(ix, iy, k1).lerp(v(i1, iy, k1), tx);
+        let x3 = v(ix, j1, k1).lerp(v(i1, j1, k1), tx);
+        x0.lerp(&x1, ty).lerp(&x2.lerp(&x3, ty), tz)
+    }
+
+    fn max(&self) -> Constituents {
+        self.values.iter().fold(Constituents::default(), |m, c| m.max(c))
+    }
+}
+
+/// Index of the cell holding `x` and the fraction across it (clamped).
+fn cell(nodes: &[f64], x: f64) -> (usize, f64) {
+    if nodes.len() < 2 || x <= nodes[0] {
+        return (0, 0.0);
+    }
+    let last = nodes.len() - 1;
+    if x >= nodes[last] {
+        return (last, 0.0);
+    }
+    let i = nodes.partition_point(|&n| n <= x) - 1;
+    (i, (x - nodes[i]) / (nodes[i + 1] - nodes[i]))
+}
+
+/// How the concentrations vary through the water.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ConstituentField {
+    Uniform(Constituents),
+    /// Linear across the domain along x (axis 0) or y (axis 1), from the
+    /// low edge to the high edge.
+    Gradient {
+        axis: usize,
+        size_m: f64,
+        from: Constituents,
+        to: Constituents,
+    },
+    /// Depth layers (top, bottom in m, positive down); outside every layer
+    /// the `base` concentrations hold.
+    Layers {
+        base: Constituents,
+        layers: Vec<(f64, f64, Constituents)>,
+    },
+    Grid(ConstituentGrid),
+}
+
+impl ConstituentField {
+    /// Concentrations at `p`.
+    pub fn at(&self, p: Vec3) -> Constituents {
+        match self {
+            ConstituentField::Uniform(c) => *c,
+            ConstituentField::Gradient {
+                axis,
+                size_m,
+                from,
+                to,
+            } => {
+                let t = (p[*axis] as f64 / size_m).clamp(0.0, 1.0);
+                from.lerp(to, t)
+            }
+            ConstituentField::Layers { base, layers } => {
+                let depth = -(p.z as f64);
+                layers
+                    .iter()
+                    .find(|(top, bottom, _)| depth >= *top && depth < *bottom)
+                    .map_or(*base, |l| l.2)
+            }
+            ConstituentField::Grid(g) => g.at(p),
+        }
+    }
+
+    /// The largest concentrations anywhere.
+    pub fn max(&self) -> Constituents {
+        match self {
+            ConstituentField::Uniform(c) => *c,
+            ConstituentField::Gradient { from, to, .. } => from.max(to),
+            ConstituentField::Layers { base, layers } => {
+                layers.iter().fold(*base, |m, l| m.max(&l.2))
+            }
+            ConstituentField::Grid(g) => g.max(),
+        }
+    }
+}
+
+/// Per-band spectra of the bio-optical model, already band-averaged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandSpectra {
+    pub a_w: Vec<f64>,
+    pub b_w: Vec<f64>,
+    pub a_phi_a: Vec<f64>,
+    pub a_phi_e: Vec<f64>,
+    /// exp(-S_g (l - 440)) per band.
+    pub cdom_shape: Vec<f64>,
+    /// exp(-S_nap (l - 440)) per band.
+    pub nap_shape: Vec<f64>,
+    /// (550 / l)^n per band.
+    pub bp_shape: Vec<f64>,
+}
+
+/// The IOPs at a point in one band (1/m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iop {
+    pub a: f64,
+    /// Scattering by pure water (Rayleigh-like phase function).
+    pub b_w: f64,
+    /// Scattering by particles (the scene's phase function).
+    pub b_p: f64,
+}
+
+impl Iop {
+    pub fn b(&self) -> f64 {
+        self.b_w + self.b_p
+    }
+    pub fn c(&self) -> f64 {
+        self.a + self.b_w + self.b_p
+    }
+}
+
+/// The water's optical model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WaterModel {
+    /// a and b the same everywhere and in every band; all scattering uses
+    /// the particle phase function.
+    Explicit { a: f64, b: f64 },
+    Constituents {
+        spectra: BandSpectra,
+        field: ConstituentField,
+        /// Fixed b_p(550) (1/m), or None for 0.30 Chl^0.62.
+        bp_550: Option<f64>,
+    },
+}
+
+impl WaterModel {
+    /// IOPs at `p` in `band`.
+    #[inline]
+    pub fn iop(&self, p: Vec3, band: usize) -> Iop {
+        match self {
+            WaterModel::Explicit { a, b } => Iop {
+                a: *a,
+                b_w: 0.0,
+                b_p: *b,
+            },
+            WaterModel::Constituents {
+                spectra,
+                field,
+                bp_550,
+            } => Self::from_constituents(spectra, &field.at(p), *bp_550, band),
+        }
+    }
+
+    fn from_constituents(s: &BandSpectra, c: &Constituents, bp_550: Option<f64>, band: usize) -> Iop {
+        let a_phi = if c.chl > 0.0 {
+            s.a_phi_a[band] * c.chl.powf(s.a_phi_e[band])
+        } else {
+            0.0
+        };
+        let a = s.a_w[band] + a_phi + c.cdom_440 * s.cdom_shape[band] + c.nap_440 * s.nap_shape[band];
+        let bp550 = bp_550.unwrap_or(if c.chl > 0.0 { 0.30 * c.chl.powf(0.62) } else { 0.0 });
+        Iop {
+            a,
+            b_w: s.b_w[band],
+            b_p: bp550 * s.bp_shape[band],
+        }
+    }
+
+    /// An upper bound of the extinction anywhere in `band` (exact for
+    /// uniform water).
+    pub fn majorant(&self, band: usize) -> f64 {
+        match self {
+            WaterModel::Explicit { a, b } => a + b,
+            WaterModel::Constituents {
+                spectra,
+                field,
+                bp_550,
+            } => Self::from_constituents(spectra, &field.max(), *bp_550, band).c(),
+        }
+    }
+
+    /// True when the IOPs do not depend on position.
+    pub fn is_uniform(&self) -> bool {
+        match self {
+            WaterModel::Explicit { .. } => true,
+            WaterModel::Constituents { field, .. } => matches!(field, ConstituentField::Uniform(_)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spectra() -> BandSpectra {
+        BandSpectra {
+            a_w: vec![0.01, 0.4],
+            b_w: vec![0.004, 0.001],
+            a_phi_a: vec![0.04, 0.01],
+            a_phi_e: vec![0.7, 0.9],
+            cdom_shape: vec![1.0, 0.1],
+            nap_shape: vec![1.0, 0.2],
+            bp_shape: vec![1.2, 0.8],
+        }
+    }
+
+    #[test]
+    fn majorant_bounds_every_point_of_a_gradient() {
+        let m = WaterModel::Constituents {
+            spectra: spectra(),
+            field: ConstituentField::Gradient {
+                axis: 0,
+                size_m: 100.0,
+                from: Constituents { chl: 0.5, cdom_440: 0.02, nap_440: 0.0 },
+                to: Constituents { chl: 5.0, cdom_440: 0.3, nap_440: 0.05 },
+            },
+            bp_550: None,
+        };
+        for band in 0..2 {
+            let maj = m.majorant(band);
+            for i in 0..=100 {
+                let c = m.iop(Vec3::new(i as f32, 3.0, -2.0), band).c();
+                assert!(c <= maj * (1.0 + 1e-12), "band {band} x {i}");
+            }
+            assert!((m.iop(Vec3::new(100.0, 0.0, -1.0), band).c() - maj).abs() < 1e-12);
+        }
+        // The model: a at chl 5, band 0.
+        let iop = m.iop(Vec3::new(100.0, 0.0, -1.0), 0);
+        let want_a = 0.01 + 0.04 * 5f64.powf(0.7) + 0.3 + 0.05;
+        assert!((iop.a - want_a).abs() < 1e-12);
+        assert!((iop.b_p - 0.30 * 5f64.powf(0.62) * 1.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn grid_interpolates_trilinearly_and_clamps() {
+        let c = |v: f64| Constituents { chl: v, cdom_440: 0.0, nap_440: 0.0 };
+        let g = ConstituentGrid {
+            xs: vec![0.0, 10.0],
+            ys: vec![0.0, 10.0],
+            depths: vec![0.0, 10.0],
+            values: (0..8).map(|i| c(i as f64)).collect(),
+        };
+        let f = ConstituentField::Grid(g);
+        // Trilinear of v = x + 2 y + 4 z in unit-cube coordinates.
+        let at = f.at(Vec3::new(5.0, 2.5, -7.5)).chl;
+        assert!((at - (0.5 + 2.0 * 0.25 + 4.0 * 0.75)).abs() < 1e-6);
+        assert_eq!(f.at(Vec3::new(-5.0, -5.0, 5.0)).chl, 0.0);
+        assert_eq!(f.at(Vec3::new(50.0, 50.0, -50.0)).chl, 7.0);
+        assert_eq!(f.max().chl, 7.0);
+    }
+
+    #[test]
+    fn layers_override_the_base() {
+        let c = |v: f64| Constituents { chl: v, cdom_440: 0.0, nap_440: 0.0 };
+        let f = ConstituentField::Layers { base: c(1.0), layers: vec![(2.0, 4.0, c(3.0))] };
+        assert_eq!(f.at(Vec3::new(0.0, 0.0, -1.0)).chl, 1.0);
+        assert_eq!(f.at(Vec3::new(0.0, 0.0, -3.0)).chl, 3.0);
+        assert_eq!(f.max().chl, 3.0);
+    }
+}

@@ -1,0 +1,201 @@
+//! The scene file as written: TOML deserialised by serde, every table
+//! closed to unknown keys. `scene::Scene::parse` turns it into a validated
+//! scene; this module only describes the syntax.
+
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    #[serde(default = "default_name")]
+    pub name: String,
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    pub spectral: SpectralFile,
+    pub sun: SunFile,
+    #[serde(default)]
+    pub sky: SkyFile,
+    #[serde(default)]
+    pub surface: SurfaceFile,
+    pub domain: DomainFile,
+    pub water: WaterFile,
+    pub bottom: Option<BottomFile>,
+    #[serde(default)]
+    pub target: Vec<TargetFile>,
+    pub photons: PhotonsFile,
+    #[serde(default)]
+    pub tally: TallyFile,
+}
+
+fn default_name() -> String {
+    "scene".into()
+}
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpectralFile {
+    pub start_nm: Option<f64>,
+    pub end_nm: Option<f64>,
+    pub bands: Option<usize>,
+    pub centers_nm: Option<Vec<f64>>,
+    pub fwhm_nm: Option<Vec<f64>>,
+    /// "error" (default) or "clamp": what to do with a band whose centre lies
+    /// outside a data table's range.
+    pub out_of_range: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunFile {
+    pub zenith_deg: f64,
+    #[serde(default)]
+    pub azimuth_deg: f64,
+    pub spectrum: Option<String>,
+    pub irradiance: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyFile {
+    pub spectrum: Option<String>,
+    pub radiance: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceFile {
+    pub kind: Option<String>,
+    pub wind_speed: Option<f64>,
+    pub refractive_index: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainFile {
+    pub size_m: [f64; 2],
+    pub edges: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaterFile {
+    pub iop: Option<IopFile>,
+    pub phase: Option<PhaseFile>,
+    pub chl: Option<f64>,
+    pub cdom_440: Option<f64>,
+    pub cdom_slope: Option<f64>,
+    pub nap_440: Option<f64>,
+    pub nap_slope: Option<f64>,
+    /// Particle scattering at 550 nm (1/m); default 0.30 Chl^0.62 (case-1 water).
+    pub bp_550: Option<f64>,
+    /// Spectral slope n of particle scattering, b_p ~ (550/l)^n; default 1.
+    pub bp_slope: Option<f64>,
+    pub gradient: Option<GradientFile>,
+    #[serde(default)]
+    pub layer: Vec<LayerFile>,
+    /// CSV of a regular 3-D grid of constituents.
+    pub grid: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IopFile {
+    pub a: f64,
+    pub b: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseFile {
+    pub kind: String,
+    pub bb_ratio: Option<f64>,
+    pub q: Option<f64>,
+    pub g: Option<f64>,
+    pub file: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GradientFile {
+    pub axis: String,
+    pub chl: Option<[f64; 2]>,
+    pub cdom_440: Option<[f64; 2]>,
+    pub nap_440: Option<[f64; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerFile {
+    pub top_m: f64,
+    pub bottom_m: f64,
+    pub chl: Option<f64>,
+    pub cdom_440: Option<f64>,
+    pub nap_440: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BottomFile {
+    pub depth_m: Option<f64>,
+    pub slope: Option<SlopeFile>,
+    pub heightfield: Option<String>,
+    pub reflectance: Option<Reflectance>,
+    /// Areas of a second bottom type (e.g. a seagrass meadow) as boxes in x, y.
+    #[serde(default)]
+    pub patch: Vec<PatchFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlopeFile {
+    pub from_depth_m: f64,
+    pub to_depth_m: f64,
+    pub axis: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchFile {
+    pub min_m: [f64; 2],
+    pub max_m: [f64; 2],
+    pub reflectance: Reflectance,
+}
+
+/// A reflectance: a constant, a name from the bottom table, or a CSV path.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum Reflectance {
+    Constant(f64),
+    Named(String),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TargetFile {
+    pub kind: String,
+    pub center_m: [f64; 3],
+    pub size_m: Option<Vec<f64>>,
+    pub file: Option<String>,
+    pub scale: Option<f64>,
+    pub reflectance: Reflectance,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhotonsFile {
+    pub count: u64,
+    /// Store the first scattering of unscattered sunlight too (the renderer
+    /// computes it directly, so by default it is not stored).
+    #[serde(default)]
+    pub store_direct: bool,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TallyFile {
+    #[serde(default)]
+    pub depths_m: Vec<f64>,
+}

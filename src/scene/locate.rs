@@ -1,0 +1,108 @@
+//! Line numbers for scene errors: where a key sits in the TOML text.
+
+use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
+
+/// One step of a key path: a table key or an array index.
+#[derive(Clone, Copy, Debug)]
+pub enum Step<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+/// The scene text, for turning key paths into line numbers in errors.
+pub struct Source<'t> {
+    pub text: &'t str,
+    pub path: PathBuf,
+}
+
+impl<'t> Source<'t> {
+    pub fn new(text: &'t str, path: &Path) -> Self {
+        Source {
+            text,
+            path: path.to_path_buf(),
+        }
+    }
+
+    /// 1-based line of the byte offset `at`.
+    pub fn line_of(&self, at: usize) -> usize {
+        self.text[..at.min(self.text.len())].matches('\n').count() + 1
+    }
+
+    /// Line of the deepest part of `steps` present in the file (the value if
+    /// found, else its nearest enclosing key); 1 if nothing matches.
+    pub fn line_of_path(&self, steps: &[Step]) -> usize {
+        let Ok(root) = DeTable::parse(self.text) else {
+            return 1;
+        };
+        let mut best = 1;
+        let mut table: Option<&DeTable> = Some(root.get_ref());
+        let mut value: Option<&DeValue> = None;
+        for step in steps {
+            let next = match (step, table, value) {
+                (Step::Key(k), Some(t), _) => t.iter().find(|(key, _)| key.get_ref().as_ref() == *k).map(|(key, v)| {
+                    best = self.line_of(key.span().start);
+                    v
+                }),
+                (Step::Index(i), _, Some(DeValue::Array(a))) => a.get(*i).inspect(|v| {
+                    best = self.line_of(v.span().start);
+                }),
+                _ => None,
+            };
+            let Some(v) = next else { break };
+            value = Some(v.get_ref());
+            table = match v.get_ref() {
+                DeValue::Table(t) => Some(t),
+                _ => None,
+            };
+        }
+        best
+    }
+
+    /// An error about the value at `steps`.
+    pub fn error(&self, steps: &[Step], what: impl Into<String>) -> crate::Error {
+        crate::Error::Scene {
+            path: self.path.clone(),
+            line: self.line_of_path(steps),
+            key: key_name(steps),
+            what: what.into(),
+        }
+    }
+}
+
+/// `water.layer[1].chl` style name of a key path.
+pub fn key_name(steps: &[Step]) -> String {
+    let mut s = String::new();
+    for step in steps {
+        match step {
+            Step::Key(k) => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(k);
+            }
+            Step::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_lines_of_nested_keys() {
+        let text = "name = \"x\"\n[water]\nchl = 1.0\n\n[[target]]\nkind = \"box\"\n[[target]]\nkind = \"panel\"\nreflectance = 2.0\n";
+        let src = Source::new(text, Path::new("s.toml"));
+        assert_eq!(src.line_of_path(&[Step::Key("water"), Step::Key("chl")]), 3);
+        assert_eq!(
+            src.line_of_path(&[Step::Key("target"), Step::Index(1), Step::Key("reflectance")]),
+            9
+        );
+        // A missing key points at its enclosing table.
+        assert_eq!(src.line_of_path(&[Step::Key("water"), Step::Key("cdom_440")]), 2);
+        let e = src.error(&[Step::Key("target"), Step::Index(1), Step::Key("reflectance")], "too big");
+        assert_eq!(e.to_string(), "s.toml:9: target[1].reflectance: too big");
+    }
+}

@@ -1,0 +1,159 @@
+//! The scene: what is simulated, read from TOML and validated.
+//!
+//! `Scene::parse` checks every value and resolves spectra to the band grid
+//! (band averages with each band's Gaussian response), so the transport code
+//! sees only per-band numbers. Errors name the file, the line and the key.
+//! Relative file names (CSV spectra, height fields, meshes, grids) are
+//! resolved against the scene file's directory.
+//!
+//! Conventions: metres, z up, mean sea surface at z = 0, depths positive
+//! downward; the sun's azimuth is the compass direction *toward* the sun,
+//! measured from +x toward +y; spectral irradiance in W m^-2 nm^-1.
+//!
+//! Not for: tracing light (see `emit`).
+
+mod build;
+pub mod file;
+pub mod locate;
+
+use crate::error::Result;
+use crate::geometry::{Geometry, SurfaceId};
+use crate::optics::iop::WaterModel;
+use crate::optics::phase::PhaseFunction;
+use crate::optics::surface::SeaSurface;
+use crate::spectral::BandGrid;
+use glam::Vec3;
+use std::path::Path;
+
+/// The built-in coastal scene (TOML).
+pub const COASTAL_TOML: &str = include_str!("coastal.toml");
+
+/// The sun: a collimated beam.
+#[derive(Clone, Debug)]
+pub struct Sun {
+    pub zenith_rad: f64,
+    pub azimuth_rad: f64,
+    /// Direction of travel of sunlight (unit, pointing down).
+    pub direction: Vec3,
+    /// Direct normal spectral irradiance per band, W m^-2 nm^-1.
+    pub irradiance: Vec<f64>,
+}
+
+impl Sun {
+    /// Irradiance on a horizontal plane per band.
+    pub fn horizontal_irradiance(&self, band: usize) -> f64 {
+        self.irradiance[band] * self.zenith_rad.cos()
+    }
+}
+
+/// The sky: isotropic diffuse radiance.
+#[derive(Clone, Debug)]
+pub struct Sky {
+    /// Horizontal spectral irradiance from the sky per band (pi x radiance).
+    pub irradiance: Vec<f64>,
+}
+
+/// The horizontal domain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Domain {
+    pub size_m: [f64; 2],
+    /// Periodic edges wrap photons around; open edges lose them.
+    pub periodic: bool,
+}
+
+impl Domain {
+    pub fn area_m2(&self) -> f64 {
+        self.size_m[0] * self.size_m[1]
+    }
+}
+
+/// A rectangle of the floor with its own reflectance.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    pub min_m: [f64; 2],
+    pub max_m: [f64; 2],
+    pub reflectance: Vec<f64>,
+}
+
+/// The sea floor's reflectance (its shape is in the geometry).
+#[derive(Clone, Debug)]
+pub struct Bottom {
+    pub reflectance: Vec<f64>,
+    pub patches: Vec<Patch>,
+}
+
+/// Reflecting surface id of the floor in the geometry.
+pub const FLOOR: SurfaceId = 0;
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub seed: u64,
+    pub bands: BandGrid,
+    pub sun: Sun,
+    pub sky: Sky,
+    pub surface: SeaSurface,
+    pub domain: Domain,
+    pub water: WaterModel,
+    /// Phase function of particle scattering (all scattering in explicit-IOP mode).
+    pub particle_phase: PhaseFunction,
+    /// Phase function of pure-water scattering.
+    pub water_phase: PhaseFunction,
+    pub bottom: Option<Bottom>,
+    /// Lambertian reflectance per band of each target (surface id 1 + index).
+    pub target_reflectance: Vec<Vec<f64>>,
+    pub geometry: Geometry,
+    pub photons: u64,
+    pub store_direct: bool,
+    /// Depths (m, >= 0) of the irradiance tallies; 0 is just below the surface.
+    pub tally_depths: Vec<f64>,
+}
+
+/// Values the command line may override before validation.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Overrides {
+    pub photons: Option<u64>,
+    pub bands: Option<usize>,
+    pub seed: Option<u64>,
+}
+
+impl Scene {
+    /// Parse and validate scene `text`; `path` names it in errors and
+    /// anchors relative file names.
+    pub fn parse(text: &str, path: &Path, overrides: &Overrides) -> Result<Scene> {
+        build::build(text, path, overrides)
+    }
+
+    /// Read, parse and validate the scene file at `path`.
+    pub fn load(path: &Path, overrides: &Overrides) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| crate::Error::io(path, "read", e))?;
+        Scene::parse(&text, path, overrides)
+    }
+
+    /// The built-in coastal scene.
+    pub fn coastal(overrides: &Overrides) -> Result<Scene> {
+        Scene::parse(COASTAL_TOML, Path::new("<built-in coastal scene>"), overrides)
+    }
+
+    /// Lambertian reflectance of `surface` at `p` in `band`.
+    pub fn reflectance(&self, surface: SurfaceId, p: Vec3, band: usize) -> f64 {
+        if surface == FLOOR {
+            let Some(b) = &self.bottom else { return 0.0 };
+            let (x, y) = (p.x as f64, p.y as f64);
+            b.patches
+                .iter()
+                .find(|q| x >= q.min_m[0] && x < q.max_m[0] && y >= q.min_m[1] && y < q.max_m[1])
+                .map_or(b.reflectance[band], |q| q.reflectance[band])
+        } else {
+            self.target_reflectance
+                .get(surface as usize - 1)
+                .map_or(0.0, |r| r[band])
+        }
+    }
+
+    /// Total horizontal spectral irradiance (sun + sky) per band above the surface.
+    pub fn incident_irradiance(&self, band: usize) -> f64 {
+        self.sun.horizontal_irradiance(band) + self.sky.irradiance[band]
+    }
+}
