@@ -2,6 +2,8 @@
 //!
 //! The modules, in data-flow order:
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
+//! - [`optics`]: embedded spectral tables (water, sun, sky, bottom, CIE)
+//!   averaged over the band grid ([`optics::tables::Table`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader
@@ -16,6 +18,7 @@
 pub mod cache;
 pub mod error;
 pub mod mem;
+pub mod optics;
 pub mod photon;
 pub mod progress;
 pub mod query;
