@@ -48,6 +48,15 @@ pub enum Error {
         key: String,
         what: String,
     },
+    /// A tabulated data file (a spectrum CSV) is malformed; `line` is 1-based,
+    /// absent when the fault is the file as a whole (e.g. too few rows).
+    #[error("{path}: {}{field}: {what}", line_prefix(.line))]
+    Data {
+        path: PathBuf,
+        line: Option<usize>,
+        field: String,
+        what: String,
+    },
     /// The memory budget cannot hold what the operation needs.
     #[error("memory budget of {budget} bytes is too small: {what}")]
     Budget { budget: u64, what: String },
@@ -80,6 +89,21 @@ impl Error {
         }
     }
 
+    /// A malformed data file at `path`, read for `field`, at `line` (1-based) if known.
+    pub fn data(
+        path: impl AsRef<Path>,
+        line: Option<usize>,
+        field: impl Into<String>,
+        what: impl Into<String>,
+    ) -> Self {
+        Error::Data {
+            path: path.as_ref().to_path_buf(),
+            line,
+            field: field.into(),
+            what: what.into(),
+        }
+    }
+
     /// An invalid value for `field`.
     pub fn invalid(field: impl Into<String>, what: impl Into<String>) -> Self {
         Error::Invalid {
@@ -87,4 +111,8 @@ impl Error {
             what: what.into(),
         }
     }
+}
+
+fn line_prefix(line: &Option<usize>) -> String {
+    line.map(|n| format!("line {n}: ")).unwrap_or_default()
 }

@@ -2,7 +2,8 @@
 //!
 //! The modules, in data-flow order:
 //! - [`scene`]: the scene file, validated ([`scene::Scene`]).
-//! - [`optics`]: data tables, IOPs, phase functions, the sea surface.
+//! - [`optics`]: embedded spectral tables averaged over the band grid
+//!   ([`optics::tables::Table`]), IOPs, phase functions, the sea surface.
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy ([`emit::Emitter`]).
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
@@ -23,6 +24,7 @@ pub mod emit;
 pub mod error;
 pub mod mem;
 pub mod output;
+pub mod optics;
 pub mod photon;
 pub mod progress;
 pub mod query;

@@ -1,0 +1,6 @@
+//! Optics: data tables, inherent optical properties, phase functions and
+//! the sea surface.
+
+pub mod iop;
+pub mod surface;
+pub mod tables;

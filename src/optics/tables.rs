@@ -1,0 +1,1008 @@
+//! Embedded spectral data tables and their average over a sensor band.
+//!
+//! Design note: every optical input that is a measured function of
+//! wavelength (pure-water absorption and scattering, phytoplankton
+//! coefficients, the solar spectrum, bottom albedo, colour-matching
+//! functions) is a [`Table`]: samples linear between breakpoints. The CSVs in
+//! `data/` are compiled in with `include_str!` and parsed once on first use,
+//! so a run needs no external files; users may supply their own spectra with
+//! [`Table::from_csv_file`]. The simulation never looks a table up at a
+//! single wavelength: it asks for [`Table::band_averages`] over the
+//! [`BandGrid`], once, when a scene is set up. This module is not for the
+//! parametric models built on these tables (IOP mixing, phase functions).
+//!
+//! Units: wavelength in nm everywhere; values in the units of the source:
+//!
+//! | accessor | quantity | units | range (nm) | source |
+//! |---|---|---|---|---|
+//! | [`water_absorption`] | a_w | 1/m | 380–1000 | Pope & Fry 1997 to 727.5 nm, Kou et al. 1993 above |
+//! | [`seawater_scattering`] | b_w | 1/m | 350–850 | Smith & Baker 1981 (Morel 1974 seawater) |
+//! | [`bricaud_a_phi`], [`bricaud_a_p`] | A, E with a = A Chl^E | 1/m, – | 400–700 | Bricaud et al. 1998 |
+//! | [`solar`], [`sky_diffuse_irradiance`] | spectral irradiance | W m^-2 nm^-1 | 280–4000 | ASTM G173-03 |
+//! | [`cie_1931`] | xbar, ybar, zbar | – | 360–830 | CIE 1931 2° observer |
+//! | [`bottom_reflectance`] | irradiance reflectance R | 0–1 | 400–800 | ASU (G. Asner) / WASI6 seagrass |
+//!
+//! Full citations and licence notes are in each CSV's `#` header and in
+//! `data/README.md`.
+//!
+//! **Out-of-range policy: refuse, never extrapolate.** [`Table::at`] returns
+//! `None` outside the tabulated range, and [`Table::band_average`] returns an
+//! error naming the table and the band when the band centre lies outside it.
+//! A band whose centre is inside but whose response (truncated at ±3 sigma)
+//! runs past an end is averaged over the overlap only, renormalised by the
+//! response over that same overlap; [`Table::band_coverage`] reports the
+//! fraction of the response that was kept, so a caller can warn (once) when
+//! it is small. Extrapolating measured spectra (water absorption rises
+//! steeply past 700 nm, the bottom spectra are noisy past their ends) would
+//! invent data; a truncated average stays within the measurements.
+//! This module never prints: warning is the caller's decision.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use crate::error::{Error, Result};
+use crate::spectral::BandGrid;
+
+/// FWHM of a Gaussian in units of its standard deviation, 2 sqrt(2 ln 2).
+pub const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949_4;
+
+/// The Gaussian band response is truncated at this many standard deviations
+/// either side of the centre (it keeps 99.73 % of the weight).
+pub const RESPONSE_HALF_WIDTH_SIGMA: f64 = 3.0;
+
+/// Quadrature sub-steps are at most this many sigma wide. With 5-point
+/// Gauss–Legendre on each, the Gaussian x linear product is integrated to
+/// about machine precision (the rule is exact for degree-9 polynomials and
+/// the Gaussian varies little across sigma/4).
+const MAX_STEP_SIGMA: f64 = 0.25;
+
+/// 5-point Gauss–Legendre nodes and weights on [-1, 1].
+const GL_NODES: [f64; 5] = [
+    -0.906_179_845_938_664,
+    -0.538_469_310_105_683_1,
+    0.0,
+    0.538_469_310_105_683_1,
+    0.906_179_845_938_664,
+];
+const GL_WEIGHTS: [f64; 5] = [
+    0.236_926_885_056_189_1,
+    0.478_628_670_499_366_5,
+    0.568_888_888_888_888_9,
+    0.478_628_670_499_366_5,
+    0.236_926_885_056_189_1,
+];
+
+/// A tabulated function of wavelength (nm), linear between samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    x_nm: Vec<f64>,
+    y: Vec<f64>,
+    name: String,
+}
+
+impl Table {
+    /// A table from samples: at least two points, wavelengths finite, positive
+    /// and strictly increasing, values finite. Errors name `name`.
+    pub fn new(name: &str, x_nm: Vec<f64>, y: Vec<f64>) -> Result<Table> {
+        if x_nm.len() != y.len() {
+            return Err(Error::invalid(
+                name,
+                format!("{} wavelengths but {} values", x_nm.len(), y.len()),
+            ));
+        }
+        if x_nm.len() < 2 {
+            return Err(Error::invalid(
+                name,
+                format!("needs at least 2 samples, got {}", x_nm.len()),
+            ));
+        }
+        if let Some(i) = x_nm.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+            return Err(Error::invalid(
+                name,
+                format!(
+                    "wavelength #{i} ({}) is not a positive number of nm",
+                    x_nm[i]
+                ),
+            ));
+        }
+        if let Some(i) = x_nm.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(Error::invalid(
+                name,
+                format!(
+                    "wavelengths must increase strictly: #{} ({} nm) follows {} nm",
+                    i + 1,
+                    x_nm[i + 1],
+                    x_nm[i]
+                ),
+            ));
+        }
+        if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+            return Err(Error::invalid(
+                name,
+                format!("value #{i} at {} nm is not finite ({})", x_nm[i], y[i]),
+            ));
+        }
+        Ok(Table {
+            x_nm,
+            y,
+            name: name.to_string(),
+        })
+    }
+
+    /// A user-supplied spectrum: a CSV file of optional `#` comment lines, an
+    /// optional header line (one with no numeric field), then `nm,value` rows.
+    /// Blank lines are skipped. `field` is the configuration field that named
+    /// the file; it becomes part of the table's name and of every error, which
+    /// also carries the path and, where there is one, the 1-based line.
+    pub fn from_csv_file(path: &Path, field: &str) -> Result<Table> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
+        let name = format!("{field} ({})", path.display());
+        let mut tables = parse_csv(&text, path, field, &name, Columns::UserPair)?;
+        // UserPair always yields exactly one table.
+        Ok(tables.remove(0))
+    }
+
+    /// The table's name (embedded tables: `file.csv:column`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// First and last tabulated wavelength, nm.
+    pub fn range_nm(&self) -> (f64, f64) {
+        (self.x_nm[0], self.x_nm[self.x_nm.len() - 1])
+    }
+
+    /// Tabulated wavelengths, nm.
+    pub fn x_nm(&self) -> &[f64] {
+        &self.x_nm
+    }
+
+    /// Tabulated values.
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// The value at `nm`, linear between samples; `None` outside the range
+    /// (or for NaN) — see the module's out-of-range policy.
+    pub fn at(&self, nm: f64) -> Option<f64> {
+        let (lo, hi) = self.range_nm();
+        if !(lo..=hi).contains(&nm) {
+            return None;
+        }
+        Some(self.lerp(self.segment(nm), nm))
+    }
+
+    /// Integral of the (piecewise-linear) table over its whole range, i.e.
+    /// the trapezoid rule on the samples; units of y times nm.
+    pub fn integral(&self) -> f64 {
+        self.x_nm
+            .windows(2)
+            .zip(self.y.windows(2))
+            .map(|(x, y)| 0.5 * (x[1] - x[0]) * (y[0] + y[1]))
+            .sum()
+    }
+
+    /// Average of the table weighted by a Gaussian band response of centre
+    /// `center_nm` and full width at half maximum `fwhm_nm`
+    /// (sigma = FWHM / 2.3548), truncated at ±3 sigma.
+    ///
+    /// The integrals run over the overlap of the truncated response with the
+    /// table, split at the table's breakpoints (where y is linear) and into
+    /// sub-steps of at most sigma/4, each by 5-point Gauss–Legendre; the
+    /// result is normalised by the response's integral over the same overlap.
+    /// Errors, naming the table and the band, if the centre lies outside the
+    /// table's range or the FWHM is not a positive number.
+    pub fn band_average(&self, center_nm: f64, fwhm_nm: f64) -> Result<f64> {
+        self.band_average_inner(center_nm, fwhm_nm, None)
+    }
+
+    /// [`Table::band_average`] for every band of `bands`, in band order.
+    pub fn band_averages(&self, bands: &BandGrid) -> Result<Vec<f64>> {
+        bands
+            .centers_nm()
+            .iter()
+            .zip(bands.fwhm_nm())
+            .enumerate()
+            .map(|(i, (&c, &w))| self.band_average_inner(f64::from(c), f64::from(w), Some(i)))
+            .collect()
+    }
+
+    /// Fraction (0..=1) of the band's truncated response that lies inside the
+    /// table's range: 1 for a band well inside, about 0.5 for a band centred
+    /// on an end, 0 for a band wholly outside. Lets callers warn about edge
+    /// bands averaged over a partial overlap. Invalid FWHM gives 0.
+    pub fn band_coverage(&self, center_nm: f64, fwhm_nm: f64) -> f64 {
+        if !(center_nm.is_finite() && fwhm_nm.is_finite() && fwhm_nm > 0.0) {
+            return 0.0;
+        }
+        let sigma = fwhm_nm / FWHM_PER_SIGMA;
+        let half = RESPONSE_HALF_WIDTH_SIGMA * sigma;
+        let (lo, hi) = self.range_nm();
+        let (a, b) = (lo.max(center_nm - half), hi.min(center_nm + half));
+        if b <= a {
+            return 0.0;
+        }
+        let full = gaussian_integral(center_nm - half, center_nm + half, center_nm, sigma);
+        if full > 0.0 {
+            (gaussian_integral(a, b, center_nm, sigma) / full).clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
+    }
+
+    fn band_average_inner(&self, center_nm: f64, fwhm_nm: f64, band: Option<usize>) -> Result<f64> {
+        let band_text = || {
+            let index = band.map(|i| format!("band {i} ")).unwrap_or_default();
+            format!("{index}(centre {center_nm} nm, FWHM {fwhm_nm} nm)")
+        };
+        let (lo, hi) = self.range_nm();
+        if !(fwhm_nm.is_finite() && fwhm_nm > 0.0) {
+            return Err(Error::invalid(
+                &self.name,
+                format!("{}: FWHM must be a positive number of nm", band_text()),
+            ));
+        }
+        if !(lo..=hi).contains(&center_nm) {
+            return Err(Error::invalid(
+                &self.name,
+                format!(
+                    "{}: centre lies outside the tabulated range {lo}..{hi} nm",
+                    band_text()
+                ),
+            ));
+        }
+        let sigma = fwhm_nm / FWHM_PER_SIGMA;
+        let half = RESPONSE_HALF_WIDTH_SIGMA * sigma;
+        let (a, b) = (lo.max(center_nm - half), hi.min(center_nm + half));
+        let max_step = MAX_STEP_SIGMA * sigma;
+
+        let (mut weighted, mut weight) = (0.0, 0.0);
+        let mut j = self.segment(a);
+        while j + 1 < self.x_nm.len() && self.x_nm[j] < b {
+            let (s0, s1) = (self.x_nm[j].max(a), self.x_nm[j + 1].min(b));
+            if s1 > s0 {
+                let steps = ((s1 - s0) / max_step).ceil().max(1.0);
+                let h = (s1 - s0) / steps;
+                for k in 0..steps as usize {
+                    let mid = s0 + (k as f64 + 0.5) * h;
+                    for (t, w) in GL_NODES.iter().zip(GL_WEIGHTS) {
+                        let x = mid + 0.5 * h * t;
+                        let g = w * 0.5 * h * gaussian(x, center_nm, sigma);
+                        weighted += g * self.lerp(j, x);
+                        weight += g;
+                    }
+                }
+            }
+            j += 1;
+        }
+        if weight > 0.0 {
+            Ok(weighted / weight)
+        } else {
+            // The response is too narrow to resolve next to the centre (it
+            // underflowed): the limit of a vanishing band is the point value.
+            Ok(self.lerp(self.segment(center_nm), center_nm))
+        }
+    }
+
+    /// Index j of the segment [x_j, x_j+1] holding `nm` (clamped to the ends).
+    fn segment(&self, nm: f64) -> usize {
+        let n = self.x_nm.len();
+        self.x_nm
+            .partition_point(|&x| x <= nm)
+            .saturating_sub(1)
+            .min(n - 2)
+    }
+
+    fn lerp(&self, j: usize, nm: f64) -> f64 {
+        let (x0, x1) = (self.x_nm[j], self.x_nm[j + 1]);
+        let (y0, y1) = (self.y[j], self.y[j + 1]);
+        y0 + (y1 - y0) * ((nm - x0) / (x1 - x0))
+    }
+}
+
+/// The unnormalised Gaussian response at `x`.
+fn gaussian(x: f64, center: f64, sigma: f64) -> f64 {
+    let u = (x - center) / sigma;
+    (-0.5 * u * u).exp()
+}
+
+/// Integral of [`gaussian`] over [a, b] by the same quadrature as the band
+/// average (std has no erf).
+fn gaussian_integral(a: f64, b: f64, center: f64, sigma: f64) -> f64 {
+    let steps = ((b - a) / (MAX_STEP_SIGMA * sigma)).ceil().max(1.0);
+    let h = (b - a) / steps;
+    (0..steps as usize)
+        .map(|k| {
+            let mid = a + (k as f64 + 0.5) * h;
+            GL_NODES
+                .iter()
+                .zip(GL_WEIGHTS)
+                .map(|(t, w)| w * 0.5 * h * gaussian(mid + 0.5 * h * t, center, sigma))
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// Which value columns of a CSV to read.
+enum Columns<'a> {
+    /// A user file: exactly `nm,value`; the header line is optional.
+    UserPair,
+    /// An embedded file: the header is required and names these columns
+    /// (the first column is always the wavelength); other columns are ignored.
+    Named(&'a [&'a str]),
+}
+
+/// Parses CSV `text` (read from `path`) into one table per value column.
+/// Errors carry `path`, the 1-based line and `field` (the configuration field
+/// for a user file, the file name for an embedded one). Table names are
+/// `name` for a user file and `name:column` for an embedded one.
+fn parse_csv(
+    text: &str,
+    path: &Path,
+    field: &str,
+    name: &str,
+    columns: Columns,
+) -> Result<Vec<Table>> {
+    // (value column indices, fields per row): known up front for a user
+    // file, read from the header for an embedded one.
+    let mut layout: Option<(Vec<usize>, usize)> = match columns {
+        Columns::UserPair => Some((vec![1], 2)),
+        Columns::Named(_) => None,
+    };
+    let mut ys: Vec<Vec<f64>> = match columns {
+        Columns::UserPair => vec![Vec::new()],
+        Columns::Named(names) => vec![Vec::new(); names.len()],
+    };
+    let mut x_nm: Vec<f64> = Vec::new();
+    let mut first = true;
+    let err = |line: Option<usize>, what: String| Error::data(path, line, field, what);
+
+    for (index, raw) in text.lines().enumerate() {
+        let line_no = index + 1;
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if std::mem::take(&mut first) {
+            // A header is a line with no numeric field: a bad first data row
+            // such as "4OO,0.1" still has a number, so it is reported rather
+            // than silently skipped as a header.
+            if fields.iter().all(|f| f.parse::<f64>().is_err()) {
+                if let Columns::Named(names) = columns {
+                    let wanted = names
+                        .iter()
+                        .map(|n| {
+                            fields.iter().position(|f| f == n).ok_or_else(|| {
+                                err(Some(line_no), format!("header has no column '{n}'"))
+                            })
+                        })
+                        .collect::<Result<_>>()?;
+                    layout = Some((wanted, fields.len()));
+                }
+                continue;
+            }
+        }
+        let Some((wanted, width)) = &layout else {
+            return Err(err(
+                Some(line_no),
+                "expected a header line naming the columns".into(),
+            ));
+        };
+        if fields.len() != *width {
+            let expect = match columns {
+                Columns::UserPair => "2 fields (nm,value)".to_string(),
+                Columns::Named(_) => format!("{width} fields as in the header"),
+            };
+            return Err(err(
+                Some(line_no),
+                format!("expected {expect}, found {}", fields.len()),
+            ));
+        }
+        let number = |col: usize, what: &str| -> Result<f64> {
+            let text = fields[col];
+            match text.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(err(
+                    Some(line_no),
+                    format!("{what} '{text}' is not a finite number"),
+                )),
+            }
+        };
+        let x = number(0, "wavelength")?;
+        if x <= 0.0 {
+            return Err(err(
+                Some(line_no),
+                format!("wavelength {x} nm is not positive"),
+            ));
+        }
+        if let Some(&prev) = x_nm.last() {
+            if x <= prev {
+                return Err(err(
+                    Some(line_no),
+                    format!("wavelengths must increase strictly: {x} nm follows {prev} nm"),
+                ));
+            }
+        }
+        for (k, &col) in wanted.iter().enumerate() {
+            ys[k].push(number(col, "value")?);
+        }
+        x_nm.push(x);
+    }
+    if x_nm.len() < 2 {
+        return Err(err(
+            None,
+            format!("needs at least 2 data rows, found {}", x_nm.len()),
+        ));
+    }
+    let names: Vec<String> = match columns {
+        Columns::UserPair => vec![name.to_string()],
+        Columns::Named(cols) => cols.iter().map(|c| format!("{name}:{c}")).collect(),
+    };
+    names
+        .iter()
+        .zip(ys)
+        .map(|(n, y)| Table::new(n, x_nm.clone(), y))
+        .collect()
+}
+
+/// Parses an embedded file once. The files are compiled in and checked by
+/// this module's tests, so a parse failure is a build defect, not bad input.
+fn embedded(
+    cell: &'static OnceLock<Vec<Table>>,
+    file: &str,
+    text: &str,
+    columns: &[&str],
+) -> &'static [Table] {
+    cell.get_or_init(|| {
+        parse_csv(text, Path::new(file), file, file, Columns::Named(columns))
+            .unwrap_or_else(|e| panic!("embedded table {file} is malformed: {e}"))
+    })
+}
+
+const AW_FILE: &str = "aw_composite_380_1000.csv";
+const AW_CSV: &str = include_str!("../../data/aw_composite_380_1000.csv");
+const BW_FILE: &str = "bw_seawater_smith_baker_1981.csv";
+const BW_CSV: &str = include_str!("../../data/bw_seawater_smith_baker_1981.csv");
+const APH_FILE: &str = "aph_bricaud1998.csv";
+const APH_CSV: &str = include_str!("../../data/aph_bricaud1998.csv");
+const SOLAR_FILE: &str = "astm_g173_solar.csv";
+const SOLAR_CSV: &str = include_str!("../../data/astm_g173_solar.csv");
+const BOTTOM_FILE: &str = "bottom_reflectance_asu_wasi.csv";
+const BOTTOM_CSV: &str = include_str!("../../data/bottom_reflectance_asu_wasi.csv");
+const CIE_FILE: &str = "cie1931_2deg_cmf.csv";
+const CIE_CSV: &str = include_str!("../../data/cie1931_2deg_cmf.csv");
+
+/// Pure-water absorption a_w, 1/m, 380–1000 nm: Pope & Fry (1997) to
+/// 727.5 nm, Kou et al. (1993) above (junction smooth to ~5 %).
+pub fn water_absorption() -> &'static Table {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    &embedded(&CELL, AW_FILE, AW_CSV, &["aw_per_m"])[0]
+}
+
+/// Pure-seawater scattering b_w, 1/m, 350–850 nm (Smith & Baker 1981,
+/// following Morel 1974). Backscattering is b_w / 2.
+pub fn seawater_scattering() -> &'static Table {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    &embedded(&CELL, BW_FILE, BW_CSV, &["bw_per_m"])[0]
+}
+
+fn bricaud() -> &'static [Table] {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    embedded(&CELL, APH_FILE, APH_CSV, &["A_phi", "E_phi", "A_p", "E_p"])
+}
+
+/// Bricaud et al. (1998) phytoplankton absorption, 400–700 nm:
+/// (A_phi, E_phi) with a_phi(l) = A_phi(l) Chl^E_phi(l) in 1/m, Chl in
+/// mg m^-3. E_phi is the exponent itself, not 1 - E.
+pub fn bricaud_a_phi() -> (&'static Table, &'static Table) {
+    let t = bricaud();
+    (&t[0], &t[1])
+}
+
+/// Bricaud et al. (1998) total particulate absorption, 400–700 nm:
+/// (A_p, E_p) with a_p = A_p Chl^E_p in 1/m.
+pub fn bricaud_a_p() -> (&'static Table, &'static Table) {
+    let t = bricaud();
+    (&t[2], &t[3])
+}
+
+/// The three ASTM G173-03 spectra.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SolarSpectrum {
+    /// Top of atmosphere (AM0).
+    Extraterrestrial,
+    /// AM1.5 hemispherical on a 37° tilted surface facing the sun.
+    GlobalTilt,
+    /// AM1.5 direct normal, including circumsolar.
+    DirectCircumsolar,
+}
+
+fn solar_tables() -> &'static [Table] {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    embedded(
+        &CELL,
+        SOLAR_FILE,
+        SOLAR_CSV,
+        &[
+            "extraterrestrial_W_m2_nm",
+            "global_tilt_W_m2_nm",
+            "direct_circumsolar_W_m2_nm",
+        ],
+    )
+}
+
+/// An ASTM G173-03 solar spectrum, W m^-2 nm^-1, 280–4000 nm.
+pub fn solar(which: SolarSpectrum) -> &'static Table {
+    let t = solar_tables();
+    match which {
+        SolarSpectrum::Extraterrestrial => &t[0],
+        SolarSpectrum::GlobalTilt => &t[1],
+        SolarSpectrum::DirectCircumsolar => &t[2],
+    }
+}
+
+/// A diffuse-sky irradiance proxy, W m^-2 nm^-1, 280–4000 nm: ASTM G173
+/// global-tilt minus direct+circumsolar, clamped at >= 0.
+///
+/// Chosen because G173 is the one reference that gives both components from
+/// the same atmosphere, so the proxy has a consistent sky-blue spectral
+/// shape. It is not an exact horizontal diffuse irradiance: the global
+/// spectrum is on a 37° tilt facing the sun (direct incidence ~11°, so the
+/// tilted plane receives ~0.98 of the direct normal beam and the difference
+/// removes ~2 % of the direct too much) and the tilted plane also sees some
+/// ground-reflected light. The clamp removes tiny negative differences where
+/// both spectra are ~0 in the deep water-vapour bands (254 samples above
+/// 2700 nm). Integral 280–4000 nm: ~100.3 W m^-2. Scale it to the scene's
+/// sky irradiance rather than treating the magnitude as exact.
+pub fn sky_diffuse_irradiance() -> &'static Table {
+    static CELL: OnceLock<Table> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let global = solar(SolarSpectrum::GlobalTilt);
+        let direct = solar(SolarSpectrum::DirectCircumsolar);
+        // Both columns come from one file, so they share the wavelength grid.
+        let y = global
+            .y()
+            .iter()
+            .zip(direct.y())
+            .map(|(g, d)| (g - d).max(0.0))
+            .collect();
+        Table::new(
+            "astm_g173_solar.csv:global_tilt-direct_circumsolar",
+            global.x_nm().to_vec(),
+            y,
+        )
+        .unwrap_or_else(|e| panic!("sky diffuse proxy: {e}"))
+    })
+}
+
+/// CIE 1931 2° colour-matching functions (xbar, ybar, zbar), dimensionless,
+/// 360–830 nm; ybar is the photopic luminous efficiency V(l).
+pub fn cie_1931() -> (&'static Table, &'static Table, &'static Table) {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    let t = embedded(&CELL, CIE_FILE, CIE_CSV, &["xbar", "ybar", "zbar"]);
+    (&t[0], &t[1], &t[2])
+}
+
+/// The bottom types of [`bottom_reflectance`], as named in the data file:
+/// sand, coral, cca (crustose coralline algae), macroalgae, seagrass
+/// (Zostera marina).
+pub const BOTTOM_TYPES: &[&str] = &["sand", "coral", "cca", "macroalgae", "seagrass"];
+
+/// Bottom irradiance reflectance (albedo, 0–1), 400–800 nm, of one of
+/// [`BOTTOM_TYPES`] (matched case-insensitively). Lambertian BRDF: R / pi.
+/// Above ~750 nm the in-water spectra are less reliable.
+pub fn bottom_reflectance(kind: &str) -> Result<&'static Table> {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    let tables = embedded(&CELL, BOTTOM_FILE, BOTTOM_CSV, BOTTOM_TYPES);
+    BOTTOM_TYPES
+        .iter()
+        .position(|k| k.eq_ignore_ascii_case(kind.trim()))
+        .map(|i| &tables[i])
+        .ok_or_else(|| {
+            Error::invalid(
+                "bottom type",
+                format!(
+                    "unknown kind '{kind}'; known kinds: {}",
+                    BOTTOM_TYPES.join(", ")
+                ),
+            )
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+
+    /// A table sampling `f` on an irregular grid (so breakpoints never sit
+    /// symmetrically about a band centre).
+    fn sampled(name: &str, lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> Table {
+        let mut x = Vec::new();
+        let mut v = lo;
+        let mut k = 0;
+        while v < hi {
+            x.push(v);
+            v += [0.7, 1.3, 2.9, 0.4][k % 4];
+            k += 1;
+        }
+        x.push(hi);
+        let y = x.iter().map(|&x| f(x)).collect();
+        Table::new(name, x, y).unwrap()
+    }
+
+    fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    #[test]
+    fn fwhm_per_sigma_is_2_sqrt_2_ln_2() {
+        assert!((FWHM_PER_SIGMA - 2.0 * (2.0 * std::f64::consts::LN_2).sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn embedded_tables_parse_with_documented_ranges() {
+        let (a_phi, e_phi) = bricaud_a_phi();
+        let (a_p, e_p) = bricaud_a_p();
+        let (xbar, ybar, zbar) = cie_1931();
+        let mut all: Vec<(&Table, (f64, f64), usize)> = vec![
+            (water_absorption(), (380.0, 1000.0), 413),
+            (seawater_scattering(), (350.0, 850.0), 501),
+            (a_phi, (400.0, 700.0), 151),
+            (e_phi, (400.0, 700.0), 151),
+            (a_p, (400.0, 700.0), 151),
+            (e_p, (400.0, 700.0), 151),
+            (
+                solar(SolarSpectrum::Extraterrestrial),
+                (280.0, 4000.0),
+                2002,
+            ),
+            (solar(SolarSpectrum::GlobalTilt), (280.0, 4000.0), 2002),
+            (
+                solar(SolarSpectrum::DirectCircumsolar),
+                (280.0, 4000.0),
+                2002,
+            ),
+            (sky_diffuse_irradiance(), (280.0, 4000.0), 2002),
+            (xbar, (360.0, 830.0), 471),
+            (ybar, (360.0, 830.0), 471),
+            (zbar, (360.0, 830.0), 471),
+        ];
+        for kind in BOTTOM_TYPES {
+            all.push((bottom_reflectance(kind).unwrap(), (400.0, 800.0), 401));
+        }
+        for (t, range, rows) in all {
+            assert_eq!(t.range_nm(), range, "{}", t.name());
+            assert_eq!(t.x_nm().len(), rows, "{}", t.name());
+            // Every value in these tables is physically non-negative.
+            assert!(t.y().iter().all(|&v| v >= 0.0), "{}", t.name());
+        }
+        assert_eq!(
+            water_absorption().name(),
+            "aw_composite_380_1000.csv:aw_per_m"
+        );
+    }
+
+    #[test]
+    fn water_absorption_spot_values_match_the_file() {
+        let aw = water_absorption();
+        assert_eq!(aw.at(440.0), Some(0.00635));
+        assert_eq!(aw.at(700.0), Some(0.624));
+        // Either side of the Pope & Fry / Kou junction.
+        assert_eq!(aw.at(727.5), Some(1.678));
+        assert_eq!(aw.at(728.0), Some(1.7607));
+        // Linear between samples: midway between 440 (0.00635) and 442.5 (0.00696).
+        assert!((aw.at(441.25).unwrap() - 0.006655).abs() < 1e-12);
+        assert_eq!(aw.at(379.9), None);
+        assert_eq!(aw.at(1000.1), None);
+        assert_eq!(aw.at(f64::NAN), None);
+    }
+
+    #[test]
+    fn seawater_scattering_follows_morel() {
+        let bw = seawater_scattering();
+        assert!(rel(bw.at(500.0).unwrap(), 0.00288) < 0.05);
+        // Morel (1974) b_w(l) = 0.00288 (l/500)^-4.32 within 5 % over the table.
+        for nm in (350..=850).step_by(10) {
+            let nm = f64::from(nm);
+            let morel = 0.00288 * (nm / 500.0).powf(-4.32);
+            assert!(rel(bw.at(nm).unwrap(), morel) < 0.05, "{nm} nm");
+        }
+    }
+
+    #[test]
+    fn bricaud_columns_are_coefficient_and_exponent() {
+        let (a, e) = bricaud_a_phi();
+        assert_eq!(a.at(440.0), Some(0.037824));
+        assert_eq!(e.at(440.0), Some(0.626633));
+        let (a_p, e_p) = bricaud_a_p();
+        assert_eq!(a_p.at(440.0), Some(0.052019));
+        assert_eq!(e_p.at(440.0), Some(0.634965));
+        // E is the exponent itself: a_phi(440) at Chl 1 is A, at Chl 10 about 0.16 1/m.
+        let a10 = a.at(440.0).unwrap() * 10f64.powf(e.at(440.0).unwrap());
+        assert!((a10 - 0.1601).abs() < 1e-3, "{a10}");
+    }
+
+    #[test]
+    fn astm_g173_integrals_match_the_header() {
+        let et = solar(SolarSpectrum::Extraterrestrial).integral();
+        let global = solar(SolarSpectrum::GlobalTilt).integral();
+        let direct = solar(SolarSpectrum::DirectCircumsolar).integral();
+        assert!((et - 1348.0).abs() < 0.5, "{et}");
+        assert!((global - 1000.4).abs() < 0.1, "{global}");
+        assert!((direct - 900.1).abs() < 0.1, "{direct}");
+        let sky = sky_diffuse_irradiance();
+        let diffuse = sky.integral();
+        assert!((diffuse - 100.29).abs() < 0.05, "{diffuse}");
+        // The diffuse sky is bluer than the direct beam.
+        let d = solar(SolarSpectrum::DirectCircumsolar);
+        let ratio = |t: &Table| t.at(450.0).unwrap() / t.at(650.0).unwrap();
+        assert!(ratio(sky) > 1.5 * ratio(d));
+    }
+
+    #[test]
+    fn cie_ybar_peaks_at_555_nm() {
+        let (_, ybar, _) = cie_1931();
+        let (i, &peak) = ybar
+            .y()
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .unwrap();
+        assert_eq!(ybar.x_nm()[i], 555.0);
+        assert!((peak - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn bottom_types_are_the_file_columns() {
+        let header = BOTTOM_CSV
+            .lines()
+            .find(|l| !l.starts_with('#'))
+            .unwrap()
+            .to_string();
+        assert_eq!(header, format!("wavelength_nm,{}", BOTTOM_TYPES.join(",")));
+        for kind in BOTTOM_TYPES {
+            let t = bottom_reflectance(kind).unwrap();
+            assert!(t.y().iter().all(|&r| r > 0.0 && r < 1.0), "{kind}");
+        }
+        let sand = bottom_reflectance("Sand").unwrap();
+        assert_eq!(sand.at(400.0), Some(0.14803));
+        let e = bottom_reflectance("mud").unwrap_err().to_string();
+        assert!(
+            e.contains("mud") && e.contains("sand, coral, cca, macroalgae, seagrass"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn band_average_of_linear_is_value_at_centre() {
+        let t = sampled("linear", 300.0, 900.0, |x| 3.0 + 0.02 * x);
+        for (c, w) in [
+            (500.0, 10.0),
+            (431.37, 3.3),
+            (612.9, 47.0),
+            (700.0, 0.9),
+            (600.0, 80.0),
+        ] {
+            let avg = t.band_average(c, w).unwrap();
+            assert!((avg - (3.0 + 0.02 * c)).abs() < 1e-9, "{c} {w}: {avg}");
+        }
+    }
+
+    #[test]
+    fn band_average_of_constant_is_the_constant() {
+        let t = sampled("constant", 300.0, 900.0, |_| 0.25);
+        for (c, w) in [(500.0, 10.0), (301.0, 40.0), (899.5, 5.0), (300.0, 20.0)] {
+            assert!((t.band_average(c, w).unwrap() - 0.25).abs() < 1e-14);
+        }
+    }
+
+    /// For y = (x - c)^2 the average is the variance of a Gaussian truncated
+    /// at ±3 sigma, sigma^2 (1 - 6 phi(3) / (2 Phi(3) - 1)): checks the
+    /// quadrature and the truncation, not just symmetry. The table's linear
+    /// interpolation of the parabola adds at most h^2/4 = 2.5e-5 nm^2.
+    #[test]
+    fn band_average_of_quadratic_is_truncated_gaussian_variance() {
+        let c = 550.0;
+        let x: Vec<f64> = (0..=40000).map(|i| 450.0 + 0.005 * f64::from(i)).collect();
+        let y = x.iter().map(|v| (v - c) * (v - c)).collect();
+        let t = Table::new("parabola", x, y).unwrap();
+        let fwhm = 20.0;
+        let sigma = fwhm / FWHM_PER_SIGMA;
+        let phi3 = (-4.5f64).exp() / (2.0 * std::f64::consts::PI).sqrt();
+        let variance = sigma * sigma * (1.0 - 6.0 * phi3 / 0.997_300_203_936_740);
+        let avg = t.band_average(c, fwhm).unwrap();
+        assert!((avg - variance).abs() < 3e-5, "{avg} vs {variance}");
+    }
+
+    /// A band centred on the table's first sample keeps only the upper half
+    /// of its response: on y = x the average is c + sigma m, with m the mean
+    /// of a unit half-Gaussian truncated at 3: (1 - e^-4.5) / (sqrt(2 pi) (Phi(3) - 1/2)).
+    #[test]
+    fn edge_band_averages_over_the_overlap() {
+        let t = sampled("ramp", 400.0, 800.0, |x| x);
+        let fwhm = 20.0;
+        let sigma = fwhm / FWHM_PER_SIGMA;
+        let m =
+            (1.0 - (-4.5f64).exp()) / ((2.0 * std::f64::consts::PI).sqrt() * 0.498_650_101_968_370);
+        let avg = t.band_average(400.0, fwhm).unwrap();
+        assert!((avg - (400.0 + sigma * m)).abs() < 1e-9, "{avg}");
+        let avg = t.band_average(800.0, fwhm).unwrap();
+        assert!((avg - (800.0 - sigma * m)).abs() < 1e-9, "{avg}");
+        assert!((t.band_coverage(400.0, fwhm) - 0.5).abs() < 1e-12);
+        assert!((t.band_coverage(600.0, fwhm) - 1.0).abs() < 1e-12);
+        assert_eq!(t.band_coverage(300.0, fwhm), 0.0);
+    }
+
+    /// Inside a segment y is linear, so a narrow band returns the point value
+    /// to rounding. On a breakpoint the slope changes by ds and the average
+    /// moves by ds sigma E[max(u, 0)], with E[max(u, 0)] = (phi(0) - phi(3)) /
+    /// (2 Phi(3) - 1) = 0.395578 for the truncated response (728 nm, the Pope &
+    /// Fry / Kou junction, has ds = -0.081 nm^-1: a 1.4e-5 shift).
+    #[test]
+    fn narrow_band_equals_point_value() {
+        let aw = water_absorption();
+        let fwhm = 1e-3;
+        for c in [441.3, 555.55, 728.6] {
+            let avg = aw.band_average(c, fwhm).unwrap();
+            assert!(rel(avg, aw.at(c).unwrap()) < 1e-12, "{c}: {avg}");
+        }
+        let sigma = fwhm / FWHM_PER_SIGMA;
+        for c in [440.0, 728.0] {
+            let slope = |a: f64, b: f64| (aw.at(b).unwrap() - aw.at(a).unwrap()) / (b - a);
+            let ds = slope(c, c + 0.1) - slope(c - 0.1, c);
+            let avg = aw.band_average(c, fwhm).unwrap();
+            let expect = aw.at(c).unwrap() + 0.395_578 * ds * sigma;
+            assert!(
+                (avg - expect).abs() < 1e-4 * (ds * sigma).abs() + 1e-15,
+                "{c}: {avg}"
+            );
+        }
+        // So narrow it underflows: falls back to the point value.
+        assert_eq!(
+            aw.band_average(500.0, 1e-300).unwrap(),
+            aw.at(500.0).unwrap()
+        );
+    }
+
+    #[test]
+    fn band_centre_outside_range_is_an_error_naming_the_table() {
+        let e = water_absorption()
+            .band_average(350.0, 10.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("aw_composite_380_1000.csv:aw_per_m"), "{e}");
+        assert!(e.contains("350") && e.contains("380..1000"), "{e}");
+        let e = seawater_scattering()
+            .band_average(500.0, 0.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bw_per_m") && e.contains("FWHM"), "{e}");
+        assert!(seawater_scattering().band_average(f64::NAN, 10.0).is_err());
+    }
+
+    #[test]
+    fn band_averages_cover_the_grid_and_name_the_failing_band() {
+        let bands = BandGrid::even(400.0, 700.0, 31).unwrap();
+        let aw = water_absorption();
+        let avgs = aw.band_averages(&bands).unwrap();
+        assert_eq!(avgs.len(), 31);
+        for (i, &c) in bands.centers_nm().iter().enumerate() {
+            let one = aw
+                .band_average(f64::from(c), f64::from(bands.fwhm_nm()[i]))
+                .unwrap();
+            assert_eq!(avgs[i], one);
+        }
+        // A 10 nm band smooths a_w but stays near the point value in the blue.
+        assert!(rel(avgs[4], aw.at(440.0).unwrap()) < 0.1);
+        let wide = BandGrid::even(800.0, 1100.0, 4).unwrap();
+        let e = aw.band_averages(&wide).unwrap_err().to_string();
+        assert!(e.contains("band 3") && e.contains("aw_per_m"), "{e}");
+    }
+
+    #[test]
+    fn table_new_rejects_bad_samples_naming_the_table() {
+        let cases = [
+            (vec![400.0], vec![1.0]),
+            (vec![400.0, 500.0], vec![1.0]),
+            (vec![400.0, 400.0], vec![1.0, 2.0]),
+            (vec![500.0, 400.0], vec![1.0, 2.0]),
+            (vec![400.0, 500.0], vec![1.0, f64::NAN]),
+            (vec![-1.0, 500.0], vec![1.0, 2.0]),
+            (vec![400.0, f64::INFINITY], vec![1.0, 2.0]),
+        ];
+        for (x, y) in cases {
+            let e = Table::new("a_cdom", x.clone(), y).unwrap_err().to_string();
+            assert!(e.starts_with("a_cdom:"), "{x:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn user_csv_with_comments_header_and_blank_lines_parses() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(
+            &dir,
+            "cdom.csv",
+            "# measured 2024\r\n# units 1/m\r\nwavelength_nm, a\r\n400,0.5\r\n\r\n 450 , 0.25 \r\n500,0.125\r\n",
+        );
+        let t = Table::from_csv_file(&path, "water.a_cdom_file").unwrap();
+        assert_eq!(t.x_nm(), &[400.0, 450.0, 500.0]);
+        assert_eq!(t.y(), &[0.5, 0.25, 0.125]);
+        assert!(t.name().contains("water.a_cdom_file"));
+        // No header at all is fine too.
+        let path = write(&dir, "bare.csv", "400,1\n500,2");
+        assert_eq!(
+            Table::from_csv_file(&path, "f").unwrap().at(450.0),
+            Some(1.5)
+        );
+    }
+
+    #[test]
+    fn user_csv_errors_name_file_line_and_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let check = |name: &str, text: &str, needles: &[&str]| {
+            let path = write(&dir, name, text);
+            let e = Table::from_csv_file(&path, "bottom.file").unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains(&path.display().to_string()), "{msg}");
+            assert!(msg.contains("bottom.file"), "{msg}");
+            for n in needles {
+                assert!(msg.contains(n), "{name}: missing '{n}' in: {msg}");
+            }
+        };
+        check(
+            "badnum.csv",
+            "# c\nnm,R\n400,0.1\n410,0.x2\n",
+            &["line 4:", "'0.x2'"],
+        );
+        // A typo in the first row is an error, not a header.
+        check("typo.csv", "4OO,0.1\n410,0.2\n", &["line 1:", "'4OO'"]);
+        check("nan.csv", "400,0.1\n410,NaN\n", &["line 2:", "finite"]);
+        check(
+            "order.csv",
+            "400,0.1\n420,0.2\n410,0.3\n",
+            &["line 3:", "increase"],
+        );
+        check("dup.csv", "400,0.1\n400,0.2\n", &["line 2:", "increase"]);
+        check("cols.csv", "400,0.1\n410,0.2,7\n", &["line 2:", "2 fields"]);
+        check(
+            "short.csv",
+            "# only one\nnm,R\n400,0.1\n",
+            &["at least 2 data rows, found 1"],
+        );
+        check("empty.csv", "", &["found 0"]);
+        check(
+            "neg.csv",
+            "-400,0.1\n410,0.2\n",
+            &["line 1:", "not positive"],
+        );
+        let missing = dir.path().join("missing.csv");
+        let e = Table::from_csv_file(&missing, "bottom.file").unwrap_err();
+        assert!(matches!(e, Error::Io { .. }), "{e}");
+        assert!(e.to_string().contains("missing.csv"));
+    }
+
+    #[test]
+    fn embedded_parser_requires_its_header() {
+        let path = Path::new("x.csv");
+        let e = parse_csv("400,1\n500,2\n", path, "x", "x", Columns::Named(&["a"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 1") && e.contains("header"), "{e}");
+        let e = parse_csv(
+            "nm,b\n400,1\n500,2\n",
+            path,
+            "x",
+            "x",
+            Columns::Named(&["a"]),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("no column 'a'"), "{e}");
+    }
+}
