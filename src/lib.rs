@@ -1,6 +1,8 @@
 //! littoral — out-of-core spectral photon mapping for coastal waters.
 //!
 //! The modules, in data-flow order:
+//! - [`geometry`]: sea floor and targets as triangles in one BVH, with
+//!   closest-hit and occlusion queries ([`geometry::Geometry`]).
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
@@ -15,6 +17,7 @@
 
 pub mod cache;
 pub mod error;
+pub mod geometry;
 pub mod mem;
 pub mod photon;
 pub mod progress;
