@@ -22,6 +22,7 @@
 pub mod cache;
 pub mod emit;
 pub mod error;
+pub mod geometry;
 pub mod mem;
 pub mod output;
 pub mod optics;
