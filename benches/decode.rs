@@ -22,10 +22,7 @@ fn decode(c: &mut Criterion) {
         b.iter(|| file.decode_tile(t, &mut dec, &mut out).unwrap())
     });
     g.bench_function("decode_no_checksum", |b| {
-        b.iter(|| {
-            dec.decode_unchecked(file.blob(t), &e, &mut out)
-                .unwrap()
-        })
+        b.iter(|| dec.decode_unchecked(file.blob(t), &e, &mut out).unwrap())
     });
     g.bench_function("decode_and_build_tree", |b| {
         b.iter(|| {

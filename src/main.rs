@@ -5,8 +5,8 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use littoral::progress::Progress;
 use littoral::query::{PhotonMap, Search};
-use littoral::store::{build_map, BuildOptions, MapFile};
 use littoral::scene::{Overrides, Scene};
+use littoral::store::{build_map, BuildOptions, MapFile};
 use littoral::synth::{Distribution, SynthSource};
 use std::io::Write;
 use std::path::PathBuf;
@@ -252,7 +252,11 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
     };
     let emission = littoral::emit::emit(&scene, &a.map, &options, &bars)?;
     let total = start.elapsed().as_secs_f64();
-    let physics = littoral::emit::report::EmissionReport::new(&scene, &emission.totals, &emission.photon_power);
+    let physics = littoral::emit::report::EmissionReport::new(
+        &scene,
+        &emission.totals,
+        &emission.photon_power,
+    );
     let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
     let report = serde_json::json!({
         "report": physics,

@@ -23,12 +23,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .suffix(".partial")
         .tempfile_in(dir)
         .map_err(|e| Error::io(path, "create", e))?;
-    tmp.write_all(bytes).map_err(|e| Error::io(path, "write", e))?;
-    tmp.as_file().sync_all().map_err(|e| Error::io(path, "write", e))?;
+    tmp.write_all(bytes)
+        .map_err(|e| Error::io(path, "write", e))?;
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| Error::io(path, "write", e))?;
     use std::os::unix::fs::PermissionsExt;
     tmp.as_file()
         .set_permissions(std::fs::Permissions::from_mode(0o644))
         .map_err(|e| Error::io(path, "write", e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, "rename into place", e.error))?;
+    tmp.persist(path)
+        .map_err(|e| Error::io(path, "rename into place", e.error))?;
     Ok(())
 }

@@ -78,14 +78,35 @@ impl<'s> Emitter<'s> {
     }
 
     /// Trace photon `i`; appends what it stores to `out`.
-    fn trace_one(&self, i: u64, tally: &mut PhotonTally, out: &mut Vec<StagedPhoton>) -> (usize, trace::Traced) {
+    fn trace_one(
+        &self,
+        i: u64,
+        tally: &mut PhotonTally,
+        out: &mut Vec<StagedPhoton>,
+    ) -> (usize, trace::Traced) {
         let mut rng = Pcg32::new(self.scene.seed, i);
         let u = rng.uniform_f64();
-        let k = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1);
         let nb = self.scene.bands.len();
-        let (source, band) = if k < nb { (Source::Sun, k) } else { (Source::Sky, k - nb) };
+        let (source, band) = if k < nb {
+            (Source::Sun, k)
+        } else {
+            (Source::Sky, k - nb)
+        };
         tally.clear();
-        let t = trace::trace(self.scene, i, &mut rng, source, band, self.photon_power[band] as f32, tally, out);
+        let t = trace::trace(
+            self.scene,
+            i,
+            &mut rng,
+            source,
+            band,
+            self.photon_power[band] as f32,
+            tally,
+            out,
+        );
         (band, t)
     }
 
@@ -100,12 +121,18 @@ impl<'s> Emitter<'s> {
             local.stored_surface += t.stored_surface as u64;
             local.truncated += t.truncated as u64;
         }
-        self.totals.lock().unwrap_or_else(|e| e.into_inner()).merge(&local);
+        self.totals
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .merge(&local);
     }
 
     /// The totals so far.
     pub fn totals(&self) -> Totals {
-        self.totals.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        self.totals
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
     }
 
     /// Trace every photon without storing any (validation runs and tallies).
@@ -150,7 +177,11 @@ impl PhotonSource for Emitter<'_> {
     fn bounds(&self) -> Aabb {
         let d = &self.scene.domain;
         let g = self.scene.geometry.bounds();
-        let deepest = if g.is_valid() { g.min.z.min(-1.0) } else { -1.0 };
+        let deepest = if g.is_valid() {
+            g.min.z.min(-1.0)
+        } else {
+            -1.0
+        };
         Aabb {
             min: Vec3::new(0.0, 0.0, deepest),
             max: Vec3::new(d.size_m[0] as f32, d.size_m[1] as f32, 0.0),
@@ -166,7 +197,12 @@ pub struct Emission {
 }
 
 /// Trace the scene's photons into the map at `map_path`.
-pub fn emit(scene: &Scene, map_path: &Path, options: &BuildOptions, progress: &dyn Progress) -> Result<Emission> {
+pub fn emit(
+    scene: &Scene,
+    map_path: &Path,
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<Emission> {
     let emitter = Emitter::new(scene)?;
     let map = build_map(map_path, &emitter, options, progress)?;
     Ok(Emission {

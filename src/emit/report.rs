@@ -104,7 +104,11 @@ impl EmissionReport {
             let (eu, eu_se) = series(totals.slot(d, EU));
             let (eod, eod_se) = series(totals.slot(d, EOD));
             let (eou, eou_se) = series(totals.slot(d, EOU));
-            let r = ed.iter().zip(&eu).map(|(d, u)| if *d > 0.0 { u / d } else { 0.0 }).collect();
+            let r = ed
+                .iter()
+                .zip(&eu)
+                .map(|(d, u)| if *d > 0.0 { u / d } else { 0.0 })
+                .collect();
             tally.push(DepthTally {
                 depth_m: depth,
                 Ed: ed,
@@ -141,8 +145,16 @@ impl EmissionReport {
         let (ed, ed_se) = series(up);
         let (eu, eu_se) = series(uu);
 
-        let power = |counts: &[u64]| -> Vec<f64> { counts.iter().zip(photon_power).map(|(&c, p)| c as f64 * p).collect() };
-        let emitted: Vec<f64> = (0..nb).map(|b| scene.incident_irradiance(b) * area).collect();
+        let power = |counts: &[u64]| -> Vec<f64> {
+            counts
+                .iter()
+                .zip(photon_power)
+                .map(|(&c, p)| c as f64 * p)
+                .collect()
+        };
+        let emitted: Vec<f64> = (0..nb)
+            .map(|b| scene.incident_irradiance(b) * area)
+            .collect();
         let escaped = power(&totals.escaped);
         let absorbed_water = power(&totals.absorbed_water);
         let absorbed_surfaces = power(&totals.absorbed_surfaces);
@@ -156,7 +168,13 @@ impl EmissionReport {
             let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
             let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
             residual.push(res);
-            sigma.push(if sd > 0.0 { res / sd } else if res == 0.0 { 0.0 } else { f64::INFINITY });
+            sigma.push(if sd > 0.0 {
+                res / sd
+            } else if res == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            });
         }
         let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
         EmissionReport {
@@ -164,7 +182,12 @@ impl EmissionReport {
             bands_nm: scene.bands.centers_nm().to_vec(),
             fwhm_nm: scene.bands.fwhm_nm().to_vec(),
             tally,
-            above_surface: AboveSurface { Ed: ed, Eu: eu, Ed_stderr: ed_se, Eu_stderr: eu_se },
+            above_surface: AboveSurface {
+                Ed: ed,
+                Eu: eu,
+                Ed_stderr: ed_se,
+                Eu_stderr: eu_se,
+            },
             kd,
             energy: Energy {
                 units: "W nm^-1",

@@ -138,7 +138,10 @@ impl Totals {
         add(&mut self.absorbed_surfaces, &o.absorbed_surfaces);
         add(&mut self.lost_edges, &o.lost_edges);
         self.sum.iter_mut().zip(&o.sum).for_each(|(x, y)| *x += y);
-        self.sum_sq.iter_mut().zip(&o.sum_sq).for_each(|(x, y)| *x += y);
+        self.sum_sq
+            .iter_mut()
+            .zip(&o.sum_sq)
+            .for_each(|(x, y)| *x += y);
         self.traced += o.traced;
         self.stored_volume += o.stored_volume;
         self.stored_surface += o.stored_surface;

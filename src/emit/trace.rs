@@ -16,7 +16,7 @@
 //! (transmitted once through the surface) is not stored unless the scene
 //! asks for it, since the renderer adds that single scattering directly.
 
-use super::tally::{Fate, PhotonTally, EOD, EOU, ED, EU, MIN_ABS_MU};
+use super::tally::{Fate, PhotonTally, ED, EOD, EOU, EU, MIN_ABS_MU};
 use crate::optics::phase::scatter;
 use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use crate::rng::Pcg32;
@@ -72,17 +72,27 @@ pub fn trace(
         stored_volume: 0,
         stored_surface: 0,
     };
-    let mut store = |pos: Vec3, dir: Vec3, layer: u16, events: &mut u32, out: &mut Vec<StagedPhoton>| {
-        *events += 1;
-        out.push(StagedPhoton::new(
-            &Photon { position: pos, direction: dir, band: band as u16, power },
-            layer,
-            (index << 20) | (*events as u64),
-        ));
-    };
+    let store =
+        |pos: Vec3, dir: Vec3, layer: u16, events: &mut u32, out: &mut Vec<StagedPhoton>| {
+            *events += 1;
+            out.push(StagedPhoton::new(
+                &Photon {
+                    position: pos,
+                    direction: dir,
+                    band: band as u16,
+                    power,
+                },
+                layer,
+                (index << 20) | (*events as u64),
+            ));
+        };
 
     // Start on the surface, anywhere in the domain.
-    let mut pos = Vec3::new((rng.uniform_f64() * sx) as f32, (rng.uniform_f64() * sy) as f32, 0.0);
+    let mut pos = Vec3::new(
+        (rng.uniform_f64() * sx) as f32,
+        (rng.uniform_f64() * sy) as f32,
+        0.0,
+    );
     let mut dir = match source {
         Source::Sun => scene.sun.direction,
         Source::Sky => cosine_hemisphere(-Vec3::Z, rng),
@@ -110,10 +120,16 @@ pub fn trace(
         } else {
             f64::INFINITY
         };
-        let t_surface = if dir.z > 0.0 { (-pos.z / dir.z) as f64 } else { f64::INFINITY };
+        let t_surface = if dir.z > 0.0 {
+            (-pos.z / dir.z) as f64
+        } else {
+            f64::INFINITY
+        };
         let t_edge = edge_distance(pos, dir, sx, sy);
         let t_limit = t_flight.min(t_surface).min(t_edge);
-        let hit = scene.geometry.intersect(pos, dir, t_limit.min(f32::MAX as f64) as f32);
+        let hit = scene
+            .geometry
+            .intersect(pos, dir, t_limit.min(f32::MAX as f64) as f32);
         if let Some(h) = hit {
             let next = h.position;
             tally_segment(depths, tally, pos, next, dir);
@@ -178,7 +194,11 @@ pub fn trace(
         if xi >= iop.c() {
             continue; // null collision
         }
-        let phase = if xi < iop.a + iop.b_w { &scene.water_phase } else { &scene.particle_phase };
+        let phase = if xi < iop.a + iop.b_w {
+            &scene.water_phase
+        } else {
+            &scene.particle_phase
+        };
         if !direct || scene.store_direct {
             store(pos, dir, LAYER_VOLUME, &mut events, out);
             result.stored_volume += 1;

@@ -77,7 +77,9 @@ impl ConstituentGrid {
     }
 
     fn max(&self) -> Constituents {
-        self.values.iter().fold(Constituents::default(), |m, c| m.max(c))
+        self.values
+            .iter()
+            .fold(Constituents::default(), |m, c| m.max(c))
     }
 }
 
@@ -219,14 +221,24 @@ impl WaterModel {
         }
     }
 
-    fn from_constituents(s: &BandSpectra, c: &Constituents, bp_550: Option<f64>, band: usize) -> Iop {
+    fn from_constituents(
+        s: &BandSpectra,
+        c: &Constituents,
+        bp_550: Option<f64>,
+        band: usize,
+    ) -> Iop {
         let a_phi = if c.chl > 0.0 {
             s.a_phi_a[band] * c.chl.powf(s.a_phi_e[band])
         } else {
             0.0
         };
-        let a = s.a_w[band] + a_phi + c.cdom_440 * s.cdom_shape[band] + c.nap_440 * s.nap_shape[band];
-        let bp550 = bp_550.unwrap_or(if c.chl > 0.0 { 0.30 * c.chl.powf(0.62) } else { 0.0 });
+        let a =
+            s.a_w[band] + a_phi + c.cdom_440 * s.cdom_shape[band] + c.nap_440 * s.nap_shape[band];
+        let bp550 = bp_550.unwrap_or(if c.chl > 0.0 {
+            0.30 * c.chl.powf(0.62)
+        } else {
+            0.0
+        });
         Iop {
             a,
             b_w: s.b_w[band],
@@ -279,8 +291,16 @@ mod tests {
             field: ConstituentField::Gradient {
                 axis: 0,
                 size_m: 100.0,
-                from: Constituents { chl: 0.5, cdom_440: 0.02, nap_440: 0.0 },
-                to: Constituents { chl: 5.0, cdom_440: 0.3, nap_440: 0.05 },
+                from: Constituents {
+                    chl: 0.5,
+                    cdom_440: 0.02,
+                    nap_440: 0.0,
+                },
+                to: Constituents {
+                    chl: 5.0,
+                    cdom_440: 0.3,
+                    nap_440: 0.05,
+                },
             },
             bp_550: None,
         };
@@ -301,7 +321,11 @@ mod tests {
 
     #[test]
     fn grid_interpolates_trilinearly_and_clamps() {
-        let c = |v: f64| Constituents { chl: v, cdom_440: 0.0, nap_440: 0.0 };
+        let c = |v: f64| Constituents {
+            chl: v,
+            cdom_440: 0.0,
+            nap_440: 0.0,
+        };
         let g = ConstituentGrid {
             xs: vec![0.0, 10.0],
             ys: vec![0.0, 10.0],
@@ -319,8 +343,15 @@ mod tests {
 
     #[test]
     fn layers_override_the_base() {
-        let c = |v: f64| Constituents { chl: v, cdom_440: 0.0, nap_440: 0.0 };
-        let f = ConstituentField::Layers { base: c(1.0), layers: vec![(2.0, 4.0, c(3.0))] };
+        let c = |v: f64| Constituents {
+            chl: v,
+            cdom_440: 0.0,
+            nap_440: 0.0,
+        };
+        let f = ConstituentField::Layers {
+            base: c(1.0),
+            layers: vec![(2.0, 4.0, c(3.0))],
+        };
         assert_eq!(f.at(Vec3::new(0.0, 0.0, -1.0)).chl, 1.0);
         assert_eq!(f.at(Vec3::new(0.0, 0.0, -3.0)).chl, 3.0);
         assert_eq!(f.max().chl, 3.0);

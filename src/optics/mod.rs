@@ -2,5 +2,6 @@
 //! the sea surface.
 
 pub mod iop;
+pub mod phase;
 pub mod surface;
 pub mod tables;

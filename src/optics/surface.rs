@@ -225,7 +225,10 @@ mod tests {
             let want = 1.0 - fresnel_reflectance(t.cos(), 1.0, 1.34);
             let got = through as f64 / n as f64;
             let se = (want * (1.0 - want) / n as f64).sqrt();
-            assert!((got - want).abs() < 4.0 * se, "theta {theta}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 4.0 * se,
+                "theta {theta}: {got} vs {want}"
+            );
         }
     }
 

@@ -62,15 +62,20 @@ impl Ctx<'_> {
             Reflectance::Constant(v) => vec![*v; self.bands.len()],
             Reflectance::Named(name) => {
                 if tables::BOTTOM_TYPES.contains(&name.as_str()) {
-                    let t = tables::bottom_reflectance(name).map_err(|e| self.err(steps, e.to_string()))?;
+                    let t = tables::bottom_reflectance(name)
+                        .map_err(|e| self.err(steps, e.to_string()))?;
                     self.per_band(t, steps)?
                 } else if name.ends_with(".csv") {
-                    let t = Table::from_csv_file(&self.path(name), &super::locate::key_name(steps))?;
+                    let t =
+                        Table::from_csv_file(&self.path(name), &super::locate::key_name(steps))?;
                     self.per_band(&t, steps)?
                 } else {
                     return Err(self.err(
                         steps,
-                        format!("'{name}' is neither a number, a bottom type ({}) nor a .csv file", tables::BOTTOM_TYPES.join(", ")),
+                        format!(
+                            "'{name}' is neither a number, a bottom type ({}) nor a .csv file",
+                            tables::BOTTOM_TYPES.join(", ")
+                        ),
                     ));
                 }
             }
@@ -110,37 +115,64 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         f.spectral.start_nm.get_or_insert(400.0);
         f.spectral.end_nm.get_or_insert(700.0);
     }
-    let dir = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let dir = path
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
 
     // Spectral grid.
     let sp = &f.spectral;
     let spk = |k| [K("spectral"), K(k)];
     let bands = match (&sp.centers_nm, sp.bands) {
         (Some(c), None) => {
-            let fwhm = sp.fwhm_nm.clone().ok_or_else(|| src.error(&spk("fwhm_nm"), "required with centers_nm"))?;
-            BandGrid::explicit(c.iter().map(|&v| v as f32).collect(), fwhm.iter().map(|&v| v as f32).collect())
-                .map_err(|e| src.error(&spk("centers_nm"), e.to_string()))?
+            let fwhm = sp
+                .fwhm_nm
+                .clone()
+                .ok_or_else(|| src.error(&spk("fwhm_nm"), "required with centers_nm"))?;
+            BandGrid::explicit(
+                c.iter().map(|&v| v as f32).collect(),
+                fwhm.iter().map(|&v| v as f32).collect(),
+            )
+            .map_err(|e| src.error(&spk("centers_nm"), e.to_string()))?
         }
         (None, Some(n)) => {
             let (Some(a), Some(b)) = (sp.start_nm, sp.end_nm) else {
                 return Err(src.error(&spk("bands"), "needs start_nm and end_nm"));
             };
-            BandGrid::even(a as f32, b as f32, n).map_err(|e| src.error(&spk("bands"), e.to_string()))?
+            BandGrid::even(a as f32, b as f32, n)
+                .map_err(|e| src.error(&spk("bands"), e.to_string()))?
         }
-        _ => return Err(src.error(&[K("spectral")], "give either start_nm, end_nm and bands, or centers_nm and fwhm_nm")),
+        _ => {
+            return Err(src.error(
+                &[K("spectral")],
+                "give either start_nm, end_nm and bands, or centers_nm and fwhm_nm",
+            ))
+        }
     };
     let policy = match sp.out_of_range.as_deref() {
         None | Some("error") => RangePolicy::Error,
         Some("clamp") => RangePolicy::Clamp,
-        Some(o) => return Err(src.error(&spk("out_of_range"), format!("'{o}': use \"error\" or \"clamp\""))),
+        Some(o) => {
+            return Err(src.error(
+                &spk("out_of_range"),
+                format!("'{o}': use \"error\" or \"clamp\""),
+            ))
+        }
     };
-    let ctx = Ctx { src, dir, bands, policy };
+    let ctx = Ctx {
+        src,
+        dir,
+        bands,
+        policy,
+    };
     let nb = ctx.bands.len();
 
     // Sun.
     let s = &f.sun;
     if !finite_in(s.zenith_deg, 0.0, 89.0) {
-        return Err(ctx.err(&[K("sun"), K("zenith_deg")], "must be between 0 and 89 degrees"));
+        return Err(ctx.err(
+            &[K("sun"), K("zenith_deg")],
+            "must be between 0 and 89 degrees",
+        ));
     }
     if !s.azimuth_deg.is_finite() {
         return Err(ctx.err(&[K("sun"), K("azimuth_deg")], "must be a finite angle"));
@@ -161,8 +193,17 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         (Some(_), Some(_)) => return Err(ctx.err(&[K("sun"), K("irradiance")], "give spectrum or irradiance, not both")),
     };
     let (zen, az) = (s.zenith_deg.to_radians(), s.azimuth_deg.to_radians());
-    let toward_sun = Vec3::new((zen.sin() * az.cos()) as f32, (zen.sin() * az.sin()) as f32, zen.cos() as f32);
-    let sun = Sun { zenith_rad: zen, azimuth_rad: az, direction: -toward_sun.normalize(), irradiance: sun_irr };
+    let toward_sun = Vec3::new(
+        (zen.sin() * az.cos()) as f32,
+        (zen.sin() * az.sin()) as f32,
+        zen.cos() as f32,
+    );
+    let sun = Sun {
+        zenith_rad: zen,
+        azimuth_rad: az,
+        direction: -toward_sun.normalize(),
+        irradiance: sun_irr,
+    };
 
     // Sky.
     let sky_irr = match (&f.sky.spectrum, f.sky.radiance) {
@@ -178,21 +219,34 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         (None, Some(_)) => return Err(ctx.err(&[K("sky"), K("radiance")], "must be >= 0")),
         (Some(_), Some(_)) => return Err(ctx.err(&[K("sky"), K("radiance")], "give spectrum or radiance, not both")),
     };
-    let sky = Sky { irradiance: sky_irr };
+    let sky = Sky {
+        irradiance: sky_irr,
+    };
 
     // Surface.
     let n_water = f.surface.refractive_index.unwrap_or(1.34);
     if !finite_in(n_water, 1.0, 2.0) {
-        return Err(ctx.err(&[K("surface"), K("refractive_index")], "must be between 1 and 2"));
+        return Err(ctx.err(
+            &[K("surface"), K("refractive_index")],
+            "must be between 1 and 2",
+        ));
     }
     let wind = f.surface.wind_speed.unwrap_or(0.0);
     if !finite_in(wind, 0.0, 30.0) {
-        return Err(ctx.err(&[K("surface"), K("wind_speed")], "must be between 0 and 30 m/s"));
+        return Err(ctx.err(
+            &[K("surface"), K("wind_speed")],
+            "must be between 0 and 30 m/s",
+        ));
     }
     let surface = match f.surface.kind.as_deref() {
         None | Some("flat") => SeaSurface::flat(n_water),
         Some("cox-munk") => SeaSurface::cox_munk(n_water, wind),
-        Some(o) => return Err(ctx.err(&[K("surface"), K("kind")], format!("'{o}': use \"flat\" or \"cox-munk\""))),
+        Some(o) => {
+            return Err(ctx.err(
+                &[K("surface"), K("kind")],
+                format!("'{o}': use \"flat\" or \"cox-munk\""),
+            ))
+        }
     };
 
     // Domain.
@@ -203,9 +257,17 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let periodic = match f.domain.edges.as_deref() {
         None | Some("periodic") => true,
         Some("open") => false,
-        Some(o) => return Err(ctx.err(&[K("domain"), K("edges")], format!("'{o}': use \"periodic\" or \"open\""))),
+        Some(o) => {
+            return Err(ctx.err(
+                &[K("domain"), K("edges")],
+                format!("'{o}': use \"periodic\" or \"open\""),
+            ))
+        }
     };
-    let domain = Domain { size_m: size, periodic };
+    let domain = Domain {
+        size_m: size,
+        periodic,
+    };
 
     let (water, particle_phase) = water(&ctx, &f.water, &domain)?;
     let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
@@ -226,7 +288,10 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
                 }
                 (None, Some(s), None) => {
                     let sk = |k| [K("bottom"), K("slope"), K(k)];
-                    for (k, v) in [("from_depth_m", s.from_depth_m), ("to_depth_m", s.to_depth_m)] {
+                    for (k, v) in [
+                        ("from_depth_m", s.from_depth_m),
+                        ("to_depth_m", s.to_depth_m),
+                    ] {
                         if !finite_in(v, 1e-3, 1e5) {
                             return Err(ctx.err(&sk(k), "must be a positive depth (m)"));
                         }
@@ -234,15 +299,23 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
                     let axis = match s.axis.as_deref() {
                         None | Some("x") => Axis::X,
                         Some("y") => Axis::Y,
-                        Some(o) => return Err(ctx.err(&sk("axis"), format!("'{o}': use \"x\" or \"y\""))),
+                        Some(o) => {
+                            return Err(ctx.err(&sk("axis"), format!("'{o}': use \"x\" or \"y\"")))
+                        }
                     };
                     geo.slope_floor(s.from_depth_m as f32, s.to_depth_m as f32, axis, FLOOR);
                 }
                 (None, None, Some(h)) => {
                     let (depths, nx, ny) = GeometryBuilder::heightfield_from_csv(&ctx.path(h))?;
-                    geo.heightfield_floor(&depths, nx, ny, FLOOR).map_err(|e| ctx.err(&bk("heightfield"), e.to_string()))?;
+                    geo.heightfield_floor(&depths, nx, ny, FLOOR)
+                        .map_err(|e| ctx.err(&bk("heightfield"), e.to_string()))?;
                 }
-                _ => return Err(ctx.err(&[K("bottom")], "give exactly one of depth_m, slope or heightfield")),
+                _ => {
+                    return Err(ctx.err(
+                        &[K("bottom")],
+                        "give exactly one of depth_m, slope or heightfield",
+                    ))
+                }
             }
             let refl = b.reflectance.clone().unwrap_or(Reflectance::Constant(0.2));
             let reflectance = ctx.reflectance(&refl, &bk("reflectance"))?;
@@ -250,39 +323,65 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
             for (i, p) in b.patch.iter().enumerate() {
                 let steps = [K("bottom"), K("patch"), I(i), K("reflectance")];
                 if !(p.min_m[0] < p.max_m[0] && p.min_m[1] < p.max_m[1]) {
-                    return Err(ctx.err(&[K("bottom"), K("patch"), I(i), K("max_m")], "max_m must exceed min_m"));
+                    return Err(ctx.err(
+                        &[K("bottom"), K("patch"), I(i), K("max_m")],
+                        "max_m must exceed min_m",
+                    ));
                 }
-                patches.push(Patch { min_m: p.min_m, max_m: p.max_m, reflectance: ctx.reflectance(&p.reflectance, &steps)? });
+                patches.push(Patch {
+                    min_m: p.min_m,
+                    max_m: p.max_m,
+                    reflectance: ctx.reflectance(&p.reflectance, &steps)?,
+                });
             }
-            Some(Bottom { reflectance, patches })
+            Some(Bottom {
+                reflectance,
+                patches,
+            })
         }
     };
     let mut target_reflectance = Vec::new();
     for (i, t) in f.target.iter().enumerate() {
         let tk = |k| [K("target"), I(i), K(k)];
         let id = (i + 1) as SurfaceId;
-        let c = Vec3::new(t.center_m[0] as f32, t.center_m[1] as f32, t.center_m[2] as f32);
+        let c = Vec3::new(
+            t.center_m[0] as f32,
+            t.center_m[1] as f32,
+            t.center_m[2] as f32,
+        );
         if !c.is_finite() || c.z > 0.0 {
             return Err(ctx.err(&tk("center_m"), "must be finite and under water (z <= 0)"));
         }
         let size = t.size_m.clone().unwrap_or_default();
         let positive = size.iter().all(|&v| finite_in(v, 1e-4, 1e5));
         match t.kind.as_str() {
-            "box" if size.len() == 3 && positive => {
-                geo.add_box(c, Vec3::new(size[0] as f32, size[1] as f32, size[2] as f32), id)
+            "box" if size.len() == 3 && positive => geo.add_box(
+                c,
+                Vec3::new(size[0] as f32, size[1] as f32, size[2] as f32),
+                id,
+            ),
+            "panel" if size.len() == 2 && positive => {
+                geo.add_panel(c, [size[0] as f32, size[1] as f32], id)
             }
-            "panel" if size.len() == 2 && positive => geo.add_panel(c, [size[0] as f32, size[1] as f32], id),
             "box" => return Err(ctx.err(&tk("size_m"), "a box needs size_m = [x, y, z] > 0")),
             "panel" => return Err(ctx.err(&tk("size_m"), "a panel needs size_m = [x, y] > 0")),
             "mesh" => {
-                let file = t.file.as_ref().ok_or_else(|| ctx.err(&tk("file"), "a mesh needs file = \"mesh.obj\""))?;
+                let file = t
+                    .file
+                    .as_ref()
+                    .ok_or_else(|| ctx.err(&tk("file"), "a mesh needs file = \"mesh.obj\""))?;
                 let scale = t.scale.unwrap_or(1.0);
                 if !finite_in(scale, 1e-6, 1e6) {
                     return Err(ctx.err(&tk("scale"), "must be positive"));
                 }
                 geo.add_obj(&ctx.path(file), c, scale as f32, id)?;
             }
-            o => return Err(ctx.err(&tk("kind"), format!("'{o}': use \"box\", \"panel\" or \"mesh\""))),
+            o => {
+                return Err(ctx.err(
+                    &tk("kind"),
+                    format!("'{o}': use \"box\", \"panel\" or \"mesh\""),
+                ))
+            }
         }
         target_reflectance.push(ctx.reflectance(&t.reflectance, &tk("reflectance"))?);
     }
@@ -294,13 +393,19 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let mut tally_depths = f.tally.depths_m.clone();
     for (i, d) in tally_depths.iter().enumerate() {
         if !finite_in(*d, 0.0, 1e5) {
-            return Err(ctx.err(&[K("tally"), K("depths_m"), I(i)], "depths must be >= 0 (m)"));
+            return Err(ctx.err(
+                &[K("tally"), K("depths_m"), I(i)],
+                "depths must be >= 0 (m)",
+            ));
         }
     }
     tally_depths.sort_by(f64::total_cmp);
     tally_depths.dedup();
     if f.name.trim().is_empty() || f.name.contains(['/', '\\']) {
-        return Err(ctx.err(&[K("name")], "must be a non-empty name without path separators"));
+        return Err(ctx.err(
+            &[K("name")],
+            "must be a non-empty name without path separators",
+        ));
     }
 
     Ok(Scene {
@@ -325,7 +430,8 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
 fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
     let Some(p) = p else {
-        return PhaseFunction::fournier_forand(0.0183).map_err(|e| ctx.err(&[K("water")], e.to_string()));
+        return PhaseFunction::fournier_forand(0.0183)
+            .map_err(|e| ctx.err(&[K("water")], e.to_string()));
     };
     let pk = |k| [K("water"), K("phase"), K(k)];
     let wrap = |k, r: Result<PhaseFunction>| r.map_err(|e| ctx.err(&pk(k), e.to_string()));
@@ -341,7 +447,7 @@ fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
         "table" => {
             let file = p.file.as_ref().ok_or_else(|| ctx.err(&pk("file"), "a table needs file = \"angle_deg,value CSV\""))?;
             let t = Table::from_csv_file(&ctx.path(file), "water.phase.file")?;
-            let (angles, values) = t.points();
+            let (angles, values) = (t.x_nm(), t.y());
             wrap("file", PhaseFunction::tabulated(angles, values, "water.phase.file"))
         }
         o => Err(ctx.err(&pk("kind"), format!("'{o}': use fournier-forand, petzold, rayleigh, isotropic, henyey-greenstein or table"))),
@@ -352,7 +458,9 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
     let wk = |k| [K("water"), K(k)];
     let particle_phase = phase(ctx, w.phase.as_ref())?;
     if let Some(iop) = &w.iop {
-        let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550].iter().any(Option::is_some)
+        let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550]
+            .iter()
+            .any(Option::is_some)
             || w.gradient.is_some()
             || !w.layer.is_empty()
             || w.grid.is_some();
@@ -360,21 +468,33 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
             return Err(ctx.err(&wk("iop"), "explicit IOPs exclude constituents (chl, cdom_440, nap_440, bp_550, gradient, layer, grid)"));
         }
         if !finite_in(iop.a, 0.0, 1e4) || iop.a <= 0.0 && iop.b <= 0.0 {
-            return Err(ctx.err(&[K("water"), K("iop"), K("a")], "must be >= 0 with a + b > 0 (1/m)"));
+            return Err(ctx.err(
+                &[K("water"), K("iop"), K("a")],
+                "must be >= 0 with a + b > 0 (1/m)",
+            ));
         }
         if !finite_in(iop.b, 0.0, 1e4) {
             return Err(ctx.err(&[K("water"), K("iop"), K("b")], "must be >= 0 (1/m)"));
         }
         return Ok((WaterModel::Explicit { a: iop.a, b: iop.b }, particle_phase));
     }
-    for (k, v) in [("chl", w.chl), ("cdom_440", w.cdom_440), ("nap_440", w.nap_440), ("bp_550", w.bp_550)] {
+    for (k, v) in [
+        ("chl", w.chl),
+        ("cdom_440", w.cdom_440),
+        ("nap_440", w.nap_440),
+        ("bp_550", w.bp_550),
+    ] {
         if let Some(v) = v {
             if !finite_in(v, 0.0, 1e4) {
                 return Err(ctx.err(&wk(k), "must be >= 0"));
             }
         }
     }
-    for (k, v) in [("cdom_slope", w.cdom_slope), ("nap_slope", w.nap_slope), ("bp_slope", w.bp_slope)] {
+    for (k, v) in [
+        ("cdom_slope", w.cdom_slope),
+        ("nap_slope", w.nap_slope),
+        ("bp_slope", w.bp_slope),
+    ] {
         if let Some(v) = v {
             if !finite_in(v, 0.0, 10.0) {
                 return Err(ctx.err(&wk(k), "must be between 0 and 10"));
@@ -409,15 +529,26 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
             ConstituentField::Gradient {
                 axis,
                 size_m: domain.size_m[axis],
-                from: Constituents { chl: chl[0], cdom_440: cdom[0], nap_440: nap[0] },
-                to: Constituents { chl: chl[1], cdom_440: cdom[1], nap_440: nap[1] },
+                from: Constituents {
+                    chl: chl[0],
+                    cdom_440: cdom[0],
+                    nap_440: nap[0],
+                },
+                to: Constituents {
+                    chl: chl[1],
+                    cdom_440: cdom[1],
+                    nap_440: nap[1],
+                },
             }
         }
         (None, false, None) => {
             let mut layers = Vec::new();
             for (i, l) in w.layer.iter().enumerate() {
                 let lk = |k| [K("water"), K("layer"), I(i), K(k)];
-                if !(finite_in(l.top_m, 0.0, 1e5) && finite_in(l.bottom_m, 0.0, 1e5) && l.bottom_m > l.top_m) {
+                if !(finite_in(l.top_m, 0.0, 1e5)
+                    && finite_in(l.bottom_m, 0.0, 1e5)
+                    && l.bottom_m > l.top_m)
+                {
                     return Err(ctx.err(&lk("bottom_m"), "need 0 <= top_m < bottom_m (m)"));
                 }
                 let c = Constituents {
@@ -425,7 +556,10 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
                     cdom_440: l.cdom_440.unwrap_or(base.cdom_440),
                     nap_440: l.nap_440.unwrap_or(base.nap_440),
                 };
-                if ![c.chl, c.cdom_440, c.nap_440].iter().all(|&v| finite_in(v, 0.0, 1e4)) {
+                if ![c.chl, c.cdom_440, c.nap_440]
+                    .iter()
+                    .all(|&v| finite_in(v, 0.0, 1e4))
+                {
                     return Err(ctx.err(&lk("chl"), "concentrations must be >= 0"));
                 }
                 layers.push((l.top_m, l.bottom_m, c));
@@ -433,7 +567,12 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
             ConstituentField::Layers { base, layers }
         }
         (None, true, Some(g)) => ConstituentField::Grid(read_grid(&ctx.path(g))?),
-        _ => return Err(ctx.err(&[K("water")], "give at most one of gradient, layer and grid")),
+        _ => {
+            return Err(ctx.err(
+                &[K("water")],
+                "give at most one of gradient, layer and grid",
+            ))
+        }
     };
     let centers: Vec<f64> = ctx.bands.centers_nm().iter().map(|&c| c as f64).collect();
     let (a_phi_a, a_phi_e) = tables::bricaud_a_phi();
@@ -446,17 +585,32 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
         a_phi_a: ctx.per_band(a_phi_a, &wk("chl"))?,
         a_phi_e: ctx.per_band(a_phi_e, &wk("chl"))?,
         cdom_shape: centers.iter().map(|l| (-s_g * (l - 440.0)).exp()).collect(),
-        nap_shape: centers.iter().map(|l| (-s_nap * (l - 440.0)).exp()).collect(),
+        nap_shape: centers
+            .iter()
+            .map(|l| (-s_nap * (l - 440.0)).exp())
+            .collect(),
         bp_shape: centers.iter().map(|l| (550.0 / l).powf(n_bp)).collect(),
     };
-    Ok((WaterModel::Constituents { spectra, field, bp_550: w.bp_550 }, particle_phase))
+    Ok((
+        WaterModel::Constituents {
+            spectra,
+            field,
+            bp_550: w.bp_550,
+        },
+        particle_phase,
+    ))
 }
 
 /// A constituent grid CSV: header `x_m,y_m,depth_m,chl,cdom_440,nap_440`,
 /// one row per node of a full regular grid, in any order.
 fn read_grid(path: &Path) -> Result<ConstituentGrid> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-    let bad = |line: usize, what: String| Error::Scene { path: path.to_path_buf(), line, key: "water.grid".into(), what };
+    let bad = |line: usize, what: String| Error::Scene {
+        path: path.to_path_buf(),
+        line,
+        key: "water.grid".into(),
+        what,
+    };
     let mut rows: Vec<[f64; 6]> = Vec::new();
     let mut header_seen = false;
     for (i, line) in text.lines().enumerate() {
@@ -467,14 +621,23 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
         if !header_seen {
             header_seen = true;
             if line.replace(' ', "") != "x_m,y_m,depth_m,chl,cdom_440,nap_440" {
-                return Err(bad(i + 1, "header must be x_m,y_m,depth_m,chl,cdom_440,nap_440".into()));
+                return Err(bad(
+                    i + 1,
+                    "header must be x_m,y_m,depth_m,chl,cdom_440,nap_440".into(),
+                ));
             }
             continue;
         }
-        let v: Vec<f64> = line.split(',').map(|s| s.trim().parse::<f64>()).collect::<std::result::Result<_, _>>()
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|s| s.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
             .map_err(|_| bad(i + 1, format!("'{line}' is not six numbers")))?;
         if v.len() != 6 || !v.iter().all(|x| x.is_finite()) || v[3..].iter().any(|&x| x < 0.0) {
-            return Err(bad(i + 1, format!("'{line}' needs six finite numbers, concentrations >= 0")));
+            return Err(bad(
+                i + 1,
+                format!("'{line}' needs six finite numbers, concentrations >= 0"),
+            ));
         }
         rows.push([v[0], v[1], v[2], v[3], v[4], v[5]]);
     }
@@ -486,7 +649,16 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
     };
     let (xs, ys, ds) = (axis(0), axis(1), axis(2));
     if rows.is_empty() || xs.len() * ys.len() * ds.len() != rows.len() {
-        return Err(bad(1, format!("{} rows do not form a full {}x{}x{} grid", rows.len(), xs.len(), ys.len(), ds.len())));
+        return Err(bad(
+            1,
+            format!(
+                "{} rows do not form a full {}x{}x{} grid",
+                rows.len(),
+                xs.len(),
+                ys.len(),
+                ds.len()
+            ),
+        ));
     }
     let mut values = vec![None; rows.len()];
     for r in &rows {
@@ -495,9 +667,21 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
         let k = ds.partition_point(|&d| d < r[2]);
         let slot = &mut values[i + xs.len() * (j + ys.len() * k)];
         if slot.is_some() {
-            return Err(bad(1, format!("node ({}, {}, {}) appears twice", r[0], r[1], r[2])));
+            return Err(bad(
+                1,
+                format!("node ({}, {}, {}) appears twice", r[0], r[1], r[2]),
+            ));
         }
-        *slot = Some(Constituents { chl: r[3], cdom_440: r[4], nap_440: r[5] });
+        *slot = Some(Constituents {
+            chl: r[3],
+            cdom_440: r[4],
+            nap_440: r[5],
+        });
     }
-    Ok(ConstituentGrid { xs, ys, depths: ds, values: values.into_iter().map(|v| v.unwrap_or_default()).collect() })
+    Ok(ConstituentGrid {
+        xs,
+        ys,
+        depths: ds,
+        values: values.into_iter().map(|v| v.unwrap_or_default()).collect(),
+    })
 }

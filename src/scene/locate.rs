@@ -40,10 +40,13 @@ impl<'t> Source<'t> {
         let mut value: Option<&DeValue> = None;
         for step in steps {
             let next = match (step, table, value) {
-                (Step::Key(k), Some(t), _) => t.iter().find(|(key, _)| key.get_ref().as_ref() == *k).map(|(key, v)| {
-                    best = self.line_of(key.span().start);
-                    v
-                }),
+                (Step::Key(k), Some(t), _) => t
+                    .iter()
+                    .find(|(key, _)| key.get_ref().as_ref() == *k)
+                    .map(|(key, v)| {
+                        best = self.line_of(key.span().start);
+                        v
+                    }),
                 (Step::Index(i), _, Some(DeValue::Array(a))) => a.get(*i).inspect(|v| {
                     best = self.line_of(v.span().start);
                 }),
@@ -97,12 +100,26 @@ mod tests {
         let src = Source::new(text, Path::new("s.toml"));
         assert_eq!(src.line_of_path(&[Step::Key("water"), Step::Key("chl")]), 3);
         assert_eq!(
-            src.line_of_path(&[Step::Key("target"), Step::Index(1), Step::Key("reflectance")]),
+            src.line_of_path(&[
+                Step::Key("target"),
+                Step::Index(1),
+                Step::Key("reflectance")
+            ]),
             9
         );
         // A missing key points at its enclosing table.
-        assert_eq!(src.line_of_path(&[Step::Key("water"), Step::Key("cdom_440")]), 2);
-        let e = src.error(&[Step::Key("target"), Step::Index(1), Step::Key("reflectance")], "too big");
+        assert_eq!(
+            src.line_of_path(&[Step::Key("water"), Step::Key("cdom_440")]),
+            2
+        );
+        let e = src.error(
+            &[
+                Step::Key("target"),
+                Step::Index(1),
+                Step::Key("reflectance"),
+            ],
+            "too big",
+        );
         assert_eq!(e.to_string(), "s.toml:9: target[1].reflectance: too big");
     }
 }

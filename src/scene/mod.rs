@@ -86,7 +86,7 @@ pub struct Bottom {
 pub const FLOOR: SurfaceId = 0;
 
 /// A validated scene.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Scene {
     pub name: String,
     pub seed: u64,
@@ -133,7 +133,11 @@ impl Scene {
 
     /// The built-in coastal scene.
     pub fn coastal(overrides: &Overrides) -> Result<Scene> {
-        Scene::parse(COASTAL_TOML, Path::new("<built-in coastal scene>"), overrides)
+        Scene::parse(
+            COASTAL_TOML,
+            Path::new("<built-in coastal scene>"),
+            overrides,
+        )
     }
 
     /// Lambertian reflectance of `surface` at `p` in `band`.

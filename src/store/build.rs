@@ -24,7 +24,7 @@ pub const BATCH_INDICES: u64 = 4096;
 /// Batches that may wait in the channel.
 const CHANNEL_BATCHES: usize = 4;
 /// Source indices sampled to build the partition.
-const PILOT_INDICES: u64 = 131_072;
+const PILOT_INDICES: u64 = 32_768;
 
 /// Anything that produces photons for a map from numbered source indices.
 ///
@@ -90,13 +90,27 @@ pub fn build_map(
         .min(PILOT_INDICES)
         .min((cap / per_index) as u64)
         .max(probe.min(n));
-    let mut pilot = Vec::new();
-    for j in 0..pilot_n {
-        let i = j * n / pilot_n.max(1);
-        staged.clear();
-        source.sample(i..i + 1, &mut staged);
-        pilot.extend(staged.iter().map(|p| p.pos()));
-    }
+    // Trace the pilot in parallel: for an emitter it is real transport work.
+    let pilot: Vec<Vec3> = {
+        use rayon::prelude::*;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(options.threads)
+            .build()
+            .map_err(|e| Error::invalid("threads", e.to_string()))?;
+        pool.install(|| {
+            (0..pilot_n)
+                .into_par_iter()
+                .map_init(Vec::new, |buf, j| {
+                    let i = j * n / pilot_n.max(1);
+                    buf.clear();
+                    source.sample(i..i + 1, buf);
+                    buf.iter().map(|p| p.pos()).collect::<Vec<Vec3>>()
+                })
+                .flatten()
+                .collect()
+        })
+    };
+    let mut pilot = pilot;
     drop(staged);
     let expected = if pilot_n == 0 {
         0

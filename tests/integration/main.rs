@@ -9,5 +9,5 @@ mod determinism;
 mod memory;
 mod oracle;
 mod physics;
-mod scenes;
 mod roundtrip;
+mod scenes;

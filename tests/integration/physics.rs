@@ -10,7 +10,8 @@ use littoral::scene::{Overrides, Scene};
 use std::path::Path;
 
 fn scene(toml: &str) -> Scene {
-    Scene::parse(toml, Path::new("test.toml"), &Overrides::default()).unwrap_or_else(|e| panic!("{e}\n{toml}"))
+    Scene::parse(toml, Path::new("test.toml"), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}\n{toml}"))
 }
 
 fn run(s: &Scene) -> Totals {
@@ -54,7 +55,15 @@ fn tally(t: &Totals, d: usize, q: usize) -> (f64, f64) {
 fn beer_lambert() {
     for (a, zenith) in [(0.1, 0.0), (0.5, 30.0), (1.0, 60.0)] {
         let depths = [0.0, 0.5, 1.0, 2.0];
-        let s = simple(a, 0.0, zenith, r#"{ kind = "isotropic" }"#, 1.34, 200_000, &depths);
+        let s = simple(
+            a,
+            0.0,
+            zenith,
+            r#"{ kind = "isotropic" }"#,
+            1.34,
+            200_000,
+            &depths,
+        );
         let t = run(&s);
         let mu_w = (1.0 - ((zenith as f64).to_radians().sin() / 1.34).powi(2)).sqrt();
         let (e0, _) = tally(&t, 0, ED);
@@ -65,7 +74,10 @@ fn beer_lambert() {
             let want = (-a * z / mu_w).exp();
             // Given n0 transmitted photons each survives to z independently.
             let se = (want * (1.0 - want) / n0).sqrt();
-            assert!((ratio - want).abs() < 3.0 * se, "a {a} zenith {zenith} z {z}: {ratio} vs {want} (se {se})");
+            assert!(
+                (ratio - want).abs() < 3.0 * se,
+                "a {a} zenith {zenith} z {z}: {ratio} vs {want} (se {se})"
+            );
             assert_eq!(tally(&t, d, EU).0, 0.0, "no upwelling without scattering");
         }
     }
@@ -75,15 +87,30 @@ fn beer_lambert() {
 #[test]
 fn fresnel_transmission() {
     for (zenith, r) in [(0.0f64, 0.0211), (60.0, 0.0610)] {
-        let s = simple(0.1, 0.0, zenith, r#"{ kind = "isotropic" }"#, 1.34, 200_000, &[0.0]);
+        let s = simple(
+            0.1,
+            0.0,
+            zenith,
+            r#"{ kind = "isotropic" }"#,
+            1.34,
+            200_000,
+            &[0.0],
+        );
         let t = run(&s);
         let (through, _) = tally(&t, 0, ED);
-        let want = 1.0 - littoral::optics::surface::fresnel_reflectance(zenith.to_radians().cos(), 1.0, 1.34);
+        let want = 1.0
+            - littoral::optics::surface::fresnel_reflectance(zenith.to_radians().cos(), 1.0, 1.34);
         assert!((want - (1.0 - r)).abs() < 5e-4);
         let se = (want * (1.0 - want) / t.traced as f64).sqrt();
-        assert!((through - want).abs() < 3.0 * se, "zenith {zenith}: {through} vs {want}");
+        assert!(
+            (through - want).abs() < 3.0 * se,
+            "zenith {zenith}: {through} vs {want}"
+        );
         let (up, _) = t.mean_and_stderr(t.above_slots().1, 0);
-        assert!((up - (1.0 - through)).abs() < 1e-12, "reflected = 1 - transmitted");
+        assert!(
+            (up - (1.0 - through)).abs() < 1e-12,
+            "reflected = 1 - transmitted"
+        );
     }
 }
 
@@ -94,17 +121,31 @@ fn fresnel_transmission() {
 #[test]
 fn chandrasekhar_albedo() {
     for (w0, mu0, want, photons) in [
-        (0.5, 1.0, 0.11523, 1_000_000u64),
+        (0.5, 1.0f64, 0.11523, 1_000_000u64),
         (0.9, 1.0, 0.41495, 200_000),
         (0.9, 0.5, 0.50794, 200_000),
         (0.99, 1.0, 0.75272, 60_000),
     ] {
         let zenith = mu0.acos().to_degrees();
-        let s = simple(1.0 - w0, w0, zenith, r#"{ kind = "isotropic" }"#, 1.0, photons, &[]);
+        let s = simple(
+            1.0 - w0,
+            w0,
+            zenith,
+            r#"{ kind = "isotropic" }"#,
+            1.0,
+            photons,
+            &[],
+        );
         let t = run(&s);
         let (up, se) = t.mean_and_stderr(t.above_slots().1, 0);
-        assert!(3.0 * se < 0.01 * want, "photon count too small for the 1 % check");
-        assert!((up - want).abs() < 0.01 * want, "w0 {w0} mu0 {mu0}: albedo {up} vs {want} (se {se})");
+        assert!(
+            3.0 * se < 0.01 * want,
+            "photon count too small for the 1 % check"
+        );
+        assert!(
+            (up - want).abs() < 0.01 * want,
+            "w0 {w0} mu0 {mu0}: albedo {up} vs {want} (se {se})"
+        );
     }
 }
 
@@ -120,16 +161,31 @@ fn kirk_kd() {
                 let mu0 = (1.0 - (zenith.to_radians().sin() / 1.34).powi(2)).sqrt();
                 let kirk = (a * a + (0.425 * mu0 - 0.19) * a * b).sqrt() / mu0;
                 let z1 = (100.0f64).ln() / kirk;
-                let s = simple(a, b, zenith, r#"{ kind = "petzold" }"#, 1.34, 300_000, &[0.0, z1]);
+                let s = simple(
+                    a,
+                    b,
+                    zenith,
+                    r#"{ kind = "petzold" }"#,
+                    1.34,
+                    300_000,
+                    &[0.0, z1],
+                );
                 let t = run(&s);
                 let (e0, se0) = tally(&t, 0, ED);
                 let (e1, se1) = tally(&t, 1, ED);
                 let kd = (e0 / e1).ln() / z1;
                 let rel_se = ((se0 / e0).powi(2) + (se1 / e1).powi(2)).sqrt() / (e0 / e1).ln();
-                assert!(rel_se < 0.01, "Monte Carlo error {rel_se} too large for the check");
+                assert!(
+                    rel_se < 0.01,
+                    "Monte Carlo error {rel_se} too large for the check"
+                );
                 let err = kd / kirk - 1.0;
                 worst = worst.max(err.abs());
-                assert!(err.abs() < 0.05, "a {a} b {b} zenith {zenith}: Kd {kd:.4} vs Kirk {kirk:.4} ({:+.1} %)", 100.0 * err);
+                assert!(
+                    err.abs() < 0.05,
+                    "a {a} b {b} zenith {zenith}: Kd {kd:.4} vs Kirk {kirk:.4} ({:+.1} %)",
+                    100.0 * err
+                );
             }
         }
     }
@@ -142,7 +198,15 @@ fn kirk_kd() {
 fn gershun() {
     let a = 0.2;
     let depths = [0.0, 0.5, 1.0, 1.5, 2.0];
-    let s = simple(a, 0.6, 30.0, r#"{ kind = "fournier-forand", bb_ratio = 0.0183 }"#, 1.34, 400_000, &depths);
+    let s = simple(
+        a,
+        0.6,
+        30.0,
+        r#"{ kind = "fournier-forand", bb_ratio = 0.0183 }"#,
+        1.34,
+        400_000,
+        &depths,
+    );
     let t = run(&s);
     let net = |d: usize| {
         let (ed, sd) = tally(&t, d, ED);
@@ -162,7 +226,10 @@ fn gershun() {
     let rhs: f64 = (0..5).map(|d| w[d] * e0(d).0).sum::<f64>() * a * h / 3.0;
     let rhs_se = ((0..5).map(|d| (w[d] * e0(d).1).powi(2)).sum::<f64>()).sqrt() * a * h / 3.0;
     let se = (s0 * s0 + s4 * s4 + rhs_se * rhs_se).sqrt();
-    assert!((lhs - rhs).abs() < 3.0 * se, "net {lhs} vs integral of a E0 {rhs} (se {se})");
+    assert!(
+        (lhs - rhs).abs() < 3.0 * se,
+        "net {lhs} vs integral of a E0 {rhs} (se {se})"
+    );
 }
 
 const CLOSURE_SCENE: &str = r#"
@@ -276,20 +343,36 @@ fn heterogeneous_water() {
                 let (u, su) = uniform.mean_and_stderr(uniform.slot(d, q), b);
                 let (g, sg) = gridded.mean_and_stderr(gridded.slot(d, q), b);
                 let se = (su * su + sg * sg).sqrt();
-                assert!((u - g).abs() < 3.5 * se.max(1e-12), "depth {d} q {q} band {b}: {u} vs {g} (se {se})");
+                assert!(
+                    (u - g).abs() < 3.5 * se.max(1e-12),
+                    "depth {d} q {q} band {b}: {u} vs {g} (se {se})"
+                );
             }
         }
     }
     let rich = run(&layered("chl = 1.0\ncdom_440 = 0.05\nnap_440 = 0.01\n[[water.layer]]\ntop_m = 0.0\nbottom_m = 3.0\nchl = 10.0"));
-    let ratio = |t: &Totals, b: usize| t.mean_and_stderr(t.slot(2, ED), b).0 / uniform.mean_and_stderr(uniform.slot(2, ED), b).0;
+    let ratio = |t: &Totals, b: usize| {
+        t.mean_and_stderr(t.slot(2, ED), b).0 / uniform.mean_and_stderr(uniform.slot(2, ED), b).0
+    };
     let (blue, green) = (ratio(&rich, 0), ratio(&rich, 1));
-    assert!(blue < 0.8 && green < 1.0 && blue < green, "blue {blue} green {green}");
+    assert!(
+        blue < 0.8 && green < 1.0 && blue < green,
+        "blue {blue} green {green}"
+    );
 }
 
 /// The report is the same for 1 and 2 threads (integer tallies).
 #[test]
 fn totals_do_not_depend_on_threads() {
-    let s = simple(0.2, 0.5, 30.0, r#"{ kind = "petzold" }"#, 1.34, 50_000, &[0.0, 1.0]);
+    let s = simple(
+        0.2,
+        0.5,
+        30.0,
+        r#"{ kind = "petzold" }"#,
+        1.34,
+        50_000,
+        &[0.0, 1.0],
+    );
     let a = Emitter::new(&s).unwrap().trace_all(1).unwrap();
     let b = Emitter::new(&s).unwrap().trace_all(2).unwrap();
     assert_eq!(a, b);

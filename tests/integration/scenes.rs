@@ -45,7 +45,11 @@ fn the_builtin_scene_is_valid_and_as_described() {
     let far = s.water.iop(glam::Vec3::new(199.0, 100.0, -0.2), 10).a;
     assert!(near > 2.0 * far, "{near} vs {far}");
     // Overrides apply before validation.
-    let o = Overrides { photons: Some(5), bands: Some(16), seed: Some(9) };
+    let o = Overrides {
+        photons: Some(5),
+        bands: Some(16),
+        seed: Some(9),
+    };
     let s = Scene::coastal(&o).unwrap();
     assert_eq!((s.photons, s.bands.len(), s.seed), (5, 16, 9));
 }
@@ -82,7 +86,10 @@ fn bad_scenes_name_the_key_and_line() {
 }
 
 fn littoral(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_littoral")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 #[test]
@@ -94,7 +101,11 @@ fn scene_commands() {
     let good = dir.path().join("good.toml");
     std::fs::write(&good, MINIMAL).unwrap();
     let out = littoral(&["scene", "check", good.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, MINIMAL.replace("count = 1000", "count = -5")).unwrap();
     let out = littoral(&["scene", "check", bad.to_str().unwrap()]);
@@ -102,7 +113,11 @@ fn scene_commands() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("bad.toml:"), "{err}");
-    let out = littoral(&["scene", "check", dir.path().join("missing.toml").to_str().unwrap()]);
+    let out = littoral(&[
+        "scene",
+        "check",
+        dir.path().join("missing.toml").to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(1));
 }
 
@@ -118,11 +133,27 @@ fn emit_builtin_scene() {
         let map = dir.path().join(format!("m{threads}.map"));
         let report = dir.path().join(format!("r{threads}.json"));
         let out = littoral(&[
-            "emit", scene.to_str().unwrap(), "--map", map.to_str().unwrap(), "--report", report.to_str().unwrap(),
-            "--photons", "20000", "--threads", threads, "--mem-budget", "64MiB", "--quiet",
+            "emit",
+            scene.to_str().unwrap(),
+            "--map",
+            map.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--photons",
+            "20000",
+            "--threads",
+            threads,
+            "--mem-budget",
+            "64MiB",
+            "--quiet",
         ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
         assert_eq!(r["bands_nm"].as_array().unwrap().len(), 128);
         assert_eq!(r["tally"].as_array().unwrap().len(), 4);
         assert_eq!(r["tally"][0]["depth_m"], 0.0);
@@ -137,5 +168,8 @@ fn emit_builtin_scene() {
         assert!(info.status.success());
         maps.push(std::fs::read(&map).unwrap());
     }
-    assert!(maps[0] == maps[1], "emitted maps differ between 1 and 2 threads");
+    assert!(
+        maps[0] == maps[1],
+        "emitted maps differ between 1 and 2 threads"
+    );
 }
