@@ -2,6 +2,8 @@
 //!
 //! The modules, in data-flow order:
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
+//! - [`optics`]: inherent optical properties of the water — phase functions
+//!   with exact samplers ([`optics::phase::PhaseFunction`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader
@@ -16,6 +18,7 @@
 pub mod cache;
 pub mod error;
 pub mod mem;
+pub mod optics;
 pub mod photon;
 pub mod progress;
 pub mod query;
