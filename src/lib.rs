@@ -7,6 +7,8 @@
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy ([`emit::Emitter`]).
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
+//! - [`optics`]: inherent optical properties of the water — phase functions
+//!   with exact samplers ([`optics::phase::PhaseFunction`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader

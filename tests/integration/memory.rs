@@ -59,3 +59,28 @@ fn synth_20m_photons_within_64mib() {
     let map = littoral::store::MapFile::open(&out).unwrap();
     assert_eq!(map.header().photons, 20_000_000);
 }
+
+/// `littoral emit` of the built-in scene (128 bands, 1 M photons, about
+/// 1.5 M stored) under 64 MiB, judged by the peak the report records.
+#[test]
+fn emit_builtin_scene_within_64mib() {
+    let dir = tempdir();
+    let scene = dir.path().join("coastal.toml");
+    std::fs::write(&scene, littoral::scene::COASTAL_TOML).unwrap();
+    let report = dir.path().join("r.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .arg("emit")
+        .arg(&scene)
+        .arg("--map")
+        .arg(dir.path().join("c.map"))
+        .arg("--report")
+        .arg(&report)
+        .args(["--photons", "1000000", "--mem-budget", "64MiB", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let peak = r["peak_rss_bytes"].as_u64().unwrap();
+    eprintln!("emit: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
+    assert!(peak > MIB && peak <= 64 * MIB + OVERHEAD, "peak {peak}");
+}
