@@ -3,12 +3,11 @@
 //! The modules, in data-flow order:
 //! - [`scene`]: the scene file, validated ([`scene::Scene`]).
 //! - [`optics`]: embedded spectral tables averaged over the band grid
-//!   ([`optics::tables::Table`]), IOPs, phase functions, the sea surface.
+//!   ([`optics::tables::Table`]), IOPs, phase functions with exact samplers
+//!   ([`optics::phase::PhaseFunction`]), the sea surface.
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy ([`emit::Emitter`]).
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
-//! - [`optics`]: inherent optical properties of the water — phase functions
-//!   with exact samplers ([`optics::phase::PhaseFunction`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader

@@ -186,7 +186,7 @@ mod tests {
         }
         let mut a = Totals::new(3, 2);
         let mut b = Totals::new(3, 2);
-        let mut parts = vec![Totals::new(3, 2), Totals::new(3, 2)];
+        let mut parts = [Totals::new(3, 2), Totals::new(3, 2)];
         for (i, (band, t)) in photons.iter().enumerate() {
             a.record(*band, Fate::Escaped, t);
             parts[i % 2].record(*band, Fate::Escaped, t);

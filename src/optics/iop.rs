@@ -8,6 +8,7 @@
 //! - a_g = CDOM(440) exp(-S_g (l - 440)), a_nap = NAP(440) exp(-S_nap (l - 440));
 //! - b_p = b_p(550) (550 / l)^n with b_p(550) = 0.30 Chl^0.62 (case-1
 //!   water) unless given, and the scene's particle phase function.
+//!
 //! In explicit mode a and b are given directly (the same in every band)
 //! and all scattering uses the scene's phase function.
 //!
@@ -196,7 +197,7 @@ pub enum WaterModel {
     /// the particle phase function.
     Explicit { a: f64, b: f64 },
     Constituents {
-        spectra: BandSpectra,
+        spectra: Box<BandSpectra>,
         field: ConstituentField,
         /// Fixed b_p(550) (1/m), or None for 0.30 Chl^0.62.
         bp_550: Option<f64>,
@@ -287,7 +288,7 @@ mod tests {
     #[test]
     fn majorant_bounds_every_point_of_a_gradient() {
         let m = WaterModel::Constituents {
-            spectra: spectra(),
+            spectra: Box::new(spectra()),
             field: ConstituentField::Gradient {
                 axis: 0,
                 size_m: 100.0,

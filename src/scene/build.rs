@@ -593,7 +593,7 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
     };
     Ok((
         WaterModel::Constituents {
-            spectra,
+            spectra: Box::new(spectra),
             field,
             bp_550: w.bp_550,
         },

@@ -78,7 +78,11 @@ fn emit_builtin_scene_within_64mib() {
         .args(["--photons", "1000000", "--mem-budget", "64MiB", "--quiet"])
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     let peak = r["peak_rss_bytes"].as_u64().unwrap();
     eprintln!("emit: peak RSS {:.1} MiB", peak as f64 / MIB as f64);

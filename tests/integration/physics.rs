@@ -53,7 +53,7 @@ fn tally(t: &Totals, d: usize, q: usize) -> (f64, f64) {
 /// Ed(z) / Ed(0-) = exp(-a z / mu_w) with mu_w the refracted sun cosine.
 #[test]
 fn beer_lambert() {
-    for (a, zenith) in [(0.1, 0.0), (0.5, 30.0), (1.0, 60.0)] {
+    for (a, zenith) in [(0.1, 0.0f64), (0.5, 30.0), (1.0, 60.0)] {
         let depths = [0.0, 0.5, 1.0, 2.0];
         let s = simple(
             a,
@@ -65,7 +65,7 @@ fn beer_lambert() {
             &depths,
         );
         let t = run(&s);
-        let mu_w = (1.0 - ((zenith as f64).to_radians().sin() / 1.34).powi(2)).sqrt();
+        let mu_w = (1.0 - (zenith.to_radians().sin() / 1.34).powi(2)).sqrt();
         let (e0, _) = tally(&t, 0, ED);
         let n0 = e0 * t.traced as f64;
         for (d, &z) in depths.iter().enumerate().skip(1) {
