@@ -14,6 +14,9 @@
 //!   ([`store::build_map`], [`store::MapFile`]).
 //! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
 //! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
+//! - [`estimate`]: boundary- and spectral-bias compensation.
+//! - [`render`]: sensor, ray marching and radiometers ([`render::render`]).
+//! - [`cube`]: the radiance cube on disk (ENVI) and its quicklook (PNG).
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
@@ -30,6 +33,7 @@ pub mod output;
 pub mod photon;
 pub mod progress;
 pub mod query;
+pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod size;

@@ -26,6 +26,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Render a scene (default: the built-in coastal scene) into a radiance
+    /// cube, a quicklook and a report.
+    Render(RenderArgs),
     /// Trace a scene's photons into a photon map, with irradiance tallies.
     Emit(EmitArgs),
     /// Scene files: print the built-in scene, validate a file.
@@ -34,6 +37,36 @@ enum Command {
     /// Photon map files: build synthetic maps, inspect, verify, query, dump.
     #[command(subcommand)]
     Map(MapCommand),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (TOML); the built-in coastal scene when absent.
+    scene: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Keep the photon map here, or reuse it when it was made from the same scene.
+    #[arg(long)]
+    map: Option<PathBuf>,
+    #[arg(long)]
+    photons: Option<u64>,
+    #[arg(long)]
+    bands: Option<usize>,
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    #[arg(long)]
+    seed: Option<u64>,
+    #[arg(long, default_value = "512MiB")]
+    mem_budget: String,
+    /// Boundary-bias compensation: none, ellipsoid or clipped-sphere.
+    #[arg(long)]
+    boundary: Option<String>,
+    /// Spectral-bias compensation: naive or compensated.
+    #[arg(long)]
+    spectral: Option<String>,
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -229,7 +262,130 @@ fn run(cli: Cli) -> AnyResult<()> {
             Ok(())
         }
         Command::Emit(a) => run_emit(a),
+        Command::Render(a) => run_render(a),
     }
+}
+
+fn run_render(a: RenderArgs) -> AnyResult<()> {
+    use littoral::emit::report::EmissionReport;
+    let start = std::time::Instant::now();
+    let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
+    if a.photons == Some(0) {
+        return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
+    }
+    let overrides = Overrides {
+        photons: a.photons,
+        bands: a.bands,
+        seed: a.seed,
+        boundary: a.boundary.as_deref(),
+        spectral: a.spectral.as_deref(),
+    };
+    let scene = match &a.scene {
+        Some(path) => Scene::load(path, &overrides)?,
+        None => Scene::coastal(&overrides)?,
+    };
+    std::fs::create_dir_all(&a.out).map_err(|e| littoral::Error::io(&a.out, "create directory", e))?;
+    if !a.out.is_dir() {
+        return Err(littoral::Error::io(&a.out, "create directory", std::io::Error::other("not a directory")).into());
+    }
+    let t_scene = start.elapsed().as_secs_f64();
+    let bars = Bars::new(a.quiet);
+
+    // The photon map: reused when its sidecar report carries this scene's
+    // fingerprint, else emitted (to --map, or to a scratch file).
+    let scratch_map = tempfile::Builder::new()
+        .prefix(".littoral-map.")
+        .tempfile_in(&a.out)
+        .map_err(|e| littoral::Error::io(&a.out, "create", e))?;
+    let map_path = a.map.clone().unwrap_or_else(|| scratch_map.path().to_path_buf());
+    let sidecar = PathBuf::from(format!("{}.emission.json", map_path.display()));
+    let reusable = a.map.is_some()
+        && map_path.is_file()
+        && std::fs::read(&sidecar)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+            .is_some_and(|v| v["scene_fingerprint"] == scene.fingerprint);
+    let emission: serde_json::Value = if reusable {
+        serde_json::from_slice(&std::fs::read(&sidecar).map_err(|e| littoral::Error::io(&sidecar, "read", e))?)?
+    } else {
+        let options = BuildOptions {
+            threads: a.threads,
+            ..BuildOptions::with_budget(budget)
+        };
+        let em = littoral::emit::emit(&scene, &map_path, &options, &bars)?;
+        let report = EmissionReport::new(&scene, &em.totals, &em.photon_power);
+        let mut v = serde_json::to_value(&report)?;
+        v["scene_fingerprint"] = serde_json::json!(scene.fingerprint);
+        v["map"] = serde_json::json!({
+            "photons": em.map.photons,
+            "tiles": em.map.tiles,
+            "file_bytes": em.map.file_bytes,
+            "bytes_per_photon": em.map.file_bytes as f64 / em.map.photons.max(1) as f64,
+        });
+        if a.map.is_some() {
+            littoral::output::write_atomic(&sidecar, &serde_json::to_vec_pretty(&v)?)?;
+        }
+        v
+    };
+    let t_emit = start.elapsed().as_secs_f64();
+
+    // Rendering: the tile cache gets the budget less a fixed reserve for
+    // tile buffers, scratch and the quicklook image.
+    let reserve = (32u64 << 20).min(budget / 4);
+    let map = littoral::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve)?;
+    let rendered = littoral::render::render(&scene, &map, &a.out, a.threads, &bars)?;
+    let t_render = start.elapsed().as_secs_f64();
+    drop(map);
+    drop(scratch_map);
+
+    let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
+    let mut report = emission;
+    report["reused_map"] = serde_json::json!(reusable);
+    report["radiometers"] = serde_json::to_value(&rendered.radiometers)?;
+    report["Ed_above_surface"] = report["above_surface"]["Ed"].clone();
+    report["estimate"] = serde_json::json!({
+        "k": scene.estimate.k,
+        "k_expanded": scene.estimate.k_expanded,
+        "radius_m": scene.estimate.radius_m,
+        "max_radius_m": scene.estimate.max_radius_m,
+        "boundary": scene.estimate.boundary,
+        "spectral": scene.estimate.spectral,
+        "step_m": scene.estimate.step_m,
+    });
+    report["sensor"] = serde_json::json!({
+        "pixels": scene.sensor.pixels,
+        "samples_per_pixel": scene.sensor.samples_per_pixel,
+    });
+    report["cache"] = serde_json::to_value(rendered.cache)?;
+    report["outputs"] = serde_json::json!({
+        "hdr": rendered.hdr.display().to_string(),
+        "bsq": rendered.bsq.display().to_string(),
+        "png": rendered.png.display().to_string(),
+    });
+    report["timings_s"] = serde_json::json!({
+        "scene": t_scene,
+        "emit": t_emit - t_scene,
+        "render": t_render - t_emit,
+        "total": t_render,
+    });
+    report["peak_rss_bytes"] = serde_json::json!(peak);
+    let json_path = a.out.join(format!("{}.json", scene.name));
+    littoral::output::write_atomic(&json_path, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())?;
+    if !a.quiet {
+        eprintln!(
+            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s (emit {:.1} s, render {:.1} s); peak memory {:.1} MiB",
+            scene.name,
+            scene.sensor.pixels[0],
+            scene.sensor.pixels[1],
+            scene.bands.len(),
+            a.out.display(),
+            t_render,
+            t_emit - t_scene,
+            t_render - t_emit,
+            peak as f64 / (1 << 20) as f64
+        );
+    }
+    Ok(())
 }
 
 fn run_emit(a: EmitArgs) -> AnyResult<()> {
@@ -240,8 +396,8 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
     }
     let overrides = Overrides {
         photons: a.photons,
-        bands: None,
         seed: a.seed,
+        ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &overrides)?;
     let parsed = start.elapsed().as_secs_f64();

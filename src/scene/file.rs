@@ -25,6 +25,54 @@ pub struct SceneFile {
     pub photons: PhotonsFile,
     #[serde(default)]
     pub tally: TallyFile,
+    pub sensor: Option<SensorFile>,
+    #[serde(default)]
+    pub radiometer: Vec<RadiometerFile>,
+    #[serde(default)]
+    pub estimate: EstimateFile,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorFile {
+    pub kind: Option<String>,
+    pub pixels: Option<[usize; 2]>,
+    pub gsd_m: Option<f64>,
+    pub samples_per_pixel: Option<u32>,
+    /// Orthographic: centre of the image on the surface (default: domain centre).
+    pub center_m: Option<[f64; 2]>,
+    pub position_m: Option<[f64; 3]>,
+    pub look_at_m: Option<[f64; 3]>,
+    pub fov_deg: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadiometerFile {
+    pub depth_m: f64,
+    pub view: Option<View>,
+    /// Horizontal position (default: domain centre).
+    pub position_m: Option<[f64; 2]>,
+}
+
+/// A viewing direction: "nadir", "zenith" or a vector.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum View {
+    Named(String),
+    Vector([f64; 3]),
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimateFile {
+    pub k: Option<usize>,
+    pub radius_m: Option<f64>,
+    pub max_radius_m: Option<f64>,
+    pub k_expanded: Option<usize>,
+    pub boundary: Option<String>,
+    pub spectral: Option<String>,
+    pub step_m: Option<f64>,
 }
 
 fn default_name() -> String {

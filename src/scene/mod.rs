@@ -85,6 +85,55 @@ pub struct Bottom {
 /// Reflecting surface id of the floor in the geometry.
 pub const FLOOR: SurfaceId = 0;
 
+/// The camera.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SensorKind {
+    /// Looking straight down; pixel (0, 0) is at the low-x, high-y corner.
+    Orthographic { gsd_m: f64, center_m: [f64; 2] },
+    /// A pinhole camera above the water.
+    Pinhole { position: Vec3, look_at: Vec3, fov_deg: f64 },
+}
+
+/// The imaging sensor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensor {
+    pub kind: SensorKind,
+    /// Image size [samples (x), lines (y)].
+    pub pixels: [usize; 2],
+    pub samples_per_pixel: u32,
+}
+
+/// An in-water (or above-water, at negative depth) radiance meter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Radiometer {
+    pub depth_m: f64,
+    /// "nadir", "zenith" or "x,y,z".
+    pub view_name: String,
+    /// Unit direction the instrument looks along (it measures light
+    /// travelling the opposite way).
+    pub view: Vec3,
+    pub position_m: [f64; 2],
+}
+
+/// Radiance-estimate settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EstimateSettings {
+    /// Photons in the local search.
+    pub k: usize,
+    /// Fixed search radius instead of k nearest (m).
+    pub radius_m: Option<f64>,
+    /// Largest radius of a k-nearest search (m).
+    pub max_radius_m: f64,
+    /// Photons in the expanded search of the spectral compensation.
+    pub k_expanded: usize,
+    /// "none", "ellipsoid" or "clipped-sphere".
+    pub boundary: String,
+    /// "naive" or "compensated".
+    pub spectral: String,
+    /// Ray-marching step in water (m).
+    pub step_m: f64,
+}
+
 /// A validated scene.
 #[derive(Debug)]
 pub struct Scene {
@@ -108,14 +157,22 @@ pub struct Scene {
     pub store_direct: bool,
     /// Depths (m, >= 0) of the irradiance tallies; 0 is just below the surface.
     pub tally_depths: Vec<f64>,
+    pub sensor: Sensor,
+    pub radiometers: Vec<Radiometer>,
+    pub estimate: EstimateSettings,
+    /// Fingerprint of the scene text and overrides: a photon map made from
+    /// a scene with the same fingerprint can be reused.
+    pub fingerprint: u32,
 }
 
 /// Values the command line may override before validation.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Overrides {
+pub struct Overrides<'a> {
     pub photons: Option<u64>,
     pub bands: Option<usize>,
     pub seed: Option<u64>,
+    pub boundary: Option<&'a str>,
+    pub spectral: Option<&'a str>,
 }
 
 impl Scene {

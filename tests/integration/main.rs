@@ -9,5 +9,6 @@ mod determinism;
 mod memory;
 mod oracle;
 mod physics;
+mod render;
 mod roundtrip;
 mod scenes;

@@ -49,6 +49,7 @@ fn the_builtin_scene_is_valid_and_as_described() {
         photons: Some(5),
         bands: Some(16),
         seed: Some(9),
+        ..Overrides::default()
     };
     let s = Scene::coastal(&o).unwrap();
     assert_eq!((s.photons, s.bands.len(), s.seed), (5, 16, 9));

@@ -1,0 +1,85 @@
+//! Camera rays: an orthographic nadir sensor (a ground sample distance) and
+//! a pinhole camera, both above the water.
+
+use crate::scene::{Sensor, SensorKind};
+use glam::Vec3;
+
+/// Height of orthographic rays' origins above the mean surface (m).
+const ORTHO_HEIGHT_M: f32 = 10.0;
+
+/// A ray in air toward the water.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRay {
+    pub origin: Vec3,
+    pub direction: Vec3,
+}
+
+/// Ray for pixel (`px`, `py`) at sub-pixel offset (`u`, `v`) in [0, 1).
+/// Pixel (0, 0) is the top-left of the image: low x, high y.
+pub fn ray(sensor: &Sensor, px: usize, py: usize, u: f32, v: f32) -> CameraRay {
+    let [w, h] = sensor.pixels;
+    let sx = (px as f32 + u) / w as f32 - 0.5;
+    let sy = 0.5 - (py as f32 + v) / h as f32;
+    match &sensor.kind {
+        SensorKind::Orthographic { gsd_m, center_m } => {
+            let gsd = *gsd_m as f32;
+            CameraRay {
+                origin: Vec3::new(
+                    center_m[0] as f32 + sx * w as f32 * gsd,
+                    center_m[1] as f32 + sy * h as f32 * gsd,
+                    ORTHO_HEIGHT_M,
+                ),
+                direction: -Vec3::Z,
+            }
+        }
+        SensorKind::Pinhole { position, look_at, fov_deg } => {
+            let forward = (*look_at - *position).normalize();
+            // Image "up" leans toward +y when looking straight down.
+            let up_hint = if forward.cross(Vec3::Z).length() < 1e-6 { Vec3::Y } else { Vec3::Z };
+            let right = forward.cross(up_hint).normalize();
+            let up = right.cross(forward);
+            let half = (fov_deg.to_radians() as f32 * 0.5).tan();
+            let aspect = h as f32 / w as f32;
+            let d = forward + right * (2.0 * sx * half) + up * (2.0 * sy * half * aspect);
+            CameraRay { origin: *position, direction: d.normalize() }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orthographic_pixels_tile_the_footprint() {
+        let s = Sensor {
+            kind: SensorKind::Orthographic { gsd_m: 0.5, center_m: [50.0, 50.0] },
+            pixels: [100, 80],
+            samples_per_pixel: 1,
+        };
+        let a = ray(&s, 0, 0, 0.0, 0.0);
+        let b = ray(&s, 99, 79, 1.0, 1.0);
+        assert!((a.origin.x - 25.0).abs() < 1e-4 && (a.origin.y - 70.0).abs() < 1e-4);
+        assert!((b.origin.x - 75.0).abs() < 1e-4 && (b.origin.y - 30.0).abs() < 1e-4);
+        assert_eq!(a.direction, -Vec3::Z);
+    }
+
+    #[test]
+    fn pinhole_centre_ray_looks_at_the_target() {
+        let s = Sensor {
+            kind: SensorKind::Pinhole {
+                position: Vec3::new(0.0, 0.0, 100.0),
+                look_at: Vec3::new(50.0, 0.0, 0.0),
+                fov_deg: 20.0,
+            },
+            pixels: [64, 64],
+            samples_per_pixel: 1,
+        };
+        let c = ray(&s, 32, 32, 0.0, 0.0);
+        let want = (Vec3::new(50.0, 0.0, 0.0) - Vec3::new(0.0, 0.0, 100.0)).normalize();
+        assert!(c.direction.dot(want) > 0.99999);
+        let corner = ray(&s, 0, 0, 0.0, 0.0);
+        let angle = corner.direction.dot(want).acos().to_degrees();
+        assert!(angle > 10.0 && angle < 15.0, "{angle}");
+    }
+}

@@ -1,0 +1,192 @@
+//! Radiance estimates from the photon map, with the paper's boundary- and
+//! spectral-bias compensations.
+//!
+//! Volume (in-scattered) radiance toward the viewer at x:
+//!   L_i(x, w) = sum over photons p of band i of p(w_p, w) Phi_p / V,
+//! where photons were stored at real scattering events, so the density
+//! already carries the scattering coefficient (Jensen 2001); p is the local
+//! mixture phase function (b_w p_w + b_p p_p) / b. Surface radiance leaving
+//! a Lambertian floor or target: L_i = sum f_r Phi_p / A with f_r = R_i / pi.
+//! The search is k nearest within a maximum radius (or a fixed radius);
+//! V and A follow the boundary mode (`estimate::boundary`), and the band
+//! estimates are combined with a larger search by the spectral mode
+//! (`estimate::spectral`).
+//!
+//! Not for: direct light (the renderer adds single scattering of the sun
+//! and direct sun on the floor by next-event estimation).
+
+use crate::error::Result;
+use crate::estimate::boundary::{self, AxialDistances, BoundaryMode};
+use crate::estimate::spectral::{combine, BandSums, SpectralMode};
+use crate::geometry::SurfaceId;
+use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
+use crate::query::{Neighbour, PhotonMap, Search};
+use crate::scene::Scene;
+use glam::Vec3;
+use std::cell::RefCell;
+
+/// Reusable per-thread buffers of an estimate.
+pub struct Scratch {
+    bands: usize,
+    found: Vec<Neighbour>,
+    local: BandSums,
+    expanded: BandSums,
+}
+
+impl Scratch {
+    pub fn new(bands: usize) -> Self {
+        Scratch { bands, found: Vec::new(), local: BandSums::new(bands), expanded: BandSums::new(bands) }
+    }
+}
+
+/// Radiance estimates over one photon map for one scene.
+pub struct Estimator<'a> {
+    pub scene: &'a Scene,
+    pub map: &'a PhotonMap,
+    pub boundary: BoundaryMode,
+    pub spectral: SpectralMode,
+}
+
+impl<'a> Estimator<'a> {
+    pub fn new(scene: &'a Scene, map: &'a PhotonMap) -> Result<Self> {
+        let boundary = scene
+            .estimate
+            .boundary
+            .parse::<BoundaryMode>()
+            .map_err(|e| crate::Error::invalid("estimate.boundary", e.to_string()))?;
+        let spectral = scene
+            .estimate
+            .spectral
+            .parse::<SpectralMode>()
+            .map_err(|e| crate::Error::invalid("estimate.spectral", e.to_string()))?;
+        Ok(Estimator { scene, map, boundary, spectral })
+    }
+
+    fn search(&self, k: usize) -> Search {
+        match self.scene.estimate.radius_m {
+            Some(r) => Search::Radius { radius: r as f32 * (k as f32 / self.scene.estimate.k as f32).cbrt() },
+            None => Search::Nearest { k, max_radius: Some(self.scene.estimate.max_radius_m as f32) },
+        }
+    }
+
+    /// Fill `sums` from photons of `layer` around `x`; returns the search
+    /// volume (or area, for `surface`) after boundary compensation.
+    #[allow(clippy::too_many_arguments)]
+    fn gather(
+        &self,
+        x: Vec3,
+        layer: u16,
+        k: usize,
+        found: &mut Vec<Neighbour>,
+        sums: &mut BandSums,
+        weight: &dyn Fn(&Neighbour) -> f64,
+        surface: bool,
+    ) -> Result<f64> {
+        sums.clear();
+        self.map.query_into(x, Some(layer), self.search(k), found)?;
+        let Some(last) = found.last() else { return Ok(0.0) };
+        let r = match self.scene.estimate.radius_m {
+            Some(_) => match self.search(k) {
+                Search::Radius { radius } => radius,
+                _ => unreachable!(),
+            },
+            None => last.distance_sq.sqrt().max(1e-6),
+        };
+        if surface {
+            for n in found.iter() {
+                sums.add(n.photon.band as usize, weight(n));
+            }
+            return Ok(std::f64::consts::PI * (r as f64).powi(2));
+        }
+        let b = match self.boundary {
+            BoundaryMode::None => AxialDistances([r; 6]),
+            _ => boundary::axial_distances_traced(self.scene, x, r),
+        };
+        let bd = b.0.map(|v| v as f64);
+        let volume = match self.boundary {
+            BoundaryMode::None => 4.0 / 3.0 * std::f64::consts::PI * (r as f64).powi(3),
+            BoundaryMode::ClippedSphere => boundary::clipped_sphere_volume(r as f64, &bd),
+            BoundaryMode::Ellipsoid => boundary::ellipsoid_volume(&bd),
+        };
+        for n in found.iter() {
+            if self.boundary == BoundaryMode::Ellipsoid
+                && boundary::ellipsoid_distance(n.photon.position - x, r, &b) > r
+            {
+                continue;
+            }
+            sums.add(n.photon.band as usize, weight(n));
+        }
+        Ok(volume)
+    }
+
+    /// In-scattered radiance per band at `x` toward the viewer, for light
+    /// leaving x along `toward_viewer` (W m^-3 sr^-1 nm^-1; integrate along
+    /// the ray). `out` has one entry per band.
+    pub fn volume(&self, x: Vec3, toward_viewer: Vec3, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+        let water = &self.scene.water;
+        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
+        let weight = |n: &Neighbour| -> f64 {
+            let band = n.photon.band as usize;
+            let iop = water.iop(x, band);
+            let cos = n.photon.direction.dot(toward_viewer) as f64;
+            let b = iop.b();
+            let p = if b > 0.0 { (iop.b_w * pw.eval(cos) + iop.b_p * pp.eval(cos)) / b } else { 0.0 };
+            p * n.photon.power as f64
+        };
+        self.estimate(x, LAYER_VOLUME, &weight, false, scratch, out)
+    }
+
+    /// Radiance per band leaving a Lambertian surface at `x` with unit
+    /// normal `normal` (facing the water) from the surface photon map.
+    pub fn surface(&self, x: Vec3, normal: Vec3, surface: SurfaceId, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+        let scene = self.scene;
+        let weight = |n: &Neighbour| -> f64 {
+            // Only light arriving on this side of the surface counts.
+            if n.photon.direction.dot(normal) >= 0.0 {
+                return 0.0;
+            }
+            scene.reflectance(surface, x, n.photon.band as usize) / std::f64::consts::PI * n.photon.power as f64
+        };
+        self.estimate(x, LAYER_SURFACE, &weight, true, scratch, out)
+    }
+
+    fn estimate(
+        &self,
+        x: Vec3,
+        layer: u16,
+        weight: &dyn Fn(&Neighbour) -> f64,
+        surface: bool,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let Scratch { found, local, expanded, .. } = scratch;
+        let k = self.scene.estimate.k;
+        let v_local = self.gather(x, layer, k, found, local, weight, surface)?;
+        if v_local <= 0.0 {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            return Ok(());
+        }
+        let v_expanded = if self.spectral == SpectralMode::Compensated {
+            self.gather(x, layer, self.scene.estimate.k_expanded, found, expanded, weight, surface)?
+        } else {
+            0.0
+        };
+        combine(self.spectral, local, v_local, expanded, v_expanded, out);
+        Ok(())
+    }
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Option<Scratch>> = const { RefCell::new(None) };
+}
+
+/// Run `f` with this thread's scratch for `bands` bands.
+pub fn with_scratch<R>(bands: usize, f: impl FnOnce(&mut Scratch) -> R) -> R {
+    SCRATCH.with(|s| {
+        let mut s = s.borrow_mut();
+        if s.as_ref().is_none_or(|sc| sc.bands != bands) {
+            *s = Some(Scratch::new(bands));
+        }
+        f(s.as_mut().expect("just set"))
+    })
+}

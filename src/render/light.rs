@@ -1,0 +1,184 @@
+//! Light transport along sensor rays: the sea surface, ray marching in the
+//! water with next-event single scattering of the refracted sun and the
+//! photon-map in-scatter estimate, and the floor and targets.
+//!
+//! Choices: the sun is refracted through the mean (flat) surface for next
+//! event estimation, also under a rough surface; the transmittance toward
+//! the sun is integrated with four midpoint samples in heterogeneous water
+//! (exact in uniform water); sun glint on a rough surface is added
+//! analytically from the Cox–Munk slope density (a point sun cannot be
+//! found by sampling); camera rays are not wrapped at periodic edges; a
+//! radiometer looking up at the surface sees the transmitted sky (internal
+//! reflection of upwelling light there is not followed).
+
+use super::camera::CameraRay;
+use super::estimator::{Estimator, Scratch};
+use crate::error::Result;
+use crate::optics::surface::{fresnel_reflectance, refract};
+use crate::rng::Pcg32;
+use crate::scene::Scene;
+use glam::{DVec3, Vec3};
+
+/// Longest march through water without a hit (m).
+const MAX_MARCH_M: f32 = 500.0;
+/// Stop marching when every band's transmittance is below this.
+const MIN_TRANSMITTANCE: f64 = 1e-4;
+
+/// Precomputed light sources and the estimator.
+pub struct Light<'a> {
+    pub scene: &'a Scene,
+    pub est: Estimator<'a>,
+    /// Refracted sun direction in the water (travel, pointing down).
+    pub sun_w: Vec3,
+    /// Beam-normal irradiance of the refracted sun just below the surface, per band.
+    pub e_w: Vec<f64>,
+    /// Sky radiance per band (isotropic).
+    pub sky_l: Vec<f64>,
+}
+
+impl<'a> Light<'a> {
+    pub fn new(scene: &'a Scene, est: Estimator<'a>) -> Self {
+        let n = scene.surface.n_water;
+        let d = scene.sun.direction.as_dvec3();
+        let cos_s = -d.z;
+        let sun_w = refract(d, DVec3::Z, 1.0, n).unwrap_or(DVec3::NEG_Z);
+        let cos_w = -sun_w.z;
+        let t = 1.0 - fresnel_reflectance(cos_s, 1.0, n);
+        // Horizontal irradiance is kept (times Fresnel transmittance); the
+        // beam narrows by cos_w / cos_s.
+        let e_w = scene.sun.irradiance.iter().map(|e| e * t * cos_s / cos_w).collect();
+        let sky_l = scene.sky.irradiance.iter().map(|e| e / std::f64::consts::PI).collect();
+        Light { scene, est, sun_w: sun_w.as_vec3(), e_w, sky_l }
+    }
+
+    fn bands(&self) -> usize {
+        self.scene.bands.len()
+    }
+
+    /// Transmittance per band from `x` toward the sun up to the surface
+    /// (0 where a target or the floor shades x).
+    fn sun_transmittance(&self, x: Vec3, out: &mut [f64]) {
+        let up = -self.sun_w;
+        let len = (-x.z / up.z).max(0.0);
+        if self.scene.geometry.occluded(x, up, len) {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            return;
+        }
+        let water = &self.scene.water;
+        let samples = if water.is_uniform() { 1 } else { 4 };
+        for (b, o) in out.iter_mut().enumerate() {
+            let mut tau = 0.0;
+            for s in 0..samples {
+                let p = x + up * (len * (s as f32 + 0.5) / samples as f32);
+                tau += water.iop(p, b).c() * len as f64 / samples as f64;
+            }
+            *o = (-tau).exp();
+        }
+    }
+
+    /// Radiance per band arriving at `p0` (in water) travelling along `-dir`,
+    /// i.e. what an instrument at p0 looking along `dir` sees.
+    pub fn march(&self, p0: Vec3, dir: Vec3, rng: &mut Pcg32, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+        let nb = self.bands();
+        let scene = self.scene;
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let mut tr = vec![1.0f64; nb];
+        let mut est = vec![0.0f64; nb];
+        let mut sun_t = vec![0.0f64; nb];
+        let t_surface = if dir.z > 0.0 { -p0.z / dir.z } else { f32::INFINITY };
+        let limit = t_surface.min(MAX_MARCH_M);
+        let hit = scene.geometry.intersect(p0, dir, limit);
+        let t_end = hit.map_or(limit, |h| h.t);
+        let step = scene.estimate.step_m as f32;
+        let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
+        let cos_ss = self.sun_w.dot(-dir) as f64;
+        let (pw_ss, pp_ss) = (pw.eval(cos_ss), pp.eval(cos_ss));
+        // Stratified: one jittered sample in each step.
+        let mut t0 = 0.0f32;
+        while t0 < t_end {
+            let dt = step.min(t_end - t0);
+            let x = p0 + dir * (t0 + dt * rng.uniform_f32());
+            self.est.volume(x, -dir, scratch, &mut est)?;
+            self.sun_transmittance(x, &mut sun_t);
+            let mut alive = false;
+            for b in 0..nb {
+                let iop = scene.water.iop(x, b);
+                let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
+                out[b] += tr[b] * (est[b] + single) * dt as f64;
+                tr[b] *= (-iop.c() * dt as f64).exp();
+                alive |= tr[b] > MIN_TRANSMITTANCE;
+            }
+            t0 += dt;
+            if !alive {
+                return Ok(());
+            }
+        }
+        if let Some(h) = hit {
+            // Floor or target: direct sun plus the surface photon estimate.
+            let n = h.normal;
+            let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
+            let x = h.position + n * 1e-3;
+            self.sun_transmittance(x, &mut sun_t);
+            self.est.surface(h.position, n, h.surface, scratch, &mut est)?;
+            for b in 0..nb {
+                let r = scene.reflectance(h.surface, h.position, b);
+                let direct = self.e_w[b] * sun_t[b] * cos_n * r / std::f64::consts::PI;
+                out[b] += tr[b] * (direct + est[b]);
+            }
+        } else if t_surface <= MAX_MARCH_M {
+            // Looking up through the surface: the transmitted sky, n^2 brighter.
+            let n = scene.surface.n_water;
+            let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
+            for b in 0..nb {
+                out[b] += tr[b] * t * n * n * self.sky_l[b];
+            }
+        }
+        Ok(())
+    }
+
+    /// Radiance per band reaching a sensor along `ray` (in air, toward the water).
+    pub fn camera(&self, ray: CameraRay, rng: &mut Pcg32, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+        let scene = self.scene;
+        let d = ray.direction;
+        if d.z >= 0.0 {
+            out.copy_from_slice(&self.sky_l);
+            return Ok(());
+        }
+        let p = ray.origin + d * (-ray.origin.z / d.z);
+        let p = Vec3::new(p.x, p.y, 0.0);
+        let ev = scene.surface.interact(d, rng);
+        if ev.transmitted {
+            let n2 = scene.surface.n_water * scene.surface.n_water;
+            self.march(p + ev.direction * 1e-4, ev.direction, rng, scratch, out)?;
+            // The Fresnel factor is in the choice of branch; radiance leaving
+            // the water drops by n^2.
+            out.iter_mut().for_each(|o| *o /= n2);
+        } else {
+            out.copy_from_slice(&self.sky_l);
+        }
+        self.add_glint(-d, out);
+        Ok(())
+    }
+
+    /// Sun glint on a Cox–Munk surface seen from direction `v` (up):
+    /// L = E_sun rho p(zx, zy) / (4 cos(theta_v) cos^4(beta)).
+    fn add_glint(&self, v: Vec3, out: &mut [f64]) {
+        let s2 = self.scene.surface.slope_variance;
+        if s2 <= 0.0 {
+            return;
+        }
+        let v = v.as_dvec3();
+        let s = -self.scene.sun.direction.as_dvec3();
+        let h = (v + s).normalize();
+        if h.z <= 0.0 || v.z <= 0.0 {
+            return;
+        }
+        let (zx, zy) = (-h.x / h.z, -h.y / h.z);
+        let p = (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2);
+        let rho = fresnel_reflectance(h.dot(v), 1.0, self.scene.surface.n_water);
+        let g = rho * p / (4.0 * v.z * h.z.powi(4));
+        for (o, e) in out.iter_mut().zip(&self.scene.sun.irradiance) {
+            *o += e * g;
+        }
+    }
+}
