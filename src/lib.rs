@@ -14,7 +14,8 @@
 //!   ([`store::build_map`], [`store::MapFile`]).
 //! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
 //! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
-//! - [`estimate`]: boundary- and spectral-bias compensation.
+//! - [`estimate`]: boundary-bias volumes and spectral-bias compensation
+//!   ([`estimate::spectral::SpectralEstimator`]).
 //! - [`render`]: sensor, ray marching and radiometers ([`render::render`]).
 //! - [`cube`]: the radiance cube on disk (ENVI) and its quicklook (PNG).
 //!
@@ -26,6 +27,7 @@
 pub mod cache;
 pub mod emit;
 pub mod error;
+pub mod estimate;
 pub mod geometry;
 pub mod mem;
 pub mod optics;
