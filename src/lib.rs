@@ -14,6 +14,9 @@
 //!   ([`store::build_map`], [`store::MapFile`]).
 //! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
 //! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
+//! - [`cube`]: the radiance cube written tile by tile as ENVI BSQ and read
+//!   back lazily ([`cube::EnviWriter`], [`cube::EnviCube`]), and its
+//!   true-colour quicklook ([`cube::Quicklook`]).
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
@@ -21,6 +24,7 @@
 //! [`output`] (files written whole or not at all).
 
 pub mod cache;
+pub mod cube;
 pub mod emit;
 pub mod error;
 pub mod geometry;
