@@ -25,6 +25,7 @@
 //! [`output`] (files written whole or not at all).
 
 pub mod cache;
+pub mod cube;
 pub mod emit;
 pub mod error;
 pub mod estimate;

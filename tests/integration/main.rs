@@ -5,6 +5,7 @@ mod common;
 mod cache;
 mod cli;
 mod corruption;
+mod cube_tool;
 mod determinism;
 mod memory;
 mod oracle;

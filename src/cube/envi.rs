@@ -1,0 +1,289 @@
+//! ENVI radiance cubes: a tile-by-tile writer and a lazy reader.
+//!
+//! Format: an ENVI Standard text header `NAME.hdr` beside a headerless
+//! binary `NAME.bsq` of 32-bit IEEE floats, little-endian (`data type = 4`,
+//! `byte order = 0`), band-sequential: the value of pixel (x, y) in band b
+//! sits at element `(b * lines + y) * samples + x`. BSQ is what most
+//! remote-sensing software reads fastest band by band, and it lets the reader
+//! serve one band with a single read.
+//!
+//! The writer never holds the cube: [`EnviWriter::create`] pre-sizes the data
+//! file under a temporary name and [`EnviWriter::write_tile`] scatters each
+//! tile (laid out `[y][x][band]`, as a renderer produces spectra) into its
+//! BSQ positions with positioned writes, so tiles may arrive in any order and
+//! from several threads at once. [`EnviWriter::finish`] syncs and renames the
+//! data file and then the header into place: a reader that finds the header
+//! finds a complete cube, and a writer dropped without `finish` (a crash, an
+//! error in another tile) leaves neither final name behind.
+//!
+//! [`EnviCube`] (in `envi/reader.rs`) reads such a cube, or any ENVI
+//! float32 little-endian BSQ cube with wavelengths, with positioned reads: a
+//! pixel's spectrum, a band, or rows of a band, never the whole cube.
+//! Malformed headers are refused with an error naming the file, the line and
+//! the field.
+//!
+//! Not for: other data types, interleaves (BIL, BIP) or big-endian cubes
+//! (refused, not converted), nor for editing a cube in place.
+
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::spectral::BandGrid;
+
+mod reader;
+#[cfg(test)]
+mod tests;
+
+pub use reader::EnviCube;
+
+/// Bytes per stored value (32-bit float).
+const VALUE_BYTES: u64 = 4;
+
+/// What a cube holds: its size, its bands and a description.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CubeSpec {
+    /// Pixels per line (image width).
+    pub samples: usize,
+    /// Lines (image height).
+    pub lines: usize,
+    /// The bands, in file order; their centres and FWHMs go into the header.
+    pub bands: BandGrid,
+    /// Free text for the header's `description` (no braces).
+    pub description: String,
+    /// Units of the values, e.g. `W m-2 sr-1 nm-1` (no braces).
+    pub data_units: String,
+}
+
+impl CubeSpec {
+    /// Total values in the cube, or an error if it overflows the address space.
+    fn values(&self) -> Result<u64> {
+        (self.samples as u64)
+            .checked_mul(self.lines as u64)
+            .and_then(|n| n.checked_mul(self.bands.len() as u64))
+            .filter(|n| n.checked_mul(VALUE_BYTES).is_some())
+            .ok_or_else(|| {
+                Error::invalid(
+                    "cube size",
+                    format!(
+                        "{} x {} x {} values overflow a file size",
+                        self.samples,
+                        self.lines,
+                        self.bands.len()
+                    ),
+                )
+            })
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.samples == 0 || self.lines == 0 {
+            return Err(Error::invalid(
+                "cube size",
+                format!(
+                    "samples and lines must be at least 1, got {} x {}",
+                    self.samples, self.lines
+                ),
+            ));
+        }
+        for (field, text) in [
+            ("description", &self.description),
+            ("data units", &self.data_units),
+        ] {
+            // A brace would end the header's `{...}` value early.
+            if text.contains(['{', '}']) {
+                return Err(Error::invalid(field, "must not contain '{' or '}'"));
+            }
+        }
+        self.values().map(|_| ())
+    }
+
+    /// The ENVI header text for this cube.
+    fn header_text(&self) -> String {
+        let list = |v: &[f32]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        format!(
+            "ENVI\n\
+             description = {{{}}}\n\
+             samples = {}\n\
+             lines = {}\n\
+             bands = {}\n\
+             header offset = 0\n\
+             file type = ENVI Standard\n\
+             data type = 4\n\
+             interleave = bsq\n\
+             byte order = 0\n\
+             wavelength units = Nanometers\n\
+             wavelength = {{{}}}\n\
+             fwhm = {{{}}}\n\
+             data units = {{{}}}\n",
+            self.description,
+            self.samples,
+            self.lines,
+            self.bands.len(),
+            list(self.bands.centers_nm()),
+            list(self.bands.fwhm_nm()),
+            self.data_units,
+        )
+    }
+}
+
+/// Writes one ENVI BSQ cube tile by tile; see the module doc.
+///
+/// `Sync`: [`EnviWriter::write_tile`] takes `&self`, so render threads can
+/// share one writer. Tiles must not overlap (overlapping writes race and the
+/// last one wins per value).
+#[derive(Debug)]
+pub struct EnviWriter {
+    spec: CubeSpec,
+    // Temporary files delete themselves when dropped, which is what makes an
+    // unfinished writer leave nothing behind.
+    bsq: tempfile::NamedTempFile,
+    hdr: tempfile::NamedTempFile,
+    bsq_path: PathBuf,
+    hdr_path: PathBuf,
+}
+
+impl EnviWriter {
+    /// Create `NAME.bsq` and `NAME.hdr` under temporary names in `dir`: the
+    /// header is written now and the data file pre-sized (zero-filled,
+    /// sparse) to the whole cube, ready for tiles. `name` is a plain file
+    /// name without extension.
+    pub fn create(dir: &Path, name: &str, spec: CubeSpec) -> Result<EnviWriter> {
+        if name.is_empty()
+            || name == "."
+            || name == ".."
+            || name.contains(['/', '\0'])
+            || name.starts_with('.')
+        {
+            return Err(Error::invalid(
+                "cube name",
+                format!("'{name}' must be a plain file name (no '/', not starting with '.')"),
+            ));
+        }
+        spec.validate()?;
+        let bsq_path = dir.join(format!("{name}.bsq"));
+        let hdr_path = dir.join(format!("{name}.hdr"));
+        let temp = |path: &Path| {
+            tempfile::Builder::new()
+                .prefix(".littoral.")
+                .suffix(".partial")
+                .tempfile_in(dir)
+                .map_err(|e| Error::io(path, "create", e))
+        };
+        let bsq = temp(&bsq_path)?;
+        let mut hdr = temp(&hdr_path)?;
+        bsq.as_file()
+            .set_len(spec.values()? * VALUE_BYTES)
+            .map_err(|e| Error::io(&bsq_path, "pre-size", e))?;
+        std::io::Write::write_all(&mut hdr, spec.header_text().as_bytes())
+            .map_err(|e| Error::io(&hdr_path, "write", e))?;
+        Ok(EnviWriter {
+            spec,
+            bsq,
+            hdr,
+            bsq_path,
+            hdr_path,
+        })
+    }
+
+    /// The cube being written.
+    pub fn spec(&self) -> &CubeSpec {
+        &self.spec
+    }
+
+    /// Write the tile of pixels `x0..x0+w` by `y0..y0+h`. `values` holds
+    /// `w * h * bands` values laid out `[y][x][band]` (band fastest).
+    ///
+    /// Each band of the tile is gathered into one buffer and written as one
+    /// run per tile row — or as a single run when the tile spans whole lines,
+    /// where a band's rows are contiguous in BSQ.
+    pub fn write_tile(
+        &self,
+        x0: usize,
+        y0: usize,
+        w: usize,
+        h: usize,
+        values: &[f32],
+    ) -> Result<()> {
+        let (samples, lines, bands) = (self.spec.samples, self.spec.lines, self.spec.bands.len());
+        let inside = |start: usize, len: usize, size: usize| {
+            start.checked_add(len).is_some_and(|end| end <= size)
+        };
+        if w == 0 || h == 0 || !inside(x0, w, samples) || !inside(y0, h, lines) {
+            return Err(Error::invalid(
+                "tile",
+                format!(
+                    "{w} x {h} pixels at ({x0}, {y0}) is empty or does not fit a {samples} x {lines} cube"
+                ),
+            ));
+        }
+        // w * h * bands fits: the tile lies inside the cube, whose size was checked.
+        if values.len() != w * h * bands {
+            return Err(Error::invalid(
+                "tile",
+                format!(
+                    "{w} x {h} pixels x {bands} bands needs {} values, got {}",
+                    w * h * bands,
+                    values.len()
+                ),
+            ));
+        }
+        let file = self.bsq.as_file();
+        let whole_lines = w == samples;
+        let mut run: Vec<f32> = Vec::with_capacity(w * h);
+        for b in 0..bands {
+            run.clear();
+            run.extend(
+                values
+                    .iter()
+                    .skip(b)
+                    .step_by(bands)
+                    .map(|v| f32::from_bits(v.to_bits().to_le())),
+            );
+            let bytes: &[u8] = bytemuck::cast_slice(&run);
+            let row_bytes = w * VALUE_BYTES as usize;
+            let offset = |y: usize| ((b * lines + y) * samples + x0) as u64 * VALUE_BYTES;
+            let result = if whole_lines {
+                file.write_all_at(bytes, offset(y0))
+            } else {
+                bytes
+                    .chunks_exact(row_bytes)
+                    .enumerate()
+                    .try_for_each(|(dy, row)| file.write_all_at(row, offset(y0 + dy)))
+            };
+            result.map_err(|e| Error::io(&self.bsq_path, "write", e))?;
+        }
+        Ok(())
+    }
+
+    /// Sync both files and rename them to their final names, the data file
+    /// first and the header last, so a header always describes a complete
+    /// data file. Returns `(bsq, hdr)` paths. Existing files of the same
+    /// names are replaced.
+    pub fn finish(self) -> Result<(PathBuf, PathBuf)> {
+        use std::os::unix::fs::PermissionsExt;
+        let EnviWriter {
+            bsq,
+            hdr,
+            bsq_path,
+            hdr_path,
+            ..
+        } = self;
+        for (temp, path) in [(&bsq, &bsq_path), (&hdr, &hdr_path)] {
+            let file = temp.as_file();
+            file.sync_all().map_err(|e| Error::io(path, "sync", e))?;
+            // Temporary files are created private (0600); outputs are ordinary files.
+            file.set_permissions(std::fs::Permissions::from_mode(0o644))
+                .map_err(|e| Error::io(path, "set permissions", e))?;
+        }
+        bsq.persist(&bsq_path)
+            .map_err(|e| Error::io(&bsq_path, "rename into place", e.error))?;
+        hdr.persist(&hdr_path)
+            .map_err(|e| Error::io(&hdr_path, "rename into place", e.error))?;
+        Ok((bsq_path, hdr_path))
+    }
+}

@@ -1,0 +1,464 @@
+//! Reading ENVI cubes lazily: the header parsed and checked field by field,
+//! values fetched with positioned reads.
+//!
+//! Not for: writing (see the parent module) or holding a cube in memory.
+
+use std::fs::File;
+use std::io::Read;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+use super::VALUE_BYTES;
+use crate::error::{Error, Result};
+
+/// Headers larger than this are refused: 65 535 bands of wavelengths and
+/// widths take about 2 MB, so anything larger is not an ENVI header (most
+/// likely the data file passed by mistake).
+const MAX_HEADER_BYTES: u64 = 16 << 20;
+
+/// A float32 little-endian BSQ ENVI cube opened for random access.
+#[derive(Debug)]
+pub struct EnviCube {
+    header_path: PathBuf,
+    data_path: PathBuf,
+    file: File,
+    samples: usize,
+    lines: usize,
+    bands: usize,
+    header_offset: u64,
+    wavelengths_nm: Vec<f64>,
+    fwhm_nm: Option<Vec<f64>>,
+    description: String,
+    data_units: Option<String>,
+}
+
+impl EnviCube {
+    /// Open a cube given its header (`NAME.hdr`, data in `NAME.bsq`) or its
+    /// data file (header `NAME.hdr`, or `NAME.bsq.hdr` if that exists).
+    /// Checks the header and that the data file is long enough.
+    pub fn open(hdr_or_bsq: &Path) -> Result<EnviCube> {
+        let is_hdr = hdr_or_bsq
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
+        let (header_path, data_path) = if is_hdr {
+            (hdr_or_bsq.to_path_buf(), hdr_or_bsq.with_extension("bsq"))
+        } else {
+            let mut appended = hdr_or_bsq.as_os_str().to_owned();
+            appended.push(".hdr");
+            let appended = PathBuf::from(appended);
+            let header = if appended.exists() {
+                appended
+            } else {
+                hdr_or_bsq.with_extension("hdr")
+            };
+            (header, hdr_or_bsq.to_path_buf())
+        };
+        let text = read_header_text(&header_path)?;
+        let fields = parse_fields(&header_path, &text)?;
+        let h = Header {
+            path: &header_path,
+            fields,
+        };
+
+        let samples = h.positive("samples")?;
+        let lines = h.positive("lines")?;
+        let bands = h.positive("bands")?;
+        let header_offset = match h.get("header offset") {
+            None => 0,
+            Some(_) => h.whole("header offset")? as u64,
+        };
+        h.expect("data type", &["4"], "only 4 (32-bit float) is supported")?;
+        h.expect("interleave", &["bsq"], "only bsq is supported")?;
+        h.expect("byte order", &["0"], "only 0 (little-endian) is supported")?;
+        let scale = match h.get("wavelength units") {
+            None => 1.0,
+            Some((v, line)) => match v.to_ascii_lowercase().as_str() {
+                "nanometers" | "nm" => 1.0,
+                "micrometers" | "microns" | "um" => 1000.0,
+                _ => {
+                    return Err(Error::data(
+                        &header_path,
+                        Some(line),
+                        "wavelength units",
+                        format!("'{v}' is not Nanometers or Micrometers"),
+                    ))
+                }
+            },
+        };
+        let wavelengths_nm: Vec<f64> = h
+            .list("wavelength", bands)?
+            .ok_or_else(|| {
+                Error::data(
+                    &header_path,
+                    None,
+                    "wavelength",
+                    "missing: a spectral cube needs band wavelengths",
+                )
+            })?
+            .into_iter()
+            .map(|w| w * scale)
+            .collect();
+        let fwhm_nm = h
+            .list("fwhm", bands)?
+            .map(|v| v.into_iter().map(|w| w * scale).collect());
+        let description = h
+            .get("description")
+            .map(|(v, _)| v.to_string())
+            .unwrap_or_default();
+        let data_units = h.get("data units").map(|(v, _)| v.to_string());
+
+        let file = File::open(&data_path).map_err(|e| Error::io(&data_path, "open", e))?;
+        let len = file
+            .metadata()
+            .map_err(|e| Error::io(&data_path, "stat", e))?
+            .len();
+        let needed = (samples as u64)
+            .checked_mul(lines as u64)
+            .and_then(|n| n.checked_mul(bands as u64))
+            .and_then(|n| n.checked_mul(VALUE_BYTES))
+            .and_then(|n| n.checked_add(header_offset))
+            .filter(|&n| usize::try_from(n).is_ok())
+            .ok_or_else(|| {
+                Error::data(
+                    &header_path,
+                    None,
+                    "samples",
+                    format!("{samples} x {lines} x {bands} values overflow a file size"),
+                )
+            })?;
+        if len < needed {
+            return Err(Error::data(
+                &data_path,
+                None,
+                "size",
+                format!(
+                    "holds {len} bytes but the header's {samples} x {lines} x {bands} float32 values need {needed}"
+                ),
+            ));
+        }
+        Ok(EnviCube {
+            header_path,
+            data_path,
+            file,
+            samples,
+            lines,
+            bands,
+            header_offset,
+            wavelengths_nm,
+            fwhm_nm,
+            description,
+            data_units,
+        })
+    }
+
+    /// Pixels per line.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// Lines.
+    pub fn lines(&self) -> usize {
+        self.lines
+    }
+
+    /// Bands.
+    pub fn bands(&self) -> usize {
+        self.bands
+    }
+
+    /// Band centres in nm (converted if the header gave micrometres).
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        &self.wavelengths_nm
+    }
+
+    /// Band widths (FWHM) in nm, if the header has them.
+    pub fn fwhm_nm(&self) -> Option<&[f64]> {
+        self.fwhm_nm.as_deref()
+    }
+
+    /// The header's description (empty if none).
+    pub fn description(&self) -> &str {
+        &self.description
+    }
+
+    /// The header's `data units`, if present.
+    pub fn data_units(&self) -> Option<&str> {
+        self.data_units.as_deref()
+    }
+
+    /// The header file.
+    pub fn header_path(&self) -> &Path {
+        &self.header_path
+    }
+
+    /// The data file.
+    pub fn data_path(&self) -> &Path {
+        &self.data_path
+    }
+
+    /// The spectrum of pixel (`x`, `y`): one value per band (one small read
+    /// per band, as BSQ stores a pixel's bands a whole band apart).
+    pub fn spectrum(&self, x: usize, y: usize) -> Result<Vec<f32>> {
+        if x >= self.samples || y >= self.lines {
+            return Err(Error::data(
+                &self.data_path,
+                None,
+                "pixel",
+                format!(
+                    "({x}, {y}) lies outside the {} x {} cube",
+                    self.samples, self.lines
+                ),
+            ));
+        }
+        (0..self.bands)
+            .map(|b| {
+                let mut v = [0f32];
+                self.read_values(self.index(b, y) + x as u64, &mut v)?;
+                Ok(v[0])
+            })
+            .collect()
+    }
+
+    /// Band `b` (0-based), all pixels in row order.
+    pub fn band(&self, b: usize) -> Result<Vec<f32>> {
+        self.band_rows(b, 0, self.lines)
+    }
+
+    /// Lines `y0..y0+h` of band `b`, in row order: lets a caller stream
+    /// through a band too large to hold.
+    pub fn band_rows(&self, b: usize, y0: usize, h: usize) -> Result<Vec<f32>> {
+        if b >= self.bands {
+            return Err(Error::data(
+                &self.data_path,
+                None,
+                "band",
+                format!("{b} is not below the cube's {} bands", self.bands),
+            ));
+        }
+        if y0.checked_add(h).is_none_or(|end| end > self.lines) {
+            return Err(Error::data(
+                &self.data_path,
+                None,
+                "lines",
+                format!(
+                    "{y0}..{y0}+{h} is not within the cube's {} lines",
+                    self.lines
+                ),
+            ));
+        }
+        let mut values = vec![0f32; h * self.samples];
+        self.read_values(self.index(b, y0), &mut values)?;
+        Ok(values)
+    }
+
+    /// The band whose centre is nearest `nm` (the first of equals; band 0
+    /// for a NaN).
+    pub fn band_index_nearest(&self, nm: f64) -> usize {
+        self.wavelengths_nm
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - nm).abs().total_cmp(&(b.1 - nm).abs()))
+            .map_or(0, |(i, _)| i)
+    }
+
+    /// Element index of (0, y) in band b.
+    fn index(&self, b: usize, y: usize) -> u64 {
+        (b as u64 * self.lines as u64 + y as u64) * self.samples as u64
+    }
+
+    fn read_values(&self, element: u64, out: &mut [f32]) -> Result<()> {
+        let offset = self.header_offset + element * VALUE_BYTES;
+        self.file
+            .read_exact_at(bytemuck::cast_slice_mut(out), offset)
+            .map_err(|e| Error::io(&self.data_path, "read", e))?;
+        for v in out.iter_mut() {
+            *v = f32::from_bits(u32::from_le(v.to_bits()));
+        }
+        Ok(())
+    }
+}
+
+fn read_header_text(path: &Path) -> Result<String> {
+    let file = File::open(path).map_err(|e| Error::io(path, "open", e))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_HEADER_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, "read", e))?;
+    if bytes.len() as u64 > MAX_HEADER_BYTES {
+        return Err(Error::data(
+            path,
+            None,
+            "header",
+            format!("is larger than {MAX_HEADER_BYTES} bytes: not an ENVI header"),
+        ));
+    }
+    String::from_utf8(bytes)
+        .map_err(|_| Error::data(path, None, "header", "is not text: not an ENVI header"))
+}
+
+/// A `key = value` of the header: lower-cased key, value without braces,
+/// and the 1-based line the key is on.
+type Field = (String, String, usize);
+
+/// Split a header into fields. Values in braces may span lines; `;` starts
+/// a comment line.
+fn parse_fields(path: &Path, text: &str) -> Result<Vec<Field>> {
+    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
+    match lines.by_ref().find(|(_, l)| !l.trim().is_empty()) {
+        Some((_, l)) if l.trim() == "ENVI" => {}
+        found => {
+            return Err(Error::data(
+                path,
+                found.map(|(n, _)| n),
+                "header",
+                "does not start with 'ENVI'",
+            ))
+        }
+    }
+    let mut fields: Vec<Field> = Vec::new();
+    while let Some((n, line)) = lines.next() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with(';') {
+            continue;
+        }
+        let Some((key, rest)) = line.split_once('=') else {
+            return Err(Error::data(
+                path,
+                Some(n),
+                "header",
+                format!("expected 'key = value', got '{line}'"),
+            ));
+        };
+        let key = key.trim().to_ascii_lowercase();
+        let rest = rest.trim();
+        let value = if let Some(open) = rest.strip_prefix('{') {
+            let mut body = open.to_string();
+            while !body.contains('}') {
+                let Some((_, more)) = lines.next() else {
+                    return Err(Error::data(path, Some(n), &key, "'{' is never closed"));
+                };
+                body.push('\n');
+                body.push_str(more);
+            }
+            let (inside, after) = body.split_once('}').unwrap_or((&body, ""));
+            // Values never nest braces: a second '{' first means this one
+            // was left open and swallowed the next field.
+            if inside.contains('{') {
+                return Err(Error::data(path, Some(n), &key, "'{' is never closed"));
+            }
+            if !after.trim().is_empty() {
+                return Err(Error::data(
+                    path,
+                    Some(n),
+                    &key,
+                    format!("unexpected '{}' after the closing '}}'", after.trim()),
+                ));
+            }
+            inside.trim().to_string()
+        } else {
+            rest.to_string()
+        };
+        if key.is_empty() {
+            return Err(Error::data(path, Some(n), "header", "a value has no key"));
+        }
+        if fields.iter().any(|(k, _, _)| *k == key) {
+            return Err(Error::data(path, Some(n), &key, "appears twice"));
+        }
+        fields.push((key, value, n));
+    }
+    Ok(fields)
+}
+
+/// Typed access to parsed header fields, with errors naming file, line and field.
+struct Header<'a> {
+    path: &'a Path,
+    fields: Vec<Field>,
+}
+
+impl Header<'_> {
+    fn get(&self, key: &str) -> Option<(&str, usize)> {
+        self.fields
+            .iter()
+            .find(|(k, _, _)| k == key)
+            .map(|(_, v, n)| (v.as_str(), *n))
+    }
+
+    fn required(&self, key: &str) -> Result<(&str, usize)> {
+        self.get(key)
+            .ok_or_else(|| Error::data(self.path, None, key, "missing"))
+    }
+
+    fn whole(&self, key: &str) -> Result<usize> {
+        let (v, n) = self.required(key)?;
+        v.parse::<usize>().map_err(|_| {
+            Error::data(
+                self.path,
+                Some(n),
+                key,
+                format!("expected a whole number, got '{v}'"),
+            )
+        })
+    }
+
+    fn positive(&self, key: &str) -> Result<usize> {
+        match self.whole(key)? {
+            0 => Err(Error::data(
+                self.path,
+                self.get(key).map(|(_, n)| n),
+                key,
+                "must be at least 1",
+            )),
+            v => Ok(v),
+        }
+    }
+
+    /// The field must be present and one of `allowed` (case-insensitive).
+    fn expect(&self, key: &str, allowed: &[&str], what: &str) -> Result<()> {
+        let (v, n) = self.required(key)?;
+        if allowed.iter().any(|a| a.eq_ignore_ascii_case(v)) {
+            Ok(())
+        } else {
+            Err(Error::data(
+                self.path,
+                Some(n),
+                key,
+                format!("is '{v}': {what}"),
+            ))
+        }
+    }
+
+    /// A `{a, b, ...}` list of finite numbers with exactly `count` entries,
+    /// or `None` if the field is absent.
+    fn list(&self, key: &str, count: usize) -> Result<Option<Vec<f64>>> {
+        let Some((v, n)) = self.get(key) else {
+            return Ok(None);
+        };
+        let values = v
+            .split(',')
+            .map(|s| s.trim())
+            .enumerate()
+            .map(|(i, s)| {
+                s.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::data(
+                            self.path,
+                            Some(n),
+                            format!("{key}[{i}]"),
+                            format!("expected a number, got '{s}'"),
+                        )
+                    })
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        if values.len() != count {
+            return Err(Error::data(
+                self.path,
+                Some(n),
+                key,
+                format!("has {} values but bands = {count}", values.len()),
+            ));
+        }
+        Ok(Some(values))
+    }
+}

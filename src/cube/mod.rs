@@ -1,0 +1,19 @@
+//! Radiance-cube outputs: the ENVI cube written tile by tile, and the
+//! true-colour quicklook.
+//!
+//! Design note: a cube of hundreds of bands over a large scene does not fit
+//! in memory, so the writer ([`envi::EnviWriter`]) takes tiles in any order
+//! from any thread and scatters them into a pre-sized file, and the reader
+//! ([`envi::EnviCube`]) answers pixel and band requests with positioned
+//! reads. The quicklook ([`quicklook::Quicklook`]) reduces each spectrum to
+//! three numbers, so a whole RGB image is small enough to hold.
+//!
+//! Not for: rendering (the sensor produces the spectra), spectral OpenEXR
+//! (not written yet), or other ENVI data types and interleaves than 32-bit
+//! float BSQ — the reader refuses those with an error rather than guessing.
+
+pub mod envi;
+pub mod quicklook;
+
+pub use envi::{CubeSpec, EnviCube, EnviWriter};
+pub use quicklook::Quicklook;

@@ -1,0 +1,192 @@
+//! `littoral-cube` on a small cube written by the library: the exact output
+//! forms scripts rely on, and one clean line with exit 1 on bad input.
+
+use crate::common::*;
+use littoral::cube::{CubeSpec, EnviWriter};
+use littoral::BandGrid;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn cube_tool(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_littoral-cube"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn stdout(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+fn assert_clean_failure(out: &Output, needle: &str) {
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "exit by error, not by signal or panic"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains(needle), "'{needle}' not in: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// Value of pixel (x, y) in band b of the test cube.
+fn value(x: usize, y: usize, b: usize) -> f32 {
+    0.001 * (x + 10 * y) as f32 + 0.25 * b as f32
+}
+
+/// A 6 x 4 cube with bands at 450, 550, 650 nm, written as two tiles.
+fn small_cube(dir: &Path) -> PathBuf {
+    let (w, h) = (6, 4);
+    let bands = BandGrid::explicit(vec![450.0, 550.0, 650.0], vec![100.0; 3]).unwrap();
+    let writer = EnviWriter::create(
+        dir,
+        "small",
+        CubeSpec {
+            samples: w,
+            lines: h,
+            bands,
+            description: "tool test".into(),
+            data_units: "W m-2 sr-1 nm-1".into(),
+        },
+    )
+    .unwrap();
+    for (x0, tw) in [(4, 2), (0, 4)] {
+        let values: Vec<f32> = (0..h)
+            .flat_map(|y| (x0..x0 + tw).flat_map(move |x| (0..3).map(move |b| value(x, y, b))))
+            .collect();
+        writer.write_tile(x0, 0, tw, h, &values).unwrap();
+    }
+    writer.finish().unwrap().1
+}
+
+#[test]
+fn info_spectrum_band_and_quicklook() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+
+    let info: serde_json::Value =
+        serde_json::from_str(&stdout(&cube_tool(&["info", p(&hdr)]))).unwrap();
+    assert_eq!(info["samples"], 6);
+    assert_eq!(info["lines"], 4);
+    assert_eq!(info["bands"], 3);
+    assert_eq!(info["wavelength_nm"]["min"], 450.0);
+    assert_eq!(info["wavelength_nm"]["max"], 650.0);
+    assert_eq!(info["data_units"], "W m-2 sr-1 nm-1");
+    assert_eq!(info["value"]["non_finite"], 0);
+    let (min, max) = (value(0, 0, 0), value(5, 3, 2));
+    assert_eq!(info["value"]["min"].as_f64().unwrap() as f32, min);
+    assert_eq!(info["value"]["max"].as_f64().unwrap() as f32, max);
+    let mean: f64 = (0..3)
+        .flat_map(|b| (0..4).flat_map(move |y| (0..6).map(move |x| f64::from(value(x, y, b)))))
+        .sum::<f64>()
+        / 72.0;
+    assert!((info["value"]["mean"].as_f64().unwrap() - mean).abs() < 1e-9);
+
+    // The data file works as well as the header; values print exactly.
+    let csv = stdout(&cube_tool(&[
+        "spectrum",
+        p(&hdr.with_extension("bsq")),
+        "5",
+        "2",
+    ]));
+    let want = format!(
+        "wavelength_nm,value\n450,{}\n550,{}\n650,{}\n",
+        value(5, 2, 0),
+        value(5, 2, 1),
+        value(5, 2, 2)
+    );
+    assert_eq!(csv, want);
+
+    let png = dir.path().join("band.png");
+    let out: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
+        "band",
+        p(&hdr),
+        "560",
+        "--out",
+        p(&png),
+    ])))
+    .unwrap();
+    assert_eq!(out["band"], 1);
+    assert_eq!(out["wavelength_nm"], 550.0);
+    let (info, px) = decode_png(&png);
+    assert_eq!(
+        (info.width, info.height, info.color_type),
+        (6, 4, png::ColorType::Grayscale)
+    );
+    assert_eq!((px[0], px[23]), (0, 255), "min black, max white");
+
+    let ql = dir.path().join("ql.png");
+    stdout(&cube_tool(&["quicklook", p(&hdr), "--out", p(&ql)]));
+    let (info, px) = decode_png(&ql);
+    assert_eq!(
+        (info.width, info.height, info.color_type),
+        (6, 4, png::ColorType::Rgb)
+    );
+    assert_eq!(px.len(), 6 * 4 * 3);
+}
+
+fn decode_png(path: &Path) -> (png::OutputInfo, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap();
+    let (w, h) = (reader.info().width as usize, reader.info().height as usize);
+    let mut buf = vec![0; w * h * reader.info().color_type.samples()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    (info, buf)
+}
+
+#[test]
+fn bad_cubes_and_arguments_fail_cleanly() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    let missing = dir.path().join("none.hdr");
+    assert_clean_failure(&cube_tool(&["info", p(&missing)]), "none.hdr");
+
+    let text = std::fs::read_to_string(&hdr).unwrap();
+    std::fs::write(&hdr, text.replace("data type = 4", "data type = 12")).unwrap();
+    assert_clean_failure(
+        &cube_tool(&["info", p(&hdr)]),
+        "small.hdr: line 8: data type",
+    );
+    std::fs::write(&hdr, text).unwrap();
+
+    assert_clean_failure(
+        &cube_tool(&["spectrum", p(&hdr), "6", "0"]),
+        "pixel: (6, 0)",
+    );
+    let png = dir.path().join("b.png");
+    assert_clean_failure(
+        &cube_tool(&["band", p(&hdr), "NaN", "--out", p(&png)]),
+        "NM",
+    );
+    assert_clean_failure(
+        &cube_tool(&[
+            "band",
+            p(&hdr),
+            "500",
+            "--out",
+            p(&dir.path().join("no/b.png")),
+        ]),
+        "no/b.png",
+    );
+    assert!(!png.exists());
+
+    let bsq = hdr.with_extension("bsq");
+    let f = std::fs::OpenOptions::new().write(true).open(&bsq).unwrap();
+    f.set_len(10).unwrap();
+    assert_clean_failure(
+        &cube_tool(&["info", p(&hdr)]),
+        "small.bsq: size: holds 10 bytes",
+    );
+}

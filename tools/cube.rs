@@ -1,0 +1,190 @@
+//! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
+//! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
+//! a true-colour quicklook.
+//!
+//! Thin, like `littoral`: arguments and exit codes here, the reading and
+//! image writing in the library (`littoral::cube`). Every command reads the
+//! cube with positioned reads and holds at most one band (plus, for the
+//! quicklook, the RGB image), so it works on cubes larger than memory.
+//! Not for: converting or editing cubes (not written yet), or other formats.
+
+use clap::{Parser, Subcommand};
+use littoral::cube::quicklook::{write_grey_png, write_png};
+use littoral::cube::{EnviCube, Quicklook};
+use littoral::Error;
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "littoral-cube",
+    version,
+    about = "Inspect littoral's radiance cubes (ENVI float32 BSQ)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a JSON summary: size, wavelength range, value statistics.
+    Info {
+        /// The cube's header (NAME.hdr) or data file (NAME.bsq).
+        cube: PathBuf,
+    },
+    /// Print one pixel's spectrum as CSV: wavelength_nm,value.
+    Spectrum {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// Column, from 0 at the left.
+        x: usize,
+        /// Line, from 0 at the top.
+        y: usize,
+    },
+    /// Write the band nearest a wavelength as a grey PNG, scaled linearly
+    /// from the band's minimum (black) to its maximum (white).
+    Band {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// Wavelength in nm.
+        nm: f64,
+        /// PNG file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write a true-colour PNG (CIE 1931 colour matching to sRGB).
+    Quicklook {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// PNG file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Multiply linear values by this (default: the 99th percentile of
+        /// luminance maps to white).
+        #[arg(long)]
+        exposure: Option<f32>,
+    },
+}
+
+/// Values read per chunk when scanning a whole cube (4 MiB of floats).
+const SCAN_VALUES: usize = 1 << 20;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("littoral-cube: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn run(cli: Cli) -> AnyResult<()> {
+    match cli.command {
+        Command::Info { cube } => info(&EnviCube::open(&cube)?),
+        Command::Spectrum { cube, x, y } => {
+            let cube = EnviCube::open(&cube)?;
+            let spectrum = cube.spectrum(x, y)?;
+            let mut text = String::from("wavelength_nm,value\n");
+            for (nm, v) in cube.wavelengths_nm().iter().zip(&spectrum) {
+                text.push_str(&format!("{nm},{v}\n"));
+            }
+            print(&text)
+        }
+        Command::Band { cube, nm, out } => {
+            if !nm.is_finite() {
+                return Err(
+                    Error::invalid("NM", format!("'{nm}' is not a wavelength in nm")).into(),
+                );
+            }
+            let cube = EnviCube::open(&cube)?;
+            let b = cube.band_index_nearest(nm);
+            let values = cube.band(b)?;
+            let range = write_grey_png(&out, cube.samples(), cube.lines(), &values)?;
+            let summary = serde_json::json!({
+                "band": b,
+                "wavelength_nm": cube.wavelengths_nm()[b],
+                "min": range.map(|r| r.0),
+                "max": range.map(|r| r.1),
+                "out": out,
+            });
+            print(&format!("{summary}\n"))
+        }
+        Command::Quicklook {
+            cube,
+            out,
+            exposure,
+        } => {
+            let cube = EnviCube::open(&cube)?;
+            let q = Quicklook::for_cube(&cube);
+            if !q.has_visible_bands() {
+                return Err(Error::data(
+                    cube.header_path(),
+                    None,
+                    "wavelength",
+                    "no band lies within 360-830 nm: nothing to see",
+                )
+                .into());
+            }
+            let rgb = q.cube_rgb(&cube)?;
+            write_png(&out, cube.samples(), cube.lines(), &rgb, exposure)?;
+            Ok(())
+        }
+    }
+}
+
+/// The JSON summary, scanning every value in chunks of rows.
+fn info(cube: &EnviCube) -> AnyResult<()> {
+    let (mut min, mut max, mut sum) = (f32::INFINITY, f32::NEG_INFINITY, 0f64);
+    let (mut finite, mut non_finite) = (0u64, 0u64);
+    let rows_per_chunk = (SCAN_VALUES / cube.samples()).max(1);
+    for b in 0..cube.bands() {
+        for y0 in (0..cube.lines()).step_by(rows_per_chunk) {
+            let h = rows_per_chunk.min(cube.lines() - y0);
+            for v in cube.band_rows(b, y0, h)? {
+                if v.is_finite() {
+                    min = min.min(v);
+                    max = max.max(v);
+                    sum += f64::from(v);
+                    finite += 1;
+                } else {
+                    non_finite += 1;
+                }
+            }
+        }
+    }
+    let w = cube.wavelengths_nm();
+    let w_min = w.iter().copied().fold(f64::INFINITY, f64::min);
+    let w_max = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (min, max, mean) = if finite > 0 {
+        (Some(min), Some(max), Some(sum / finite as f64))
+    } else {
+        (None, None, None)
+    };
+    let summary = serde_json::json!({
+        "header": cube.header_path(),
+        "data": cube.data_path(),
+        "description": cube.description(),
+        "data_units": cube.data_units(),
+        "samples": cube.samples(),
+        "lines": cube.lines(),
+        "bands": cube.bands(),
+        "wavelength_nm": { "min": w_min, "max": w_max },
+        "value": { "min": min, "max": max, "mean": mean, "non_finite": non_finite },
+    });
+    print(&format!("{summary:#}\n"))
+}
+
+/// Write to stdout, returning an error rather than panicking (as `println!`
+/// does) when the reader has gone, e.g. `| head`.
+fn print(text: &str) -> AnyResult<()> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| Error::io("stdout", "write", e).into())
+}
