@@ -284,9 +284,15 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         Some(path) => Scene::load(path, &overrides)?,
         None => Scene::coastal(&overrides)?,
     };
-    std::fs::create_dir_all(&a.out).map_err(|e| littoral::Error::io(&a.out, "create directory", e))?;
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| littoral::Error::io(&a.out, "create directory", e))?;
     if !a.out.is_dir() {
-        return Err(littoral::Error::io(&a.out, "create directory", std::io::Error::other("not a directory")).into());
+        return Err(littoral::Error::io(
+            &a.out,
+            "create directory",
+            std::io::Error::other("not a directory"),
+        )
+        .into());
     }
     let t_scene = start.elapsed().as_secs_f64();
     let bars = Bars::new(a.quiet);
@@ -297,7 +303,10 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         .prefix(".littoral-map.")
         .tempfile_in(&a.out)
         .map_err(|e| littoral::Error::io(&a.out, "create", e))?;
-    let map_path = a.map.clone().unwrap_or_else(|| scratch_map.path().to_path_buf());
+    let map_path = a
+        .map
+        .clone()
+        .unwrap_or_else(|| scratch_map.path().to_path_buf());
     let sidecar = PathBuf::from(format!("{}.emission.json", map_path.display()));
     let reusable = a.map.is_some()
         && map_path.is_file()
@@ -306,7 +315,9 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
             .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
             .is_some_and(|v| v["scene_fingerprint"] == scene.fingerprint);
     let emission: serde_json::Value = if reusable {
-        serde_json::from_slice(&std::fs::read(&sidecar).map_err(|e| littoral::Error::io(&sidecar, "read", e))?)?
+        serde_json::from_slice(
+            &std::fs::read(&sidecar).map_err(|e| littoral::Error::io(&sidecar, "read", e))?,
+        )?
     } else {
         let options = BuildOptions {
             threads: a.threads,
@@ -370,7 +381,10 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     });
     report["peak_rss_bytes"] = serde_json::json!(peak);
     let json_path = a.out.join(format!("{}.json", scene.name));
-    littoral::output::write_atomic(&json_path, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())?;
+    littoral::output::write_atomic(
+        &json_path,
+        (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
+    )?;
     if !a.quiet {
         eprintln!(
             "rendered {} ({}x{} px, {} bands) into {} in {:.1} s (emit {:.1} s, render {:.1} s); peak memory {:.1} MiB",

@@ -1,1 +1,2 @@
+pub mod boundary;
 pub mod spectral;

@@ -32,16 +32,27 @@ pub fn ray(sensor: &Sensor, px: usize, py: usize, u: f32, v: f32) -> CameraRay {
                 direction: -Vec3::Z,
             }
         }
-        SensorKind::Pinhole { position, look_at, fov_deg } => {
+        SensorKind::Pinhole {
+            position,
+            look_at,
+            fov_deg,
+        } => {
             let forward = (*look_at - *position).normalize();
             // Image "up" leans toward +y when looking straight down.
-            let up_hint = if forward.cross(Vec3::Z).length() < 1e-6 { Vec3::Y } else { Vec3::Z };
+            let up_hint = if forward.cross(Vec3::Z).length() < 1e-6 {
+                Vec3::Y
+            } else {
+                Vec3::Z
+            };
             let right = forward.cross(up_hint).normalize();
             let up = right.cross(forward);
             let half = (fov_deg.to_radians() as f32 * 0.5).tan();
             let aspect = h as f32 / w as f32;
             let d = forward + right * (2.0 * sx * half) + up * (2.0 * sy * half * aspect);
-            CameraRay { origin: *position, direction: d.normalize() }
+            CameraRay {
+                origin: *position,
+                direction: d.normalize(),
+            }
         }
     }
 }
@@ -53,7 +64,10 @@ mod tests {
     #[test]
     fn orthographic_pixels_tile_the_footprint() {
         let s = Sensor {
-            kind: SensorKind::Orthographic { gsd_m: 0.5, center_m: [50.0, 50.0] },
+            kind: SensorKind::Orthographic {
+                gsd_m: 0.5,
+                center_m: [50.0, 50.0],
+            },
             pixels: [100, 80],
             samples_per_pixel: 1,
         };

@@ -15,6 +15,7 @@
 //! Not for: direct light (the renderer adds single scattering of the sun
 //! and direct sun on the floor by next-event estimation).
 
+use super::smooth::SmoothedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryMode};
 use crate::estimate::spectral::{combine, BandSums, SpectralMode};
@@ -28,6 +29,7 @@ use std::cell::RefCell;
 /// Reusable per-thread buffers of an estimate.
 pub struct Scratch {
     bands: usize,
+    mix: Vec<f32>,
     found: Vec<Neighbour>,
     local: BandSums,
     expanded: BandSums,
@@ -35,7 +37,13 @@ pub struct Scratch {
 
 impl Scratch {
     pub fn new(bands: usize) -> Self {
-        Scratch { bands, found: Vec::new(), local: BandSums::new(bands), expanded: BandSums::new(bands) }
+        Scratch {
+            bands,
+            mix: Vec::new(),
+            found: Vec::new(),
+            local: BandSums::new(bands),
+            expanded: BandSums::new(bands),
+        }
     }
 }
 
@@ -45,6 +53,9 @@ pub struct Estimator<'a> {
     pub map: &'a PhotonMap,
     pub boundary: BoundaryMode,
     pub spectral: SpectralMode,
+    /// Cone-averaged phase functions for photon weights (see `smooth`).
+    water_phase: SmoothedPhase,
+    particle_phase: SmoothedPhase,
 }
 
 impl<'a> Estimator<'a> {
@@ -59,13 +70,25 @@ impl<'a> Estimator<'a> {
             .spectral
             .parse::<SpectralMode>()
             .map_err(|e| crate::Error::invalid("estimate.spectral", e.to_string()))?;
-        Ok(Estimator { scene, map, boundary, spectral })
+        Ok(Estimator {
+            scene,
+            map,
+            boundary,
+            spectral,
+            water_phase: SmoothedPhase::new(&scene.water_phase),
+            particle_phase: SmoothedPhase::new(&scene.particle_phase),
+        })
     }
 
     fn search(&self, k: usize) -> Search {
         match self.scene.estimate.radius_m {
-            Some(r) => Search::Radius { radius: r as f32 * (k as f32 / self.scene.estimate.k as f32).cbrt() },
-            None => Search::Nearest { k, max_radius: Some(self.scene.estimate.max_radius_m as f32) },
+            Some(r) => Search::Radius {
+                radius: r as f32 * (k as f32 / self.scene.estimate.k as f32).cbrt(),
+            },
+            None => Search::Nearest {
+                k,
+                max_radius: Some(self.scene.estimate.max_radius_m as f32),
+            },
         }
     }
 
@@ -84,17 +107,19 @@ impl<'a> Estimator<'a> {
     ) -> Result<f64> {
         sums.clear();
         self.map.query_into(x, Some(layer), self.search(k), found)?;
-        let Some(last) = found.last() else { return Ok(0.0) };
-        let r = match self.scene.estimate.radius_m {
-            Some(_) => match self.search(k) {
-                Search::Radius { radius } => radius,
-                _ => unreachable!(),
-            },
-            None => last.distance_sq.sqrt().max(1e-6),
+        let Some(last) = found.last() else {
+            return Ok(0.0);
+        };
+        // The search region: the fixed radius, or the k-th distance — or the
+        // maximum radius when fewer than k photons lie within it.
+        let r = match self.search(k) {
+            Search::Radius { radius } => radius,
+            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
+            Search::Nearest { .. } => last.distance_sq.sqrt().max(1e-6),
         };
         if surface {
             for n in found.iter() {
-                sums.add(n.photon.band as usize, weight(n));
+                sums.add(n.photon.band, weight(n));
             }
             return Ok(std::f64::consts::PI * (r as f64).powi(2));
         }
@@ -114,7 +139,7 @@ impl<'a> Estimator<'a> {
             {
                 continue;
             }
-            sums.add(n.photon.band as usize, weight(n));
+            sums.add(n.photon.band, weight(n));
         }
         Ok(volume)
     }
@@ -122,30 +147,55 @@ impl<'a> Estimator<'a> {
     /// In-scattered radiance per band at `x` toward the viewer, for light
     /// leaving x along `toward_viewer` (W m^-3 sr^-1 nm^-1; integrate along
     /// the ray). `out` has one entry per band.
-    pub fn volume(&self, x: Vec3, toward_viewer: Vec3, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+    pub fn volume(
+        &self,
+        x: Vec3,
+        toward_viewer: Vec3,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        // The mixture weights of the two phase functions at x, per band.
         let water = &self.scene.water;
-        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
+        scratch.mix.clear();
+        scratch.mix.extend((0..self.scene.bands.len()).map(|b| {
+            let iop = water.iop(x, b);
+            let total = iop.b();
+            if total > 0.0 {
+                (iop.b_w / total) as f32
+            } else {
+                0.0
+            }
+        }));
+        let mix = std::mem::take(&mut scratch.mix);
+        let (pw, pp) = (&self.water_phase, &self.particle_phase);
         let weight = |n: &Neighbour| -> f64 {
-            let band = n.photon.band as usize;
-            let iop = water.iop(x, band);
+            let fw = mix[n.photon.band as usize] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
-            let b = iop.b();
-            let p = if b > 0.0 { (iop.b_w * pw.eval(cos) + iop.b_p * pp.eval(cos)) / b } else { 0.0 };
-            p * n.photon.power as f64
+            (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64
         };
-        self.estimate(x, LAYER_VOLUME, &weight, false, scratch, out)
+        let r = self.estimate(x, LAYER_VOLUME, &weight, false, scratch, out);
+        scratch.mix = mix;
+        r
     }
 
     /// Radiance per band leaving a Lambertian surface at `x` with unit
     /// normal `normal` (facing the water) from the surface photon map.
-    pub fn surface(&self, x: Vec3, normal: Vec3, surface: SurfaceId, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+    pub fn surface(
+        &self,
+        x: Vec3,
+        normal: Vec3,
+        surface: SurfaceId,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
         let scene = self.scene;
         let weight = |n: &Neighbour| -> f64 {
             // Only light arriving on this side of the surface counts.
             if n.photon.direction.dot(normal) >= 0.0 {
                 return 0.0;
             }
-            scene.reflectance(surface, x, n.photon.band as usize) / std::f64::consts::PI * n.photon.power as f64
+            scene.reflectance(surface, x, n.photon.band as usize) / std::f64::consts::PI
+                * n.photon.power as f64
         };
         self.estimate(x, LAYER_SURFACE, &weight, true, scratch, out)
     }
@@ -159,7 +209,12 @@ impl<'a> Estimator<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
-        let Scratch { found, local, expanded, .. } = scratch;
+        let Scratch {
+            found,
+            local,
+            expanded,
+            ..
+        } = scratch;
         let k = self.scene.estimate.k;
         let v_local = self.gather(x, layer, k, found, local, weight, surface)?;
         if v_local <= 0.0 {
@@ -167,7 +222,15 @@ impl<'a> Estimator<'a> {
             return Ok(());
         }
         let v_expanded = if self.spectral == SpectralMode::Compensated {
-            self.gather(x, layer, self.scene.estimate.k_expanded, found, expanded, weight, surface)?
+            self.gather(
+                x,
+                layer,
+                self.scene.estimate.k_expanded,
+                found,
+                expanded,
+                weight,
+                surface,
+            )?
         } else {
             0.0
         };

@@ -46,9 +46,25 @@ impl<'a> Light<'a> {
         let t = 1.0 - fresnel_reflectance(cos_s, 1.0, n);
         // Horizontal irradiance is kept (times Fresnel transmittance); the
         // beam narrows by cos_w / cos_s.
-        let e_w = scene.sun.irradiance.iter().map(|e| e * t * cos_s / cos_w).collect();
-        let sky_l = scene.sky.irradiance.iter().map(|e| e / std::f64::consts::PI).collect();
-        Light { scene, est, sun_w: sun_w.as_vec3(), e_w, sky_l }
+        let e_w = scene
+            .sun
+            .irradiance
+            .iter()
+            .map(|e| e * t * cos_s / cos_w)
+            .collect();
+        let sky_l = scene
+            .sky
+            .irradiance
+            .iter()
+            .map(|e| e / std::f64::consts::PI)
+            .collect();
+        Light {
+            scene,
+            est,
+            sun_w: sun_w.as_vec3(),
+            e_w,
+            sky_l,
+        }
     }
 
     fn bands(&self) -> usize {
@@ -78,14 +94,25 @@ impl<'a> Light<'a> {
 
     /// Radiance per band arriving at `p0` (in water) travelling along `-dir`,
     /// i.e. what an instrument at p0 looking along `dir` sees.
-    pub fn march(&self, p0: Vec3, dir: Vec3, rng: &mut Pcg32, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+    pub fn march(
+        &self,
+        p0: Vec3,
+        dir: Vec3,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
         let nb = self.bands();
         let scene = self.scene;
         out.iter_mut().for_each(|o| *o = 0.0);
         let mut tr = vec![1.0f64; nb];
         let mut est = vec![0.0f64; nb];
         let mut sun_t = vec![0.0f64; nb];
-        let t_surface = if dir.z > 0.0 { -p0.z / dir.z } else { f32::INFINITY };
+        let t_surface = if dir.z > 0.0 {
+            -p0.z / dir.z
+        } else {
+            f32::INFINITY
+        };
         let limit = t_surface.min(MAX_MARCH_M);
         let hit = scene.geometry.intersect(p0, dir, limit);
         let t_end = hit.map_or(limit, |h| h.t);
@@ -119,7 +146,8 @@ impl<'a> Light<'a> {
             let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
             let x = h.position + n * 1e-3;
             self.sun_transmittance(x, &mut sun_t);
-            self.est.surface(h.position, n, h.surface, scratch, &mut est)?;
+            self.est
+                .surface(h.position, n, h.surface, scratch, &mut est)?;
             for b in 0..nb {
                 let r = scene.reflectance(h.surface, h.position, b);
                 let direct = self.e_w[b] * sun_t[b] * cos_n * r / std::f64::consts::PI;
@@ -137,7 +165,13 @@ impl<'a> Light<'a> {
     }
 
     /// Radiance per band reaching a sensor along `ray` (in air, toward the water).
-    pub fn camera(&self, ray: CameraRay, rng: &mut Pcg32, scratch: &mut Scratch, out: &mut [f64]) -> Result<()> {
+    pub fn camera(
+        &self,
+        ray: CameraRay,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
         let scene = self.scene;
         let d = ray.direction;
         if d.z >= 0.0 {

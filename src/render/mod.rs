@@ -13,6 +13,7 @@
 pub mod camera;
 pub mod estimator;
 pub mod light;
+pub mod smooth;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
@@ -60,7 +61,13 @@ pub struct Rendered {
 
 /// Render `scene` from `map` into `dir/NAME.{hdr,bsq,png}` with `threads`
 /// threads (0 = all cores).
-pub fn render(scene: &Scene, map: &PhotonMap, dir: &Path, threads: usize, progress: &dyn Progress) -> Result<Rendered> {
+pub fn render(
+    scene: &Scene,
+    map: &PhotonMap,
+    dir: &Path,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<Rendered> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -101,8 +108,13 @@ pub fn render(scene: &Scene, map: &PhotonMap, dir: &Path, threads: usize, progre
                             let pixel = (gy * w + gx) as u64;
                             acc.iter_mut().for_each(|a| *a = 0.0);
                             for s in 0..spp {
-                                let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
-                                let (u, v) = if spp == 1 { (0.5, 0.5) } else { (rng.uniform_f32(), rng.uniform_f32()) };
+                                let mut rng =
+                                    Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
+                                let (u, v) = if spp == 1 {
+                                    (0.5, 0.5)
+                                } else {
+                                    (rng.uniform_f32(), rng.uniform_f32())
+                                };
                                 let ray = camera::ray(&scene.sensor, gx, gy, u, v);
                                 light.camera(ray, &mut rng, scratch, &mut sample)?;
                                 acc.iter_mut().zip(&sample).for_each(|(a, s)| *a += s);
@@ -137,15 +149,31 @@ pub fn render(scene: &Scene, map: &PhotonMap, dir: &Path, threads: usize, progre
     write_png(&png, w, h, &image, None)?;
     let (hdr, bsq) = writer.finish()?;
     let radiometers = pool.install(|| {
-        scene.radiometers.par_iter().enumerate().map(|(i, r)| read_radiometer(&light, i as u64, r)).collect::<Result<Vec<_>>>()
+        scene
+            .radiometers
+            .par_iter()
+            .enumerate()
+            .map(|(i, r)| read_radiometer(&light, i as u64, r))
+            .collect::<Result<Vec<_>>>()
     })?;
-    Ok(Rendered { hdr, bsq, png, radiometers, cache: map.cache_stats() })
+    Ok(Rendered {
+        hdr,
+        bsq,
+        png,
+        radiometers,
+        cache: map.cache_stats(),
+    })
 }
 
 /// Radiometer readings only (no image).
 pub fn radiometers(scene: &Scene, map: &PhotonMap) -> Result<Vec<RadiometerReading>> {
     let light = Light::new(scene, Estimator::new(scene, map)?);
-    scene.radiometers.iter().enumerate().map(|(i, r)| read_radiometer(&light, i as u64, r)).collect()
+    scene
+        .radiometers
+        .iter()
+        .enumerate()
+        .map(|(i, r)| read_radiometer(&light, i as u64, r))
+        .collect()
 }
 
 fn read_radiometer(light: &Light, index: u64, r: &Radiometer) -> Result<RadiometerReading> {
@@ -159,11 +187,23 @@ fn read_radiometer(light: &Light, index: u64, r: &Radiometer) -> Result<Radiomet
             // Jitter within a 0.5 m footprint: the spread gives the error.
             let jx = (rng.uniform_f64() - 0.5) * 0.5;
             let jy = (rng.uniform_f64() - 0.5) * 0.5;
-            let p = Vec3::new((r.position_m[0] + jx) as f32, (r.position_m[1] + jy) as f32, -r.depth_m as f32);
+            let p = Vec3::new(
+                (r.position_m[0] + jx) as f32,
+                (r.position_m[1] + jy) as f32,
+                -r.depth_m as f32,
+            );
             if r.depth_m > 0.0 {
                 light.march(p, r.view, &mut rng, scratch, &mut one)?;
             } else {
-                light.camera(camera::CameraRay { origin: p, direction: r.view }, &mut rng, scratch, &mut one)?;
+                light.camera(
+                    camera::CameraRay {
+                        origin: p,
+                        direction: r.view,
+                    },
+                    &mut rng,
+                    scratch,
+                    &mut one,
+                )?;
             }
             for b in 0..nb {
                 sum[b] += one[b];
@@ -174,8 +214,18 @@ fn read_radiometer(light: &Light, index: u64, r: &Radiometer) -> Result<Radiomet
     })?;
     let n = RADIOMETER_SAMPLES as f64;
     let l: Vec<f64> = sum.iter().map(|s| s / n).collect();
-    let se = sum_sq.iter().zip(&l).map(|(s2, m)| ((s2 / n - m * m).max(0.0) / (n - 1.0)).sqrt()).collect();
-    Ok(RadiometerReading { depth_m: r.depth_m, view: r.view_name.clone(), position_m: r.position_m, L: l, stderr: se })
+    let se = sum_sq
+        .iter()
+        .zip(&l)
+        .map(|(s2, m)| ((s2 / n - m * m).max(0.0) / (n - 1.0)).sqrt())
+        .collect();
+    Ok(RadiometerReading {
+        depth_m: r.depth_m,
+        view: r.view_name.clone(),
+        position_m: r.position_m,
+        L: l,
+        stderr: se,
+    })
 }
 
 /// 2-D Morton code for the tile order.

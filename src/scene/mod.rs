@@ -91,7 +91,11 @@ pub enum SensorKind {
     /// Looking straight down; pixel (0, 0) is at the low-x, high-y corner.
     Orthographic { gsd_m: f64, center_m: [f64; 2] },
     /// A pinhole camera above the water.
-    Pinhole { position: Vec3, look_at: Vec3, fov_deg: f64 },
+    Pinhole {
+        position: Vec3,
+        look_at: Vec3,
+        fov_deg: f64,
+    },
 }
 
 /// The imaging sensor.

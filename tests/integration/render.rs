@@ -28,11 +28,20 @@ impl PhotonSource for UniformBox {
     fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
         for i in range {
             let mut r = Pcg32::new(77, i);
-            let p = Vec3::new(r.uniform_f32() * self.size.x, r.uniform_f32() * self.size.y, -r.uniform_f32() * self.size.z);
+            let p = Vec3::new(
+                r.uniform_f32() * self.size.x,
+                r.uniform_f32() * self.size.y,
+                -r.uniform_f32() * self.size.z,
+            );
             let z = 1.0 - 2.0 * r.uniform_f32();
             let s = (1.0 - z * z).max(0.0).sqrt();
             let phi = std::f32::consts::TAU * r.uniform_f32();
-            let photon = Photon { position: p, direction: Vec3::new(s * phi.cos(), s * phi.sin(), z), band: 0, power: 1.0 };
+            let photon = Photon {
+                position: p,
+                direction: Vec3::new(s * phi.cos(), s * phi.sin(), z),
+                band: 0,
+                power: 1.0,
+            };
             out.push(StagedPhoton::new(&photon, LAYER_VOLUME, i));
         }
     }
@@ -40,7 +49,10 @@ impl PhotonSource for UniformBox {
         littoral::BandGrid::even(500.0, 500.0, 1).unwrap()
     }
     fn bounds(&self) -> Aabb {
-        Aabb { min: Vec3::new(0.0, 0.0, -self.size.z), max: Vec3::new(self.size.x, self.size.y, 0.0) }
+        Aabb {
+            min: Vec3::new(0.0, 0.0, -self.size.z),
+            max: Vec3::new(self.size.x, self.size.y, 0.0),
+        }
     }
 }
 
@@ -76,7 +88,10 @@ spectral = "naive"
 #[test]
 fn boundary_compensation_recovers_uniform_density() {
     let dir = tempdir();
-    let src = UniformBox { n: 1_300_000, size: Vec3::new(2.0, 2.0, 1.0) };
+    let src = UniformBox {
+        n: 1_300_000,
+        size: Vec3::new(2.0, 2.0, 1.0),
+    };
     let path = dir.path().join("box.map");
     build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
     let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
@@ -90,7 +105,10 @@ fn boundary_compensation_recovers_uniform_density() {
         ("corner", Vec3::new(e, e, -1.0 + e), 0.125),
     ];
     for mode in ["none", "ellipsoid", "clipped-sphere"] {
-        let o = Overrides { boundary: Some(mode), ..Overrides::default() };
+        let o = Overrides {
+            boundary: Some(mode),
+            ..Overrides::default()
+        };
         let scene = Scene::parse(BOX_SCENE, Path::new("box.toml"), &o).unwrap();
         let est = Estimator::new(&scene, &map).unwrap();
         let mut scratch = Scratch::new(1);
@@ -101,7 +119,10 @@ fn boundary_compensation_recovers_uniform_density() {
             let want = if mode == "none" { fraction } else { 1.0 };
             let tol = if mode == "none" { 0.06 * want } else { 0.03 };
             eprintln!("{mode:>14} {name:>8}: {ratio:.4} of truth");
-            assert!((ratio - want).abs() < tol, "{mode} at {name}: {ratio} of truth, want {want}");
+            assert!(
+                (ratio - want).abs() < tol,
+                "{mode} at {name}: {ratio} of truth, want {want}"
+            );
         }
     }
 }
@@ -142,18 +163,33 @@ step_m = 0.25
 }
 
 fn littoral(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_littoral")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn render_json(dir: &Path, scene: &str, extra: &[&str]) -> serde_json::Value {
     let path = dir.join("scene.toml");
     std::fs::write(&path, scene).unwrap();
     let out_dir = dir.join("out");
-    let mut args = vec!["render", path.to_str().unwrap(), "--out", out_dir.to_str().unwrap(), "--quiet"];
+    let mut args = vec![
+        "render",
+        path.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--quiet",
+    ];
     args.extend_from_slice(extra);
     let out = littoral(&args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let name = serde_json::from_slice::<serde_json::Value>(&std::fs::read(out_dir.join("deep.json")).unwrap());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let name = serde_json::from_slice::<serde_json::Value>(
+        &std::fs::read(out_dir.join("deep.json")).unwrap(),
+    );
     name.unwrap()
 }
 
@@ -173,11 +209,16 @@ fn camera_radiometers_and_kd_agree() {
         let se0 = r["radiometers"][0]["stderr"][b].as_f64().unwrap();
         let band = cube.band(b).unwrap();
         let mean = band.iter().map(|&v| v as f64).sum::<f64>() / band.len() as f64;
-        let sd = (band.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / (band.len() - 1) as f64).sqrt();
+        let sd = (band.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>()
+            / (band.len() - 1) as f64)
+            .sqrt();
         let se_cam = sd / (band.len() as f64).sqrt();
         let want = lu0 * t / (n * n);
         let se = (se_cam * se_cam + (se0 * t / (n * n)).powi(2)).sqrt();
-        assert!((mean - want).abs() < 3.0 * se + 0.02 * want, "band {b}: camera {mean} vs radiometer {want} (se {se})");
+        assert!(
+            (mean - want).abs() < 3.0 * se + 0.02 * want,
+            "band {b}: camera {mean} vs radiometer {want} (se {se})"
+        );
         // Lu decays with about Kd (asymptotic-regime agreement within 10 %).
         let lu1 = r["radiometers"][1]["L"][b].as_f64().unwrap();
         let lu4 = r["radiometers"][2]["L"][b].as_f64().unwrap();
@@ -185,7 +226,10 @@ fn camera_radiometers_and_kd_agree() {
         let ed1 = r["tally"][1]["Ed"][b].as_f64().unwrap();
         let ed4 = r["tally"][3]["Ed"][b].as_f64().unwrap();
         let kd = (ed1 / ed4).ln() / 3.0;
-        assert!((k_lu / kd - 1.0).abs() < 0.1, "band {b}: K_Lu {k_lu} vs Kd {kd}");
+        assert!(
+            (k_lu / kd - 1.0).abs() < 0.1,
+            "band {b}: K_Lu {k_lu} vs Kd {kd}"
+        );
     }
 }
 
@@ -195,7 +239,11 @@ fn cube_is_identical_for_any_thread_count() {
     let mut cubes = Vec::new();
     for threads in ["1", "2"] {
         let dir = tempdir();
-        render_json(dir.path(), &deep_scene(""), &["--threads", threads, "--photons", "50000"]);
+        render_json(
+            dir.path(),
+            &deep_scene(""),
+            &["--threads", threads, "--photons", "50000"],
+        );
         cubes.push(std::fs::read(dir.path().join("out/deep.bsq")).unwrap());
     }
     assert!(!cubes[0].is_empty() && cubes[0] == cubes[1]);
@@ -205,25 +253,65 @@ fn cube_is_identical_for_any_thread_count() {
 #[test]
 fn render_outputs_and_errors() {
     let dir = tempdir();
-    let r = render_json(dir.path(), &deep_scene(""), &["--photons", "20000", "--boundary", "ellipsoid", "--spectral", "naive"]);
+    let r = render_json(
+        dir.path(),
+        &deep_scene(""),
+        &[
+            "--photons",
+            "20000",
+            "--boundary",
+            "ellipsoid",
+            "--spectral",
+            "naive",
+        ],
+    );
     for f in ["deep.hdr", "deep.bsq", "deep.png", "deep.json"] {
         assert!(dir.path().join("out").join(f).is_file(), "{f}");
     }
     let hdr = std::fs::read_to_string(dir.path().join("out/deep.hdr")).unwrap();
-    for key in ["samples = 4", "lines = 4", "bands = 2", "interleave = bsq", "wavelength units = Nanometers", "wavelength = {", "fwhm = {"] {
+    for key in [
+        "samples = 4",
+        "lines = 4",
+        "bands = 2",
+        "interleave = bsq",
+        "wavelength units = Nanometers",
+        "wavelength = {",
+        "fwhm = {",
+    ] {
         assert!(hdr.contains(key), "{key} missing from header:\n{hdr}");
     }
     assert_eq!(r["estimate"]["boundary"], "ellipsoid");
     assert_eq!(r["estimate"]["spectral"], "naive");
     assert_eq!(r["Ed_above_surface"].as_array().unwrap().len(), 2);
     assert!(r["cache"]["misses"].as_u64().unwrap() > 0);
-    let missing = littoral(&["render", dir.path().join("nope.toml").to_str().unwrap(), "--out", dir.path().join("o2").to_str().unwrap()]);
+    let missing = littoral(&[
+        "render",
+        dir.path().join("nope.toml").to_str().unwrap(),
+        "--out",
+        dir.path().join("o2").to_str().unwrap(),
+    ]);
     assert_eq!(missing.status.code(), Some(1));
     let file = dir.path().join("plain");
     std::fs::write(&file, b"x").unwrap();
-    let bad_out = littoral(&["render", dir.path().join("scene.toml").to_str().unwrap(), "--out", file.join("sub").to_str().unwrap()]);
+    let bad_out = littoral(&[
+        "render",
+        dir.path().join("scene.toml").to_str().unwrap(),
+        "--out",
+        file.join("sub").to_str().unwrap(),
+    ]);
     assert_eq!(bad_out.status.code(), Some(1));
-    assert_eq!(String::from_utf8_lossy(&bad_out.stderr).trim_end().lines().count(), 1);
-    let bad_mode = littoral(&["render", dir.path().join("scene.toml").to_str().unwrap(), "--boundary", "cube"]);
+    assert_eq!(
+        String::from_utf8_lossy(&bad_out.stderr)
+            .trim_end()
+            .lines()
+            .count(),
+        1
+    );
+    let bad_mode = littoral(&[
+        "render",
+        dir.path().join("scene.toml").to_str().unwrap(),
+        "--boundary",
+        "cube",
+    ]);
     assert_eq!(bad_mode.status.code(), Some(1));
 }
