@@ -14,6 +14,8 @@
 //!   ([`store::build_map`], [`store::MapFile`]).
 //! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
 //! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
+//! - [`estimate`]: density estimation; so far the boundary-bias compensation
+//!   ([`estimate::boundary::BoundaryMode`]).
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
@@ -23,6 +25,7 @@
 pub mod cache;
 pub mod emit;
 pub mod error;
+pub mod estimate;
 pub mod geometry;
 pub mod mem;
 pub mod optics;
