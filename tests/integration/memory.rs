@@ -88,3 +88,36 @@ fn emit_builtin_scene_within_64mib() {
     eprintln!("emit: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
     assert!(peak > MIB && peak <= 64 * MIB + OVERHEAD, "peak {peak}");
 }
+
+/// A reduced render of the built-in scene (300 k photons, 64 x 64 pixels,
+/// 128 bands) under `--mem-budget 64MiB`: emission, the tile cache and the
+/// cube writer all stay inside the budget plus the fixed overhead.
+#[test]
+fn render_builtin_scene_within_64mib() {
+    let dir = tempdir();
+    let scene = dir.path().join("coastal.toml");
+    let text = littoral::scene::COASTAL_TOML
+        .replace("pixels = [256, 256]", "pixels = [64, 64]")
+        .replace("gsd_m = 0.75", "gsd_m = 3.0");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .arg("render")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .args(["--photons", "300000", "--mem-budget", "64MiB", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("coastal.json")).unwrap()).unwrap();
+    let peak = r["peak_rss_bytes"].as_u64().unwrap();
+    eprintln!("render: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
+    assert!(peak > MIB && peak <= 64 * MIB + OVERHEAD, "peak {peak}");
+    assert!(r["cache"]["peak_resident_bytes"].as_u64().unwrap() <= 64 * MIB);
+}

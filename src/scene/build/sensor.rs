@@ -1,0 +1,189 @@
+//! Validation of the rendering keys: `[sensor]`, `[[radiometer]]` and
+//! `[estimate]`.
+
+use super::*;
+
+pub(super) fn render_settings(
+    ctx: &Ctx,
+    f: &SceneFile,
+    domain: &Domain,
+    ov: &Overrides,
+) -> Result<(Sensor, Vec<Radiometer>, EstimateSettings)> {
+    let sk = |k| [K("sensor"), K(k)];
+    let default = SensorFile {
+        kind: None,
+        pixels: None,
+        gsd_m: None,
+        samples_per_pixel: None,
+        center_m: None,
+        position_m: None,
+        look_at_m: None,
+        fov_deg: None,
+    };
+    let s = f.sensor.as_ref().unwrap_or(&default);
+    let pixels = s.pixels.unwrap_or([256, 256]);
+    if pixels.iter().any(|&p| p == 0 || p > 65_536) {
+        return Err(ctx.err(
+            &sk("pixels"),
+            "must be between 1 and 65536 in each direction",
+        ));
+    }
+    let spp = s.samples_per_pixel.unwrap_or(1);
+    if spp == 0 || spp > 65_536 {
+        return Err(ctx.err(&sk("samples_per_pixel"), "must be between 1 and 65536"));
+    }
+    let vec3 = |v: [f64; 3]| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
+    let kind =
+        match s.kind.as_deref() {
+            None | Some("orthographic") => {
+                let gsd = s.gsd_m.unwrap_or(
+                    domain.size_m[0].min(domain.size_m[1]) / pixels[0].max(pixels[1]) as f64,
+                );
+                if !finite_in(gsd, 1e-6, 1e6) {
+                    return Err(ctx.err(
+                        &sk("gsd_m"),
+                        "must be a positive ground sample distance (m)",
+                    ));
+                }
+                let center_m = s
+                    .center_m
+                    .unwrap_or([domain.size_m[0] / 2.0, domain.size_m[1] / 2.0]);
+                if !center_m.iter().all(|v| v.is_finite()) {
+                    return Err(ctx.err(&sk("center_m"), "must be finite"));
+                }
+                SensorKind::Orthographic {
+                    gsd_m: gsd,
+                    center_m,
+                }
+            }
+            Some("pinhole") => {
+                let position = vec3(s.position_m.ok_or_else(|| {
+                    ctx.err(&sk("position_m"), "a pinhole camera needs position_m")
+                })?);
+                let look_at = vec3(s.look_at_m.ok_or_else(|| {
+                    ctx.err(&sk("look_at_m"), "a pinhole camera needs look_at_m")
+                })?);
+                if !(position.is_finite() && position.z > 0.0) {
+                    return Err(ctx.err(&sk("position_m"), "must be above the water (z > 0)"));
+                }
+                if !look_at.is_finite() || (look_at - position).length() < 1e-6 {
+                    return Err(ctx.err(&sk("look_at_m"), "must differ from position_m"));
+                }
+                let fov_deg = s.fov_deg.unwrap_or(30.0);
+                if !finite_in(fov_deg, 0.01, 170.0) {
+                    return Err(ctx.err(&sk("fov_deg"), "must be between 0.01 and 170 degrees"));
+                }
+                SensorKind::Pinhole {
+                    position,
+                    look_at,
+                    fov_deg,
+                }
+            }
+            Some(o) => {
+                return Err(ctx.err(
+                    &sk("kind"),
+                    format!("'{o}': use \"orthographic\" or \"pinhole\""),
+                ))
+            }
+        };
+    let sensor = Sensor {
+        kind,
+        pixels,
+        samples_per_pixel: spp,
+    };
+
+    let mut radiometers = Vec::new();
+    for (i, r) in f.radiometer.iter().enumerate() {
+        let rk = |k| [K("radiometer"), I(i), K(k)];
+        if !finite_in(r.depth_m, -1e5, 1e5) || r.depth_m == 0.0 {
+            return Err(ctx.err(
+                &rk("depth_m"),
+                "must be a finite depth, not 0 (positive below the surface, negative above)",
+            ));
+        }
+        let (name, view) = match &r.view {
+            None => ("nadir".to_string(), -Vec3::Z),
+            Some(View::Named(n)) if n == "nadir" => (n.clone(), -Vec3::Z),
+            Some(View::Named(n)) if n == "zenith" => (n.clone(), Vec3::Z),
+            Some(View::Vector(v))
+                if v.iter().all(|x| x.is_finite()) && vec3(*v).length() > 1e-6 =>
+            {
+                (format!("{},{},{}", v[0], v[1], v[2]), vec3(*v).normalize())
+            }
+            Some(_) => {
+                return Err(ctx.err(
+                    &rk("view"),
+                    "use \"nadir\", \"zenith\" or a non-zero [x, y, z]",
+                ))
+            }
+        };
+        let position_m = r
+            .position_m
+            .unwrap_or([domain.size_m[0] / 2.0, domain.size_m[1] / 2.0]);
+        if !position_m.iter().all(|v| v.is_finite()) {
+            return Err(ctx.err(&rk("position_m"), "must be finite"));
+        }
+        radiometers.push(Radiometer {
+            depth_m: r.depth_m,
+            view_name: name,
+            view,
+            position_m,
+        });
+    }
+
+    let e = &f.estimate;
+    let ek = |k| [K("estimate"), K(k)];
+    let k = e.k.unwrap_or(64);
+    if k == 0 || k > 100_000 {
+        return Err(ctx.err(&ek("k"), "must be between 1 and 100000"));
+    }
+    let k_expanded = e.k_expanded.unwrap_or(8 * k);
+    if k_expanded < k || k_expanded > 1_000_000 {
+        return Err(ctx.err(&ek("k_expanded"), "must be at least k and at most 1000000"));
+    }
+    if let Some(r) = e.radius_m {
+        if !finite_in(r, 1e-6, 1e4) {
+            return Err(ctx.err(&ek("radius_m"), "must be a positive radius (m)"));
+        }
+    }
+    let max_radius_m = e.max_radius_m.unwrap_or(2.0);
+    if !finite_in(max_radius_m, 1e-6, 1e4) {
+        return Err(ctx.err(&ek("max_radius_m"), "must be a positive radius (m)"));
+    }
+    let step_m = e.step_m.unwrap_or(0.5);
+    if !finite_in(step_m, 1e-3, 1e3) {
+        return Err(ctx.err(&ek("step_m"), "must be a positive step (m)"));
+    }
+    let boundary = ov
+        .boundary
+        .map(str::to_string)
+        .or_else(|| e.boundary.clone())
+        .unwrap_or_else(|| "clipped-sphere".into());
+    if !["none", "ellipsoid", "clipped-sphere"].contains(&boundary.as_str()) {
+        return Err(ctx.err(
+            &ek("boundary"),
+            format!("'{boundary}': use \"none\", \"ellipsoid\" or \"clipped-sphere\""),
+        ));
+    }
+    let spectral = ov
+        .spectral
+        .map(str::to_string)
+        .or_else(|| e.spectral.clone())
+        .unwrap_or_else(|| "compensated".into());
+    if !["naive", "compensated"].contains(&spectral.as_str()) {
+        return Err(ctx.err(
+            &ek("spectral"),
+            format!("'{spectral}': use \"naive\" or \"compensated\""),
+        ));
+    }
+    let estimate = EstimateSettings {
+        k,
+        radius_m: e.radius_m,
+        max_radius_m,
+        k_expanded,
+        boundary,
+        spectral,
+        step_m,
+    };
+    Ok((sensor, radiometers, estimate))
+}
