@@ -75,8 +75,11 @@ impl<'a> Estimator<'a> {
             map,
             boundary,
             spectral,
-            water_phase: SmoothedPhase::new(&scene.water_phase),
-            particle_phase: SmoothedPhase::new(&scene.particle_phase),
+            water_phase: SmoothedPhase::new(&scene.water_phase, scene.estimate.phase_cone_deg),
+            particle_phase: SmoothedPhase::new(
+                &scene.particle_phase,
+                scene.estimate.phase_cone_deg,
+            ),
         })
     }
 

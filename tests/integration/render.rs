@@ -238,9 +238,10 @@ fn camera_radiometers_and_kd_agree() {
         let ku = (eu1 / eu6).ln() / 5.0;
         eprintln!("band {b}: K_Lu {k_lu:.4}, K_Eu {ku:.4}, Kd {kd:.4}; camera {mean:.4e}, radiometer through the surface {want:.4e}");
         // Measured: K_Lu 0.279 against Kd 0.358 and K_Eu 0.341 over 1-6 m,
-        // outside the 10 % the render issue asks for and not yet explained
-        // (photon noise correlated over the search radius, the 30-degree
-        // phase smoothing, or a real bias). Only the scale is asserted.
+        // outside the 10 % the render issue asks for: the 30-degree phase
+        // smoothing biases Lu's decay low, and a 10-degree cone leaves too
+        // much photon noise at 2 M photons (see render::smooth). Only the
+        // scale is asserted until the estimate gets both right.
         assert!(
             k_lu > 0.5 * kd && k_lu < 1.5 * kd,
             "band {b}: K_Lu {k_lu} vs Kd {kd}"

@@ -176,6 +176,12 @@ pub(super) fn render_settings(
             format!("'{spectral}': use \"naive\" or \"compensated\""),
         ));
     }
+    let phase_cone_deg = e
+        .phase_cone_deg
+        .unwrap_or(crate::render::smooth::DEFAULT_CONE_HALF_ANGLE_DEG);
+    if !finite_in(phase_cone_deg, 0.0, 90.0) {
+        return Err(ctx.err(&ek("phase_cone_deg"), "must be between 0 and 90 degrees"));
+    }
     let estimate = EstimateSettings {
         k,
         radius_m: e.radius_m,
@@ -184,6 +190,7 @@ pub(super) fn render_settings(
         boundary,
         spectral,
         step_m,
+        phase_cone_deg,
     };
     Ok((sensor, radiometers, estimate))
 }
