@@ -31,6 +31,7 @@ pub struct Scratch {
     bands: usize,
     mix: Vec<f32>,
     found: Vec<Neighbour>,
+    extra: Vec<Neighbour>,
     local: BandSums,
     expanded: BandSums,
 }
@@ -41,6 +42,7 @@ impl Scratch {
             bands,
             mix: Vec::new(),
             found: Vec::new(),
+            extra: Vec::new(),
             local: BandSums::new(bands),
             expanded: BandSums::new(bands),
         }
@@ -104,12 +106,17 @@ impl<'a> Estimator<'a> {
         layer: u16,
         k: usize,
         found: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
         sums: &mut BandSums,
         weight: &dyn Fn(&Neighbour) -> f64,
         surface: bool,
     ) -> Result<f64> {
         sums.clear();
-        self.map.query_into(x, Some(layer), self.search(k), found)?;
+        let search = self.search(k);
+        self.map.query_into(x, Some(layer), search, found)?;
+        if self.scene.domain.periodic {
+            self.wrap_search(x, layer, k, search, found, extra)?;
+        }
         let Some(last) = found.last() else {
             return Ok(0.0);
         };
@@ -145,6 +152,64 @@ impl<'a> Estimator<'a> {
             sums.add(n.photon.band, weight(n));
         }
         Ok(volume)
+    }
+
+    /// With periodic domain edges a search sphere that crosses an edge
+    /// continues on the far side: the periodic images of `x` are searched
+    /// too and their photons merged, moved by the period so that offsets
+    /// stay relative to x.
+    fn wrap_search(
+        &self,
+        x: Vec3,
+        layer: u16,
+        k: usize,
+        search: Search,
+        found: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        let r = match search {
+            Search::Radius { radius } => radius,
+            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
+            Search::Nearest { .. } => found.last().map_or(0.0, |n| n.distance_sq.sqrt()),
+        };
+        let [lx, ly] = self.scene.domain.size_m.map(|v| v as f32);
+        let shift = |c: f32, l: f32| -> f32 {
+            if c < r {
+                l
+            } else if c > l - r {
+                -l
+            } else {
+                0.0
+            }
+        };
+        let (ox, oy) = (shift(x.x, lx), shift(x.y, ly));
+        let mut offsets = Vec::with_capacity(3);
+        if ox != 0.0 {
+            offsets.push(Vec3::new(ox, 0.0, 0.0));
+        }
+        if oy != 0.0 {
+            offsets.push(Vec3::new(0.0, oy, 0.0));
+        }
+        if ox != 0.0 && oy != 0.0 {
+            offsets.push(Vec3::new(ox, oy, 0.0));
+        }
+        if offsets.is_empty() {
+            return Ok(());
+        }
+        for offset in offsets {
+            self.map
+                .query_into(x + offset, Some(layer), search, extra)?;
+            found.extend(extra.iter().map(|n| {
+                let mut n = *n;
+                n.photon.position -= offset;
+                n
+            }));
+        }
+        found.sort_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq));
+        if let Search::Nearest { k, .. } = search {
+            found.truncate(k);
+        }
+        Ok(())
     }
 
     /// In-scattered radiance per band at `x` toward the viewer, for light
@@ -214,12 +279,13 @@ impl<'a> Estimator<'a> {
     ) -> Result<()> {
         let Scratch {
             found,
+            extra,
             local,
             expanded,
             ..
         } = scratch;
         let k = self.scene.estimate.k;
-        let v_local = self.gather(x, layer, k, found, local, weight, surface)?;
+        let v_local = self.gather(x, layer, k, found, extra, local, weight, surface)?;
         if v_local <= 0.0 {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
@@ -230,6 +296,7 @@ impl<'a> Estimator<'a> {
                 layer,
                 self.scene.estimate.k_expanded,
                 found,
+                extra,
                 expanded,
                 weight,
                 surface,
