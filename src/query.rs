@@ -11,7 +11,7 @@
 
 use crate::cache::{CacheStats, TileCache};
 use crate::error::Result;
-use crate::photon::Photon;
+use crate::photon::{PackedPhoton, Photon};
 use crate::store::codec::morton3;
 use crate::store::MapFile;
 use glam::Vec3;
@@ -36,8 +36,12 @@ pub enum Search {
     Radius { radius: f32 },
 }
 
+/// Per-thread query scratch: candidate tiles, and results with directions
+/// still packed.
+type QueryScratch = (Vec<(f32, u32)>, Vec<(f32, PackedPhoton)>);
+
 thread_local! {
-    static CANDIDATES: std::cell::RefCell<Vec<(f32, u32)>> = const { std::cell::RefCell::new(Vec::new()) };
+    static CANDIDATES: std::cell::RefCell<QueryScratch> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// A map file with its tile cache: the query interface of the store.
@@ -103,8 +107,15 @@ impl PhotonMap {
             return Ok(());
         }
         CANDIDATES.with(|c| {
-            let mut candidates = c.borrow_mut();
-            self.search_tiles(at, layer, k, limit_sq, &mut candidates, out)
+            let (candidates, packed) = &mut *c.borrow_mut();
+            packed.clear();
+            self.search_tiles(at, layer, k, limit_sq, candidates, packed)?;
+            // Directions are decoded only for the photons that made the cut.
+            out.extend(packed.iter().map(|(d, p)| Neighbour {
+                photon: p.unpack(),
+                distance_sq: *d,
+            }));
+            Ok(())
         })
     }
 
@@ -118,7 +129,7 @@ impl PhotonMap {
         k: usize,
         limit_sq: f32,
         candidates: &mut Vec<(f32, u32)>,
-        out: &mut Vec<Neighbour>,
+        out: &mut Vec<(f32, PackedPhoton)>,
     ) -> Result<()> {
         candidates.clear();
         candidates.extend(
@@ -139,7 +150,7 @@ impl PhotonMap {
                 .expect("not empty");
             candidates.swap_remove(i);
             let bound_sq = if out.len() >= k {
-                out[k - 1].distance_sq
+                out[k - 1].0
             } else {
                 limit_sq
             };
@@ -169,13 +180,14 @@ impl PhotonMap {
                         .execute()
                 }
             };
-            out.extend(found.into_iter().map(|r| Neighbour {
-                photon: tile.photons[r.item as usize].unpack(),
-                distance_sq: r.distance,
-            }));
+            out.extend(
+                found
+                    .into_iter()
+                    .map(|r| (r.distance, tile.photons[r.item as usize])),
+            );
             drop(tile);
             if out.len() > before {
-                out.sort_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                out.sort_by(|a, b| a.0.total_cmp(&b.0));
                 out.truncate(k);
             }
         }
