@@ -4,9 +4,18 @@ use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
 
-/// Write `bytes` to `path` through a temporary file in the same directory,
-/// renamed into place only when fully written and synced.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+/// The directory a file at `path` lives in (`.` for a bare name).
+pub fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// A temporary file beside `path` (same directory, so a rename publishes
+/// it atomically), named `.NAME.*.partial`; deleted if dropped unpublished.
+/// Refuses a `path` that is a directory.
+pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
     if path.is_dir() {
         return Err(Error::io(
             path,
@@ -14,15 +23,21 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
             std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
         ));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".littoral.")
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
         .suffix(".partial")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, "create", e))?;
+        .tempfile_in(parent_dir(path))
+        .map_err(|e| Error::io(path, "create", e))
+}
+
+/// Write `bytes` to `path` through a temporary file in the same directory,
+/// renamed into place only when fully written and synced.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut tmp = temp_beside(path)?;
     tmp.write_all(bytes)
         .map_err(|e| Error::io(path, "write", e))?;
     tmp.as_file()

@@ -291,26 +291,8 @@ impl MapWriter {
         bands: BandGrid,
         bounds: Aabb,
     ) -> Result<Self> {
-        if path.is_dir() {
-            return Err(Error::io(
-                path,
-                "create",
-                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
-            ));
-        }
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".partial")
-            .tempfile_in(&dir)
-            .map_err(|e| Error::io(path, "create", e))?;
+        let dir = crate::output::parent_dir(path).to_path_buf();
+        let tmp = crate::output::temp_beside(path)?;
         let scratch_name = PathBuf::from(format!(
             "{} (scratch space in {})",
             path.display(),

@@ -56,6 +56,20 @@ impl PhotonSource for UniformBox {
     }
 }
 
+/// A map of 1.3 M photons uniform in the 2 x 2 x 1 m box of `BOX_SCENE`,
+/// and the radiance they represent with an isotropic phase function.
+fn uniform_box_map(dir: &Path) -> (PhotonMap, f64) {
+    let src = UniformBox {
+        n: 1_300_000,
+        size: Vec3::new(2.0, 2.0, 1.0),
+    };
+    let path = dir.join("box.map");
+    build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
+    let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
+    let density = src.n as f64 / 4.0;
+    (map, density / (4.0 * std::f64::consts::PI))
+}
+
 const BOX_SCENE: &str = r#"
 [spectral]
 start_nm = 500.0
@@ -88,15 +102,7 @@ spectral = "naive"
 #[test]
 fn boundary_compensation_recovers_uniform_density() {
     let dir = tempdir();
-    let src = UniformBox {
-        n: 1_300_000,
-        size: Vec3::new(2.0, 2.0, 1.0),
-    };
-    let path = dir.path().join("box.map");
-    build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
-    let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
-    let density = src.n as f64 / 4.0;
-    let truth = density / (4.0 * std::f64::consts::PI);
+    let (map, truth) = uniform_box_map(dir.path());
     let e = 1e-4f32;
     let sites = [
         ("interior", Vec3::new(1.0, 1.0, -0.5), 1.0),
@@ -133,14 +139,7 @@ fn boundary_compensation_recovers_uniform_density() {
 #[test]
 fn periodic_edges_are_searched_across() {
     let dir = tempdir();
-    let src = UniformBox {
-        n: 1_300_000,
-        size: Vec3::new(2.0, 2.0, 1.0),
-    };
-    let path = dir.path().join("box.map");
-    build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
-    let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
-    let truth = src.n as f64 / 4.0 / (4.0 * std::f64::consts::PI);
+    let (map, truth) = uniform_box_map(dir.path());
     let text = BOX_SCENE.replace("edges = \"open\"", "edges = \"periodic\"");
     let scene = Scene::parse(&text, Path::new("box.toml"), &Overrides::default()).unwrap();
     let est = Estimator::new(&scene, &map).unwrap();
