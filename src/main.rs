@@ -269,10 +269,7 @@ fn run(cli: Cli) -> AnyResult<()> {
 fn run_render(a: RenderArgs) -> AnyResult<()> {
     use littoral::emit::report::EmissionReport;
     let start = std::time::Instant::now();
-    let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
-    if a.photons == Some(0) {
-        return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
-    }
+    let budget = run_budget(&a.mem_budget, a.photons)?;
     let overrides = Overrides {
         photons: a.photons,
         bands: a.bands,
@@ -327,12 +324,7 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         let report = EmissionReport::new(&scene, &em.totals, &em.photon_power);
         let mut v = serde_json::to_value(&report)?;
         v["scene_fingerprint"] = serde_json::json!(scene.fingerprint);
-        v["map"] = serde_json::json!({
-            "photons": em.map.photons,
-            "tiles": em.map.tiles,
-            "file_bytes": em.map.file_bytes,
-            "bytes_per_photon": em.map.file_bytes as f64 / em.map.photons.max(1) as f64,
-        });
+        v["map"] = map_json(&em.map);
         if a.map.is_some() {
             littoral::output::write_atomic(&sidecar, &serde_json::to_vec_pretty(&v)?)?;
         }
@@ -402,12 +394,28 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     Ok(())
 }
 
-fn run_emit(a: EmitArgs) -> AnyResult<()> {
-    let start = std::time::Instant::now();
-    let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
-    if a.photons == Some(0) {
+/// What a report says about the photon map a run wrote.
+fn map_json(map: &littoral::store::WriteSummary) -> serde_json::Value {
+    serde_json::json!({
+        "photons": map.photons,
+        "tiles": map.tiles,
+        "file_bytes": map.file_bytes,
+        "bytes_per_photon": map.file_bytes as f64 / map.photons.max(1) as f64,
+        "spilled_bytes": map.spilled_bytes,
+    })
+}
+
+/// The memory budget of a run, after checking a `--photons` override.
+fn run_budget(mem_budget: &str, photons: Option<u64>) -> AnyResult<u64> {
+    if photons == Some(0) {
         return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
     }
+    Ok(littoral::size::parse_size("--mem-budget", mem_budget)?)
+}
+
+fn run_emit(a: EmitArgs) -> AnyResult<()> {
+    let start = std::time::Instant::now();
+    let budget = run_budget(&a.mem_budget, a.photons)?;
     let overrides = Overrides {
         photons: a.photons,
         seed: a.seed,
@@ -428,28 +436,12 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         &emission.photon_power,
     );
     let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
-    let report = serde_json::json!({
-        "report": physics,
-        "map": {
-            "path": a.map.display().to_string(),
-            "photons": emission.map.photons,
-            "tiles": emission.map.tiles,
-            "file_bytes": emission.map.file_bytes,
-            "bytes_per_photon": emission.map.file_bytes as f64 / emission.map.photons.max(1) as f64,
-            "spilled_bytes": emission.map.spilled_bytes,
-        },
-        "timings_s": { "scene": parsed, "emit_and_store": total - parsed, "total": total },
-        "peak_rss_bytes": peak,
-    });
-    // The physics fields sit at the top level of the report.
-    let mut report = report;
-    if let Some(obj) = report.as_object_mut() {
-        if let Some(serde_json::Value::Object(p)) = obj.remove("report") {
-            for (k, v) in p {
-                obj.insert(k, v);
-            }
-        }
-    }
+    let mut report = serde_json::to_value(&physics)?;
+    report["map"] = map_json(&emission.map);
+    report["map"]["path"] = serde_json::json!(a.map.display().to_string());
+    report["timings_s"] =
+        serde_json::json!({ "scene": parsed, "emit_and_store": total - parsed, "total": total });
+    report["peak_rss_bytes"] = serde_json::json!(peak);
     let text = serde_json::to_string_pretty(&report)? + "\n";
     match &a.report {
         Some(path) => littoral::output::write_atomic(path, text.as_bytes())?,

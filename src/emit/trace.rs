@@ -108,13 +108,14 @@ pub fn trace(
     cross_surface_down(scene, tally, dir);
 
     let depths = &scene.tally_depths;
+    // The band is fixed for the whole path, and so is its majorant.
+    let c_max = scene.water.majorant(band);
     loop {
         if events >= MAX_EVENTS {
             result.fate = Fate::AbsorbedWater;
             result.truncated = true;
             return result;
         }
-        let c_max = scene.water.majorant(band);
         let t_flight = if c_max > 0.0 {
             -(1.0 - rng.uniform_f64()).ln() / c_max
         } else {

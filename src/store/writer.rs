@@ -150,6 +150,24 @@ struct CellBuf {
 }
 
 impl CellBuf {
+    /// Append a photon; true when that took a new chunk of `chunk_records`.
+    fn push(&mut self, p: &StagedPhoton, chunk_records: usize) -> bool {
+        self.count += 1;
+        self.bounds.grow(p.pos());
+        match self.chunks.last_mut() {
+            Some(c) if c.len() < c.capacity() => {
+                c.push(*p);
+                false
+            }
+            _ => {
+                let mut c = Vec::with_capacity(chunk_records);
+                c.push(*p);
+                self.chunks.push(c);
+                true
+            }
+        }
+    }
+
     fn new() -> Self {
         CellBuf {
             chunks: Vec::new(),
@@ -351,18 +369,9 @@ impl MapWriter {
         for p in photons {
             let index = p.photon.layer as usize * self.partition.cells() as usize
                 + self.partition.cell_of(p.pos()) as usize;
-            let cell = &mut self.cells[index];
-            match cell.chunks.last_mut() {
-                Some(c) if c.len() < c.capacity() => c.push(*p),
-                _ => {
-                    let mut c = Vec::with_capacity(self.plan.chunk_records);
-                    c.push(*p);
-                    cell.chunks.push(c);
-                    self.buffered += chunk_bytes;
-                }
+            if self.cells[index].push(p, self.plan.chunk_records) {
+                self.buffered += chunk_bytes;
             }
-            cell.count += 1;
-            cell.bounds.grow(p.pos());
             self.summary.photons += 1;
             if self.buffered > self.plan.buffer_bytes {
                 self.spill_largest()?;
@@ -583,17 +592,9 @@ impl MapWriter {
         for p in photons {
             let k = if route(p) { 0 } else { 1 };
             let kid = &mut kids[k];
-            match kid.chunks.last_mut() {
-                Some(c) if c.len() < c.capacity() => c.push(*p),
-                _ => {
-                    let mut c = Vec::with_capacity(chunk_records);
-                    c.push(*p);
-                    kid.chunks.push(c);
-                    kid_bytes[k] += (chunk_records * STAGED) as u64;
-                }
+            if kid.push(p, chunk_records) {
+                kid_bytes[k] += (chunk_records * STAGED) as u64;
             }
-            kid.count += 1;
-            kid.bounds.grow(p.pos());
             if kid_bytes[k] > limit {
                 self.scratch.spill(kid)?;
                 kid_bytes[k] = 0;
