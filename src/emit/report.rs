@@ -1,7 +1,7 @@
 //! The emission report: irradiance profiles, apparent optical properties
 //! and the energy budget, per band, in absolute units.
 
-use super::tally::{Totals, ED, EOD, EOU, EU};
+use super::tally::{lu_cone_projected_solid_angle, Totals, ED, EOD, EOU, EU, LU};
 use crate::scene::Scene;
 use serde::Serialize;
 
@@ -18,6 +18,11 @@ pub struct DepthTally {
     pub Eu_stderr: Vec<f64>,
     pub Eod_stderr: Vec<f64>,
     pub Eou_stderr: Vec<f64>,
+    /// Upwelling radiance travelling within `emit::tally::LU_CONE_DEG` of
+    /// straight up (what a radiometer looking at nadir measures),
+    /// W m^-2 sr^-1 nm^-1.
+    pub Lu: Vec<f64>,
+    pub Lu_stderr: Vec<f64>,
     /// Irradiance reflectance Eu / Ed.
     pub R: Vec<f64>,
 }
@@ -104,6 +109,14 @@ impl EmissionReport {
             let (eu, eu_se) = series(totals.slot(d, EU));
             let (eod, eod_se) = series(totals.slot(d, EOD));
             let (eou, eou_se) = series(totals.slot(d, EOU));
+            let omega = lu_cone_projected_solid_angle();
+            let (lu, lu_se): (Vec<f64>, Vec<f64>) = {
+                let (l, s) = series(totals.slot(d, LU));
+                (
+                    l.iter().map(|v| v / omega).collect(),
+                    s.iter().map(|v| v / omega).collect(),
+                )
+            };
             let r = ed
                 .iter()
                 .zip(&eu)
@@ -119,6 +132,8 @@ impl EmissionReport {
                 Eu_stderr: eu_se,
                 Eod_stderr: eod_se,
                 Eou_stderr: eou_se,
+                Lu: lu,
+                Lu_stderr: lu_se,
                 R: r,
             });
         }

@@ -15,7 +15,28 @@ pub const ED: usize = 0;
 pub const EU: usize = 1;
 pub const EOD: usize = 2;
 pub const EOU: usize = 3;
-pub const QUANTITIES: usize = 4;
+/// Upward crossings within [`LU_CONE_DEG`] of the zenith: nadir-viewing
+/// upwelling radiance, an oracle for the renderer's radiometers.
+pub const LU: usize = 4;
+pub const QUANTITIES: usize = 5;
+
+/// Half-angle of the cone around straight up in which crossings count
+/// toward `LU`. The tally is the cone average of L weighted by cos(theta);
+/// 10 degrees keeps that within a fraction of a per cent of nadir L for the
+/// smooth upwelling light field while catching 3 % of the upward photons.
+pub const LU_CONE_DEG: f64 = 10.0;
+
+/// Projected solid angle of the `LU` cone, pi sin^2(theta_c) (sr): power
+/// per area through it divided by this is radiance.
+pub fn lu_cone_projected_solid_angle() -> f64 {
+    std::f64::consts::PI * LU_CONE_DEG.to_radians().sin().powi(2)
+}
+
+/// Whether an upward direction with vertical component `mu` counts toward `LU`.
+#[inline]
+pub fn in_lu_cone(mu: f64) -> bool {
+    mu >= LU_CONE_DEG.to_radians().cos()
+}
 
 /// Smallest |cos| used in scalar irradiance (1/|mu| per crossing): caps the
 /// infinite-variance tail of grazing crossings at a negligible bias.

@@ -15,7 +15,7 @@
 //! Not for: direct light (the renderer adds single scattering of the sun
 //! and direct sun on the floor by next-event estimation).
 
-use super::smooth::SmoothedPhase;
+use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryMode};
 use crate::estimate::spectral::{combine, BandSums, SpectralMode};
@@ -55,9 +55,10 @@ pub struct Estimator<'a> {
     pub map: &'a PhotonMap,
     pub boundary: BoundaryMode,
     pub spectral: SpectralMode,
-    /// Cone-averaged phase functions for photon weights (see `smooth`).
-    water_phase: SmoothedPhase,
-    particle_phase: SmoothedPhase,
+    /// Phase functions with the forward peak truncated, for photon weights
+    /// (see `peak`).
+    water_phase: TruncatedPhase,
+    particle_phase: TruncatedPhase,
 }
 
 impl<'a> Estimator<'a> {
@@ -77,12 +78,22 @@ impl<'a> Estimator<'a> {
             map,
             boundary,
             spectral,
-            water_phase: SmoothedPhase::new(&scene.water_phase, scene.estimate.phase_cone_deg),
-            particle_phase: SmoothedPhase::new(
+            water_phase: TruncatedPhase::new(&scene.water_phase, scene.estimate.forward_peak_deg),
+            particle_phase: TruncatedPhase::new(
                 &scene.particle_phase,
-                scene.estimate.phase_cone_deg,
+                scene.estimate.forward_peak_deg,
             ),
         })
+    }
+
+    /// The fractions of pure-water and particle scattering that the
+    /// truncated phase functions leave in the forward delta: a ray is
+    /// marched with extinction c - f_w b_w - f_p b_p.
+    pub fn forward_fractions(&self) -> (f64, f64) {
+        (
+            self.water_phase.forward_fraction(),
+            self.particle_phase.forward_fraction(),
+        )
     }
 
     fn search(&self, k: usize) -> Search {

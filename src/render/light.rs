@@ -2,6 +2,11 @@
 //! water with next-event single scattering of the refracted sun and the
 //! photon-map in-scatter estimate, and the floor and targets.
 //!
+//! Photon estimates use phase functions whose forward peak is a delta, so
+//! the march attenuates with c - f b (`render::peak`); next-event single
+//! scattering of the sun uses the exact phase function and the full
+//! extinction toward the sun.
+//!
 //! Choices: the sun is refracted through the mean (flat) surface for next
 //! event estimation, also under a rough surface; the transmittance toward
 //! the sun is integrated with four midpoint samples in heterogeneous water
@@ -118,21 +123,28 @@ impl<'a> Light<'a> {
         let t_end = hit.map_or(limit, |h| h.t);
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
+        let (fw, fp) = self.est.forward_fractions();
         let cos_ss = self.sun_w.dot(-dir) as f64;
         let (pw_ss, pp_ss) = (pw.eval(cos_ss), pp.eval(cos_ss));
-        // Stratified: one jittered sample in each step.
+        // Stratified: one jittered sample in each step, weighted by the
+        // transmittance to the sample itself (unbiased for the step's
+        // integral of T times the source).
         let mut t0 = 0.0f32;
         while t0 < t_end {
             let dt = step.min(t_end - t0);
-            let x = p0 + dir * (t0 + dt * rng.uniform_f32());
+            let s = dt * rng.uniform_f32();
+            let x = p0 + dir * (t0 + s);
             self.est.volume(x, -dir, scratch, &mut est)?;
             self.sun_transmittance(x, &mut sun_t);
             let mut alive = false;
             for b in 0..nb {
                 let iop = scene.water.iop(x, b);
                 let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
-                out[b] += tr[b] * (est[b] + single) * dt as f64;
-                tr[b] *= (-iop.c() * dt as f64).exp();
+                // The forward delta of the truncated phase functions puts
+                // its share of scattering back into the ray (see `peak`).
+                let c = iop.c() - fw * iop.b_w - fp * iop.b_p;
+                out[b] += tr[b] * (-c * s as f64).exp() * (est[b] + single) * dt as f64;
+                tr[b] *= (-c * dt as f64).exp();
                 alive |= tr[b] > MIN_TRANSMITTANCE;
             }
             t0 += dt;

@@ -13,7 +13,7 @@
 pub mod camera;
 pub mod estimator;
 pub mod light;
-pub mod smooth;
+pub mod peak;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
@@ -45,6 +45,10 @@ pub struct RadiometerReading {
     pub position_m: [f64; 2],
     /// Radiance per band (W m^-2 sr^-1 nm^-1).
     pub L: Vec<f64>,
+    /// Standard error per band of the mean over the jittered samples: the
+    /// march's sampling error. Photon-map noise is correlated over the
+    /// search radius, so it is not in this figure (in deep water at 8 M
+    /// photons and k = 800 it was 6-15 % between distant positions).
     pub stderr: Vec<f64>,
 }
 

@@ -73,7 +73,7 @@ pub struct EstimateFile {
     pub boundary: Option<String>,
     pub spectral: Option<String>,
     pub step_m: Option<f64>,
-    pub phase_cone_deg: Option<f64>,
+    pub forward_peak_deg: Option<f64>,
 }
 
 fn default_name() -> String {

@@ -136,9 +136,9 @@ pub struct EstimateSettings {
     pub spectral: String,
     /// Ray-marching step in water (m).
     pub step_m: f64,
-    /// Half-angle (degrees) of the cone the phase function is averaged over
-    /// in photon estimates (0 = exact; see `render::smooth`).
-    pub phase_cone_deg: f64,
+    /// Half-angle (degrees) of the forward peak of the phase functions that
+    /// is treated as a delta in photon estimates (0 = exact; see `render::peak`).
+    pub forward_peak_deg: f64,
 }
 
 /// A validated scene.

@@ -176,11 +176,14 @@ pub(super) fn render_settings(
             format!("'{spectral}': use \"naive\" or \"compensated\""),
         ));
     }
-    let phase_cone_deg = e
-        .phase_cone_deg
-        .unwrap_or(crate::render::smooth::DEFAULT_CONE_HALF_ANGLE_DEG);
-    if !finite_in(phase_cone_deg, 0.0, 90.0) {
-        return Err(ctx.err(&ek("phase_cone_deg"), "must be between 0 and 90 degrees"));
+    let forward_peak_deg = e
+        .forward_peak_deg
+        .unwrap_or(crate::render::peak::DEFAULT_FORWARD_PEAK_DEG);
+    if !finite_in(forward_peak_deg, 0.0, 90.0) {
+        return Err(ctx.err(
+            &ek("forward_peak_deg"),
+            "must be between 0 and 90 degrees (0 keeps the exact phase function)",
+        ));
     }
     let estimate = EstimateSettings {
         k,
@@ -190,7 +193,7 @@ pub(super) fn render_settings(
         boundary,
         spectral,
         step_m,
-        phase_cone_deg,
+        forward_peak_deg,
     };
     Ok((sensor, radiometers, estimate))
 }

@@ -1,0 +1,179 @@
+//! Phase functions as the photon-map estimate sees them: the forward peak
+//! truncated into a delta (the delta-M idea of Wiscombe 1977, applied to
+//! the rendering equation along a sensor ray).
+//!
+//! A photon's contribution is weighted by p(w_p . w). With a forward-peaked
+//! particle phase function (Fournier–Forand, Petzold: p reaches 10^3–10^4
+//! sr^-1 within a degree) one photon travelling almost exactly toward the
+//! viewer outweighs thousands of others, and the estimate becomes speckle.
+//!
+//! Write p = f delta(w' - w) + p*, where p* equals p outside a cone of
+//! half-angle theta_t around the forward direction and is flat inside it
+//! (p* = p(theta_t)), and f = 1 - integral of p* is the excess mass of the
+//! peak. Along a ray, the delta part scatters light of the ray's own
+//! direction back into it: dL/dt = -c L + f b L + b integral(p* L) + ...,
+//! so L is marched with the reduced extinction c - f b and the photons are
+//! weighted by p*. This is exact except that the radiance inside the peak
+//! (a few degrees) is taken as the radiance along the ray itself, which is
+//! smooth there. Single scattering of the sun keeps the exact phase
+//! function and the full extinction, since the direct beam is not in the
+//! photon map.
+//!
+//! theta_t is `[estimate] forward_peak_deg` (default
+//! [`DEFAULT_FORWARD_PEAK_DEG`]; 0 = the exact phase function, f = 0).
+//!
+//! Measured in deep water (a = 0.3, b = 0.6, Fournier–Forand bb = 0.02, sun
+//! at 20 degrees, 10 M photons, 8 identical bands, 4 positions), as the ratio
+//! of nadir radiometers to the emission tally of upwelling radiance (whose
+//! band mean has a 2 % standard error at 0 and 1 m, 6 % at 6 m):
+//!
+//! | theta_t | k | 0.01 m | 1 m | 6 m | spread over bands |
+//! |---|---|---|---|---|---|
+//! | 5 deg | 3200 | 1.035 | 1.013 | 0.975 | 7-16 % |
+//! | 10 deg | 800 | 1.057 | 1.023 | 0.987 | 9-14 % |
+//! | 10 deg | 3200 | 1.046 | 1.007 | 1.027 | 5-12 % |
+//! | 20 deg | 800 | 1.047 | 1.003 | 1.033 | 4-9 % |
+//! | 20 deg | 3200 | 1.049 | 0.996 | 1.057 | 2-7 % |
+//!
+//! No bias grows with theta_t at this precision while the noise falls
+//! threefold from 5 to 20 degrees, hence the default. Averaging the phase
+//! function over a cone instead (tried first) smooths the radiance the
+//! forward peak re-scatters over the whole cone, and biased the decay of
+//! upwelling radiance low (K_Lu 0.279 1/m against Kd 0.358 with a 30-degree
+//! cone). p* is tabulated in cos(theta), which also
+//! makes the estimate's inner loop a table lookup; f is the integral of the
+//! table itself, so the split conserves scattering exactly as evaluated.
+
+use crate::optics::phase::PhaseFunction;
+
+/// Default half-angle of the truncated forward peak (degrees).
+pub const DEFAULT_FORWARD_PEAK_DEG: f64 = 20.0;
+/// Table entries over cos(theta) in [-1, 1].
+const TABLE: usize = 8192;
+
+/// A phase function with its forward peak replaced by a flat top, and the
+/// removed fraction.
+#[derive(Clone, Debug)]
+pub struct TruncatedPhase {
+    table: Vec<f64>,
+    /// The fraction f of scattering moved into the forward delta.
+    forward: f64,
+    /// Without truncation the exact phase function is used.
+    exact: Option<PhaseFunction>,
+}
+
+impl TruncatedPhase {
+    /// Truncate `p` at `peak_half_angle_deg` (0 keeps it exact).
+    pub fn new(p: &PhaseFunction, peak_half_angle_deg: f64) -> Self {
+        if peak_half_angle_deg < 1e-3 {
+            return TruncatedPhase {
+                table: Vec::new(),
+                forward: 0.0,
+                exact: Some(p.clone()),
+            };
+        }
+        let cos_t = peak_half_angle_deg.to_radians().cos();
+        let cap = p.eval(cos_t);
+        let table: Vec<f64> = (0..TABLE)
+            .map(|i| {
+                let mu = -1.0 + 2.0 * i as f64 / (TABLE - 1) as f64;
+                let v = p.eval(mu);
+                if mu > cos_t {
+                    v.min(cap)
+                } else {
+                    v
+                }
+            })
+            .collect();
+        // The table is evaluated by linear interpolation: its integral is the
+        // trapezoid sum, exactly.
+        let h = 2.0 / (TABLE - 1) as f64;
+        let integral = std::f64::consts::TAU
+            * h
+            * (table.iter().sum::<f64>() - 0.5 * (table[0] + table[TABLE - 1]));
+        TruncatedPhase {
+            table,
+            forward: (1.0 - integral).max(0.0),
+            exact: None,
+        }
+    }
+
+    /// The fraction of scattering in the forward delta.
+    pub fn forward_fraction(&self) -> f64 {
+        self.forward
+    }
+
+    /// p* at cos(theta) (sr^-1), linear between table entries.
+    #[inline]
+    pub fn eval(&self, mu: f64) -> f64 {
+        if let Some(p) = &self.exact {
+            return p.eval(mu);
+        }
+        let x = (mu.clamp(-1.0, 1.0) + 1.0) * 0.5 * (TABLE - 1) as f64;
+        let i = (x as usize).min(TABLE - 2);
+        let t = x - i as f64;
+        self.table[i] * (1.0 - t) + self.table[i + 1] * t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{PI, TAU};
+
+    /// Integral of p* over the sphere by the midpoint rule in mu.
+    fn integral(t: &TruncatedPhase) -> f64 {
+        let n = 400_000;
+        (0..n)
+            .map(|i| t.eval(-1.0 + 2.0 * (i as f64 + 0.5) / n as f64))
+            .sum::<f64>()
+            * 2.0
+            / n as f64
+            * TAU
+    }
+
+    /// p* plus the delta conserves scattering; p* is p outside the peak and
+    /// flat inside; f is the peak's excess mass, found independently from
+    /// the phase function's own quantiles.
+    #[test]
+    fn truncation_conserves_scattering_and_keeps_the_wings() {
+        for p in [
+            PhaseFunction::petzold(),
+            PhaseFunction::fournier_forand(0.02).unwrap(),
+            PhaseFunction::henyey_greenstein(0.9).unwrap(),
+        ] {
+            let t = TruncatedPhase::new(&p, DEFAULT_FORWARD_PEAK_DEG);
+            let f = t.forward_fraction();
+            assert!((integral(&t) + f - 1.0).abs() < 1e-5, "{p:?}: {f}");
+            let cos_t = DEFAULT_FORWARD_PEAK_DEG.to_radians().cos();
+            let top = p.eval(cos_t);
+            for mu in [1.0, 0.9999, 0.5 * (1.0 + cos_t)] {
+                assert!((t.eval(mu) / top - 1.0).abs() < 1e-3, "flat top at {mu}");
+            }
+            for deg in [20.0f64, 45.0, 90.0, 150.0, 180.0] {
+                let mu = deg.to_radians().cos();
+                assert!(
+                    (t.eval(mu) / p.eval(mu) - 1.0).abs() < 2e-3,
+                    "wing at {deg}"
+                );
+            }
+            // f = E_p[(1 - top / p(mu)) for mu > cos_t], over 10^6 quantiles.
+            let n = 1_000_000;
+            let excess = (0..n)
+                .map(|i| p.sample_cos((i as f64 + 0.5) / n as f64))
+                .filter(|&mu| mu > cos_t)
+                .map(|mu| (1.0 - top / p.eval(mu)).max(0.0))
+                .sum::<f64>()
+                / n as f64;
+            assert!((f - excess).abs() < 2e-3, "{p:?}: f {f} vs {excess}");
+            assert!(f > 0.3, "a forward-peaked function loses most of its peak");
+        }
+        // Functions without a peak lose (almost) nothing.
+        let iso = TruncatedPhase::new(&PhaseFunction::isotropic(), DEFAULT_FORWARD_PEAK_DEG);
+        assert!(iso.forward_fraction() < 1e-9);
+        assert!((iso.eval(0.3) * 4.0 * PI - 1.0).abs() < 1e-9);
+        let exact = TruncatedPhase::new(&PhaseFunction::petzold(), 0.0);
+        assert_eq!(exact.eval(0.7), PhaseFunction::petzold().eval(0.7));
+        assert_eq!(exact.forward_fraction(), 0.0);
+    }
+}
