@@ -142,6 +142,25 @@ impl SeaSurface {
         }
     }
 
+    /// A ray from the air along `d` (`d.z < 0`) meets one facet, sampled
+    /// like `interact` does, and is split instead of choosing a branch: the
+    /// Fresnel reflectance with the reflected direction, and the refracted
+    /// direction. Either may head back into the surface (steep facets);
+    /// `interact` continues such rays.
+    pub fn split_from_above(&self, d: Vec3, rng: &mut Pcg32) -> SurfaceSplit {
+        let d = d.as_dvec3();
+        let n = self.sample_facet(d, rng);
+        let cos_i = -d.dot(n);
+        SurfaceSplit {
+            reflectance: fresnel_reflectance(cos_i, 1.0, self.n_water),
+            reflected: reflect(d, n).normalize().as_vec3(),
+            refracted: refract(d, n, 1.0, self.n_water)
+                .unwrap_or_else(|| reflect(d, n))
+                .normalize()
+                .as_vec3(),
+        }
+    }
+
     /// Upward facet normal met by a ray along `d` (flat: +z).
     fn sample_facet(&self, d: DVec3, rng: &mut Pcg32) -> DVec3 {
         if self.slope_variance <= 0.0 {
@@ -165,6 +184,17 @@ impl SeaSurface {
             }
         }
     }
+}
+
+/// One facet's split of a ray from the air (see `SeaSurface::split_from_above`).
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceSplit {
+    /// Fresnel reflectance of the facet.
+    pub reflectance: f64,
+    /// Reflected direction (in the air unless it heads down).
+    pub reflected: Vec3,
+    /// Refracted direction (in the water unless it heads up).
+    pub refracted: Vec3,
 }
 
 /// Two independent standard normal deviates (Box–Muller).

@@ -192,17 +192,47 @@ impl<'a> Light<'a> {
         }
         let p = ray.origin + d * (-ray.origin.z / d.z);
         let p = Vec3::new(p.x, p.y, 0.0);
-        let ev = scene.surface.interact(d, rng);
-        if ev.transmitted {
+        // Both branches of the facet the ray meets are followed, weighted by
+        // Fresnel: choosing one would make the bright reflected sky speckle.
+        let split = scene.surface.split_from_above(d, rng);
+        let mut part = vec![0.0; self.bands()];
+        self.leave_surface(p, split.reflected, false, rng, scratch, out)?;
+        self.leave_surface(p, split.refracted, true, rng, scratch, &mut part)?;
+        let r = split.reflectance;
+        for (o, t) in out.iter_mut().zip(&part) {
+            *o = r * *o + (1.0 - r) * t;
+        }
+        self.add_glint(-d, out);
+        Ok(())
+    }
+
+    /// Radiance reaching the surface point `p` along `-dir`, for a ray
+    /// leaving it along `dir` into the water (`in_water`) or the air; a ray
+    /// heading back into the surface meets it again (`SeaSurface::interact`).
+    /// Radiance leaving the water drops by n^2.
+    fn leave_surface(
+        &self,
+        p: Vec3,
+        dir: Vec3,
+        in_water: bool,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let scene = self.scene;
+        let (dir, in_water) = if (in_water && dir.z < 0.0) || (!in_water && dir.z > 0.0) {
+            (dir, in_water)
+        } else {
+            let ev = scene.surface.interact(dir, rng);
+            (ev.direction, in_water != ev.transmitted)
+        };
+        if in_water {
             let n2 = scene.surface.n_water * scene.surface.n_water;
-            self.march(p + ev.direction * 1e-4, ev.direction, rng, scratch, out)?;
-            // The Fresnel factor is in the choice of branch; radiance leaving
-            // the water drops by n^2.
+            self.march(p + dir * 1e-4, dir, rng, scratch, out)?;
             out.iter_mut().for_each(|o| *o /= n2);
         } else {
             out.copy_from_slice(&self.sky_l);
         }
-        self.add_glint(-d, out);
         Ok(())
     }
 
