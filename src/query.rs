@@ -98,6 +98,29 @@ impl PhotonMap {
         search: Search,
         out: &mut Vec<Neighbour>,
     ) -> Result<()> {
+        self.query_ordered_into(at, layer, search, true, out)
+    }
+
+    /// The same photons as [`PhotonMap::query_into`] in no particular (but
+    /// deterministic) order: cheaper when the caller only sums over them.
+    pub fn query_any_order_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        self.query_ordered_into(at, layer, search, false, out)
+    }
+
+    fn query_ordered_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        sorted: bool,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
         out.clear();
         let (k, limit_sq) = match search {
             Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
@@ -109,7 +132,7 @@ impl PhotonMap {
         CANDIDATES.with(|c| {
             let (candidates, packed) = &mut *c.borrow_mut();
             packed.clear();
-            self.search_tiles(at, layer, k, limit_sq, candidates, packed)?;
+            self.search_tiles(at, layer, k, limit_sq, sorted, candidates, packed)?;
             // Directions are decoded only for the photons that made the cut.
             out.extend(packed.iter().map(|(d, p)| Neighbour {
                 photon: p.unpack(),
@@ -122,12 +145,16 @@ impl PhotonMap {
     /// Visit the tiles in `candidates` nearest box first, as long as a box
     /// can still hold a result. Picking the nearest box by a linear scan is
     /// cheaper than sorting: a query visits only a few of the map's tiles.
+    /// Unsorted, the k nearest so far are kept by selection and the k-th
+    /// distance is their maximum.
+    #[allow(clippy::too_many_arguments)]
     fn search_tiles(
         &self,
         at: Vec3,
         layer: Option<u16>,
         k: usize,
         limit_sq: f32,
+        sorted: bool,
         candidates: &mut Vec<(f32, u32)>,
         out: &mut Vec<(f32, PackedPhoton)>,
     ) -> Result<()> {
@@ -142,6 +169,8 @@ impl PhotonMap {
                 .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK),
         );
         let q = at.to_array();
+        // The k-th distance so far, once k photons are known.
+        let mut kth_sq = f32::INFINITY;
         while !candidates.is_empty() {
             let (i, &(box_sq, t)) = candidates
                 .iter()
@@ -149,11 +178,7 @@ impl PhotonMap {
                 .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(a.1 .1.cmp(&b.1 .1)))
                 .expect("not empty");
             candidates.swap_remove(i);
-            let bound_sq = if out.len() >= k {
-                out[k - 1].0
-            } else {
-                limit_sq
-            };
+            let bound_sq = if out.len() >= k { kth_sq } else { limit_sq };
             if box_sq > bound_sq * PRUNE_SLACK {
                 break;
             }
@@ -167,7 +192,14 @@ impl PhotonMap {
                     .execute()
             } else {
                 let want = NonZeroUsize::new(k).expect("k > 0");
-                if bound_sq.is_finite() {
+                if bound_sq.is_finite() && !sorted {
+                    tile.tree
+                        .query(&q)
+                        .nearest_n::<SquaredEuclidean<f32>>(want)
+                        .within(bound_sq)
+                        .unsorted()
+                        .execute()
+                } else if bound_sq.is_finite() {
                     tile.tree
                         .query(&q)
                         .nearest_n::<SquaredEuclidean<f32>>(want)
@@ -187,8 +219,19 @@ impl PhotonMap {
             );
             drop(tile);
             if out.len() > before {
-                out.sort_by(|a, b| a.0.total_cmp(&b.0));
-                out.truncate(k);
+                if sorted {
+                    out.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    out.truncate(k);
+                    if out.len() >= k {
+                        kth_sq = out[k - 1].0;
+                    }
+                } else if out.len() >= k && k != usize::MAX {
+                    if out.len() > k {
+                        out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+                        out.truncate(k);
+                    }
+                    kth_sq = out.iter().fold(0.0f32, |m, p| m.max(p.0));
+                }
             }
         }
         Ok(())

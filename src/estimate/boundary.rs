@@ -67,6 +67,55 @@ impl AxialDistances {
     pub fn to_f64(&self) -> [f64; 6] {
         self.0.map(f64::from)
     }
+
+    /// The distances for a smaller search of radius `r`: each capped at r.
+    pub fn capped(&self, r: f32) -> Self {
+        AxialDistances(self.0.map(|d| d.min(r)))
+    }
+}
+
+/// In-plane boundary distances (m) of a surface search disc, each in
+/// [0, R]: along [+u, -u, +v, -v], where u and v span the surface's tangent
+/// plane (u = x and v = y for a horizontal surface).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiscDistances {
+    pub u: Vec3,
+    pub v: Vec3,
+    pub d: [f32; 4],
+}
+
+impl DiscDistances {
+    /// No boundary within `r`: the whole disc, in the plane with `normal`.
+    pub fn unbounded(r: f32, normal: Vec3) -> Self {
+        let (u, v) = tangent_basis(normal);
+        DiscDistances { u, v, d: [r; 4] }
+    }
+
+    /// The distances for a smaller search of radius `r`: each capped at r.
+    pub fn capped(&self, r: f32) -> Self {
+        DiscDistances {
+            d: self.d.map(|d| d.min(r)),
+            ..*self
+        }
+    }
+
+    /// The offset's in-plane coordinates (along u, v).
+    fn coords(&self, offset: Vec3) -> [f32; 2] {
+        [offset.dot(self.u), offset.dot(self.v)]
+    }
+}
+
+/// An orthonormal tangent basis (u, v) of the plane with unit `normal`: u
+/// is horizontal (x for a horizontal plane), v = normal x u.
+pub fn tangent_basis(normal: Vec3) -> (Vec3, Vec3) {
+    let h = Vec3::Z.cross(normal);
+    let u = if h.length_squared() > 1e-8 {
+        h.normalize()
+    } else {
+        Vec3::X
+    };
+    let v = normal.cross(u).normalize();
+    (u, v)
 }
 
 /// The six axis directions, in the order of [`AxialDistances`].
@@ -114,6 +163,44 @@ impl BoundaryMode {
             BoundaryMode::None => sphere_volume(f64::from(r).max(0.0)),
             BoundaryMode::Ellipsoid => ellipsoid_volume(&b.to_f64()),
             BoundaryMode::ClippedSphere => clipped_sphere_volume(f64::from(r), &b.to_f64()),
+        }
+    }
+
+    /// The area (m^2) to divide by for a surface search of radius `r`: the
+    /// disc, the disc clipped by the in-plane boundary lines (exact), or the
+    /// four quarter-ellipses of the adaptive distance.
+    pub fn area(self, r: f32, b: &DiscDistances) -> f64 {
+        let r = f64::from(r).max(0.0);
+        let d = b.d.map(|v| f64::from(v).clamp(0.0, r));
+        match self {
+            BoundaryMode::None => PI * r * r,
+            BoundaryMode::ClippedSphere => clipped_disc_area(r, &d),
+            BoundaryMode::Ellipsoid => PI / 4.0 * (d[0] + d[1]) * (d[2] + d[3]),
+        }
+    }
+
+    /// Whether a surface photon at `offset` = P - O, found by a Euclidean
+    /// search of radius `r`, belongs to this mode's search disc (the
+    /// offset is measured in the tangent plane).
+    pub fn accepts_in_disc(self, offset: Vec3, r: f32, b: &DiscDistances) -> bool {
+        let [x, y] = b.coords(offset);
+        match self {
+            BoundaryMode::None | BoundaryMode::ClippedSphere => x * x + y * y <= r * r,
+            BoundaryMode::Ellipsoid => {
+                let mut sum = 0.0f32;
+                for (c, (pos, neg)) in [(x, (b.d[0], b.d[1])), (y, (b.d[2], b.d[3]))] {
+                    if c == 0.0 {
+                        continue;
+                    }
+                    let side = if c > 0.0 { pos } else { neg };
+                    if side.is_nan() || side <= 0.0 {
+                        return false;
+                    }
+                    let s = c * r / side;
+                    sum += s * s;
+                }
+                sum.sqrt() <= r
+            }
         }
     }
 
@@ -470,6 +557,60 @@ pub fn axial_distances_traced(scene: &Scene, o: Vec3, r: f32) -> AxialDistances 
         let hit = trace_axis(scene, o, k, r).map_or(f32::INFINITY, |(t, _)| t);
         hit.min(analytic_distance(scene, o, k)).clamp(0.0, r)
     }))
+}
+
+/// In-plane distances from `o` on the surface `id` with unit `normal`
+/// (facing the water) to where the surface ends, by four rays along the
+/// tangent basis started 1 mm above the surface: the waterline (z = 0), any
+/// other surface (a target standing on the floor, the floor under a
+/// target), and with open edges the domain walls; each capped at `r`. The
+/// surface's own triangles are passed through (a gently curved floor goes
+/// on). In a periodic domain rays are not wrapped: surfaces continue there.
+pub fn disc_distances_traced(
+    scene: &Scene,
+    o: Vec3,
+    normal: Vec3,
+    id: crate::geometry::SurfaceId,
+    r: f32,
+) -> DiscDistances {
+    let r = cap_radius(r);
+    let (u, v) = tangent_basis(normal);
+    let start = o + normal * 1e-3;
+    let size = scene.geometry.domain_size_m();
+    let open = !scene.domain.periodic;
+    let d = [u, -u, v, -v].map(|dir| {
+        let mut t = r;
+        if dir.z > 1e-6 {
+            t = t.min(-o.z / dir.z);
+        }
+        if open {
+            for axis in 0..2 {
+                if dir[axis] > 1e-6 {
+                    t = t.min((size[axis] - o[axis]) / dir[axis]);
+                } else if dir[axis] < -1e-6 {
+                    t = t.min(o[axis] / -dir[axis]);
+                }
+            }
+        }
+        let mut from = start;
+        let mut travelled = 0.0f32;
+        // Pass through the surface's own triangles (a few at most).
+        for _ in 0..4 {
+            match scene.geometry.intersect(from, dir, t - travelled) {
+                Some(h) if h.surface == id => {
+                    travelled += h.t + 1e-4;
+                    from = start + dir * travelled;
+                }
+                Some(h) => {
+                    t = t.min(travelled + h.t);
+                    break;
+                }
+                None => break,
+            }
+        }
+        t.clamp(0.0, r)
+    });
+    DiscDistances { u, v, d }
 }
 
 /// A precomputed grid of axial distances over the water volume, trilinearly

@@ -172,7 +172,7 @@ pub struct BandSpectra {
 }
 
 /// The IOPs at a point in one band (1/m).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Iop {
     pub a: f64,
     /// Scattering by pure water (Rayleigh-like phase function).
@@ -219,6 +219,46 @@ impl WaterModel {
                 field,
                 bp_550,
             } => Self::from_constituents(spectra, &field.at(p), *bp_550, band),
+        }
+    }
+
+    /// IOPs at `p` in every band (`out` has one entry per band): the
+    /// constituent field is evaluated once, and the chlorophyll power laws
+    /// through one logarithm.
+    pub fn iops(&self, p: Vec3, out: &mut [Iop]) {
+        match self {
+            WaterModel::Explicit { .. } => {
+                let iop = self.iop(p, 0);
+                out.iter_mut().for_each(|o| *o = iop);
+            }
+            WaterModel::Constituents {
+                spectra: s,
+                field,
+                bp_550,
+            } => {
+                let c = field.at(p);
+                let ln_chl = if c.chl > 0.0 { c.chl.ln() } else { 0.0 };
+                let bp550 = bp_550.unwrap_or(if c.chl > 0.0 {
+                    0.30 * (0.62 * ln_chl).exp()
+                } else {
+                    0.0
+                });
+                for (band, o) in out.iter_mut().enumerate() {
+                    let a_phi = if c.chl > 0.0 {
+                        s.a_phi_a[band] * (s.a_phi_e[band] * ln_chl).exp()
+                    } else {
+                        0.0
+                    };
+                    *o = Iop {
+                        a: s.a_w[band]
+                            + a_phi
+                            + c.cdom_440 * s.cdom_shape[band]
+                            + c.nap_440 * s.nap_shape[band],
+                        b_w: s.b_w[band],
+                        b_p: bp550 * s.bp_shape[band],
+                    };
+                }
+            }
         }
     }
 
@@ -282,6 +322,44 @@ mod tests {
             cdom_shape: vec![1.0, 0.1],
             nap_shape: vec![1.0, 0.2],
             bp_shape: vec![1.2, 0.8],
+        }
+    }
+
+    /// All bands at once equal the per-band IOPs (to rounding of exp/ln
+    /// against powf).
+    #[test]
+    fn all_bands_at_once_match_one_band_at_a_time() {
+        let field = ConstituentField::Gradient {
+            axis: 0,
+            size_m: 10.0,
+            from: Constituents {
+                chl: 0.3,
+                cdom_440: 0.05,
+                nap_440: 0.2,
+            },
+            to: Constituents {
+                chl: 8.0,
+                cdom_440: 0.5,
+                nap_440: 0.0,
+            },
+        };
+        for bp_550 in [None, Some(0.4)] {
+            let w = WaterModel::Constituents {
+                spectra: Box::new(spectra()),
+                field: field.clone(),
+                bp_550,
+            };
+            let n = spectra().a_w.len();
+            let mut all = vec![Iop::default(); n];
+            for p in [Vec3::new(1.0, 2.0, -0.5), Vec3::new(7.0, 1.0, -3.0)] {
+                w.iops(p, &mut all);
+                for (b, got) in all.iter().enumerate() {
+                    let want = w.iop(p, b);
+                    for (g, e) in [(got.a, want.a), (got.b_w, want.b_w), (got.b_p, want.b_p)] {
+                        assert!((g - e).abs() <= 1e-12 * e.abs().max(1.0), "{g} vs {e}");
+                    }
+                }
+            }
         }
     }
 

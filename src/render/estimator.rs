@@ -17,19 +17,25 @@
 
 use super::peak::TruncatedPhase;
 use crate::error::Result;
-use crate::estimate::boundary::{self, AxialDistances, BoundaryMode};
+use crate::estimate::boundary::{self, AxialDistances, BoundaryMode, DiscDistances};
 use crate::estimate::spectral::{combine, BandSums, SpectralMode};
 use crate::geometry::SurfaceId;
+use crate::optics::iop::Iop;
 use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
 use crate::query::{Neighbour, PhotonMap, Search};
 use crate::scene::Scene;
 use glam::Vec3;
 use std::cell::RefCell;
 
+/// Surface photons count within this fraction of the search radius (plus
+/// 1 cm) of the tangent plane.
+pub const PLANE_TOLERANCE: f32 = 0.1;
+
 /// Reusable per-thread buffers of an estimate.
 pub struct Scratch {
     bands: usize,
     mix: Vec<f32>,
+    iops: Vec<Iop>,
     found: Vec<Neighbour>,
     extra: Vec<Neighbour>,
     local: BandSums,
@@ -41,6 +47,7 @@ impl Scratch {
         Scratch {
             bands,
             mix: Vec::new(),
+            iops: Vec::new(),
             found: Vec::new(),
             extra: Vec::new(),
             local: BandSums::new(bands),
@@ -108,61 +115,64 @@ impl<'a> Estimator<'a> {
         }
     }
 
-    /// Fill `sums` from photons of `layer` around `x`; returns the search
-    /// volume (or area, for `surface`) after boundary compensation.
-    #[allow(clippy::too_many_arguments)]
-    fn gather(
+    /// The radius of the search region of `k` photons of which `found` were
+    /// found: the fixed radius, or the farthest photon — or the maximum
+    /// radius when fewer than k photons lie within it.
+    fn region_radius(&self, found: &[Neighbour], k: usize) -> f32 {
+        match self.search(k) {
+            Search::Radius { radius } => radius,
+            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
+            Search::Nearest { .. } => found
+                .iter()
+                .fold(0.0f32, |m, n| m.max(n.distance_sq))
+                .sqrt()
+                .max(1e-6),
+        }
+    }
+
+    /// Photons of `layer` for a search of `k` around `x`, in any order,
+    /// continued across periodic edges.
+    fn find(
         &self,
         x: Vec3,
         layer: u16,
         k: usize,
         found: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
-        sums: &mut BandSums,
-        weight: &dyn Fn(&Neighbour) -> f64,
-        surface: bool,
-    ) -> Result<f64> {
-        sums.clear();
+    ) -> Result<()> {
         let search = self.search(k);
-        self.map.query_into(x, Some(layer), search, found)?;
+        self.map
+            .query_any_order_into(x, Some(layer), search, found)?;
         if self.scene.domain.periodic {
             self.wrap_search(x, layer, k, search, found, extra)?;
         }
-        let Some(last) = found.last() else {
-            return Ok(0.0);
-        };
-        // The search region: the fixed radius, or the k-th distance — or the
-        // maximum radius when fewer than k photons lie within it.
-        let r = match self.search(k) {
-            Search::Radius { radius } => radius,
-            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
-            Search::Nearest { .. } => last.distance_sq.sqrt().max(1e-6),
-        };
-        if surface {
-            for n in found.iter() {
-                sums.add(n.photon.band, weight(n));
+        Ok(())
+    }
+
+    /// Move the photons of the local search (`k` nearest, or within the
+    /// local fixed radius) to the front of `found`; returns their count.
+    fn take_local(&self, found: &mut [Neighbour], k: usize) -> usize {
+        match self.search(k) {
+            Search::Radius { radius } => {
+                let r_sq = radius * radius;
+                let mut n = 0;
+                for i in 0..found.len() {
+                    if found[i].distance_sq <= r_sq {
+                        found.swap(i, n);
+                        n += 1;
+                    }
+                }
+                n
             }
-            return Ok(std::f64::consts::PI * (r as f64).powi(2));
-        }
-        let b = match self.boundary {
-            BoundaryMode::None => AxialDistances([r; 6]),
-            _ => boundary::axial_distances_traced(self.scene, x, r),
-        };
-        let bd = b.0.map(|v| v as f64);
-        let volume = match self.boundary {
-            BoundaryMode::None => 4.0 / 3.0 * std::f64::consts::PI * (r as f64).powi(3),
-            BoundaryMode::ClippedSphere => boundary::clipped_sphere_volume(r as f64, &bd),
-            BoundaryMode::Ellipsoid => boundary::ellipsoid_volume(&bd),
-        };
-        for n in found.iter() {
-            if self.boundary == BoundaryMode::Ellipsoid
-                && boundary::ellipsoid_distance(n.photon.position - x, r, &b) > r
-            {
-                continue;
+            Search::Nearest { .. } => {
+                if found.len() > k {
+                    found.select_nth_unstable_by(k - 1, |a, b| {
+                        a.distance_sq.total_cmp(&b.distance_sq)
+                    });
+                }
+                found.len().min(k)
             }
-            sums.add(n.photon.band, weight(n));
         }
-        Ok(volume)
     }
 
     /// With periodic domain edges a search sphere that crosses an edge
@@ -178,11 +188,7 @@ impl<'a> Estimator<'a> {
         found: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<()> {
-        let r = match search {
-            Search::Radius { radius } => radius,
-            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
-            Search::Nearest { .. } => found.last().map_or(0.0, |n| n.distance_sq.sqrt()),
-        };
+        let r = self.region_radius(found, k);
         let [lx, ly] = self.scene.domain.size_m.map(|v| v as f32);
         let shift = |c: f32, l: f32| -> f32 {
             if c < r {
@@ -209,16 +215,18 @@ impl<'a> Estimator<'a> {
         }
         for offset in offsets {
             self.map
-                .query_into(x + offset, Some(layer), search, extra)?;
+                .query_any_order_into(x + offset, Some(layer), search, extra)?;
             found.extend(extra.iter().map(|n| {
                 let mut n = *n;
                 n.photon.position -= offset;
                 n
             }));
         }
-        found.sort_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq));
         if let Search::Nearest { k, .. } = search {
-            found.truncate(k);
+            if found.len() > k {
+                found.select_nth_unstable_by(k - 1, |a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                found.truncate(k);
+            }
         }
         Ok(())
     }
@@ -233,11 +241,26 @@ impl<'a> Estimator<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
+        let mut iops = std::mem::take(&mut scratch.iops);
+        iops.resize(self.scene.bands.len(), Iop::default());
+        self.scene.water.iops(x, &mut iops);
+        let r = self.volume_with_iops(x, toward_viewer, &iops, scratch, out);
+        scratch.iops = iops;
+        r
+    }
+
+    /// [`Estimator::volume`] with the IOPs at `x` (one per band) given.
+    pub fn volume_with_iops(
+        &self,
+        x: Vec3,
+        toward_viewer: Vec3,
+        iops: &[Iop],
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
         // The mixture weights of the two phase functions at x, per band.
-        let water = &self.scene.water;
         scratch.mix.clear();
-        scratch.mix.extend((0..self.scene.bands.len()).map(|b| {
-            let iop = water.iop(x, b);
+        scratch.mix.extend(iops.iter().map(|iop| {
             let total = iop.b();
             if total > 0.0 {
                 (iop.b_w / total) as f32
@@ -252,13 +275,17 @@ impl<'a> Estimator<'a> {
             let cos = n.photon.direction.dot(toward_viewer) as f64;
             (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64
         };
-        let r = self.estimate(x, LAYER_VOLUME, &weight, false, scratch, out);
+        let r = self.estimate(x, LAYER_VOLUME, &weight, None, scratch, out);
         scratch.mix = mix;
         r
     }
 
     /// Radiance per band leaving a Lambertian surface at `x` with unit
     /// normal `normal` (facing the water) from the surface photon map.
+    /// Photons count when they lie near the tangent plane (within
+    /// [`PLANE_TOLERANCE`] of the search radius, plus 1 cm) and arrived from
+    /// the water side; the search disc is clipped where the surface ends
+    /// (the waterline, targets standing on it, open domain walls).
     pub fn surface(
         &self,
         x: Vec3,
@@ -276,15 +303,25 @@ impl<'a> Estimator<'a> {
             scene.reflectance(surface, x, n.photon.band as usize) / std::f64::consts::PI
                 * n.photon.power as f64
         };
-        self.estimate(x, LAYER_SURFACE, &weight, true, scratch, out)
+        self.estimate(
+            x,
+            LAYER_SURFACE,
+            &weight,
+            Some((normal, surface)),
+            scratch,
+            out,
+        )
     }
 
+    /// One search serves both sizes: the expanded search (or the local one
+    /// alone in naive mode) is found, its nearest photons are the local
+    /// search, and the boundaries are traced once at the larger radius.
     fn estimate(
         &self,
         x: Vec3,
         layer: u16,
         weight: &dyn Fn(&Neighbour) -> f64,
-        surface: bool,
+        surface: Option<(Vec3, SurfaceId)>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -295,26 +332,93 @@ impl<'a> Estimator<'a> {
             expanded,
             ..
         } = scratch;
+        let compensated = self.spectral == SpectralMode::Compensated;
         let k = self.scene.estimate.k;
-        let v_local = self.gather(x, layer, k, found, extra, local, weight, surface)?;
+        let k_big = if compensated {
+            self.scene.estimate.k_expanded.max(k)
+        } else {
+            k
+        };
+        self.find(x, layer, k_big, found, extra)?;
+        if let Some((normal, _)) = surface {
+            // Photons on other surfaces (a target's side, the far side of a
+            // thin panel) are not on this one.
+            let r = self.region_radius(found, k_big);
+            let tol = PLANE_TOLERANCE * r + 0.01;
+            found.retain(|n| (n.photon.position - x).dot(normal).abs() <= tol);
+        }
+        if found.is_empty() {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            return Ok(());
+        }
+        let r_big = self.region_radius(found, k_big);
+        let n_local = if compensated {
+            self.take_local(found, k)
+        } else {
+            found.len()
+        };
+        let r_local = if compensated {
+            self.region_radius(&found[..n_local], k)
+        } else {
+            r_big
+        };
+        let mode = self.boundary;
+        let (v_local, v_expanded) = match surface {
+            None => {
+                let b = match mode {
+                    BoundaryMode::None => AxialDistances::unbounded(r_big),
+                    _ => boundary::axial_distances_traced(self.scene, x, r_big),
+                };
+                let sum = |set: &[Neighbour], r: f32, sums: &mut BandSums| -> f64 {
+                    let b = b.capped(r);
+                    sums.clear();
+                    for n in set {
+                        if mode.accepts(n.photon.position - x, r, &b) {
+                            sums.add(n.photon.band, weight(n));
+                        }
+                    }
+                    mode.volume(r, &b)
+                };
+                let v_local = sum(&found[..n_local], r_local, local);
+                (
+                    v_local,
+                    if compensated {
+                        sum(found, r_big, expanded)
+                    } else {
+                        0.0
+                    },
+                )
+            }
+            Some((normal, id)) => {
+                let d = match mode {
+                    BoundaryMode::None => DiscDistances::unbounded(r_big, normal),
+                    _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_big),
+                };
+                let sum = |set: &[Neighbour], r: f32, sums: &mut BandSums| -> f64 {
+                    let d = d.capped(r);
+                    sums.clear();
+                    for n in set {
+                        if mode.accepts_in_disc(n.photon.position - x, r, &d) {
+                            sums.add(n.photon.band, weight(n));
+                        }
+                    }
+                    mode.area(r, &d)
+                };
+                let v_local = sum(&found[..n_local], r_local, local);
+                (
+                    v_local,
+                    if compensated {
+                        sum(found, r_big, expanded)
+                    } else {
+                        0.0
+                    },
+                )
+            }
+        };
         if v_local <= 0.0 {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
         }
-        let v_expanded = if self.spectral == SpectralMode::Compensated {
-            self.gather(
-                x,
-                layer,
-                self.scene.estimate.k_expanded,
-                found,
-                extra,
-                expanded,
-                weight,
-                surface,
-            )?
-        } else {
-            0.0
-        };
         combine(self.spectral, local, v_local, expanded, v_expanded, out);
         Ok(())
     }

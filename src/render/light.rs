@@ -19,6 +19,7 @@
 use super::camera::CameraRay;
 use super::estimator::{Estimator, Scratch};
 use crate::error::Result;
+use crate::optics::iop::Iop;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
@@ -77,8 +78,9 @@ impl<'a> Light<'a> {
     }
 
     /// Transmittance per band from `x` toward the sun up to the surface
-    /// (0 where a target or the floor shades x).
-    fn sun_transmittance(&self, x: Vec3, out: &mut [f64]) {
+    /// (0 where a target or the floor shades x); `here` holds the IOPs at x,
+    /// `tmp` is space for other points in heterogeneous water.
+    fn sun_transmittance(&self, x: Vec3, here: &[Iop], tmp: &mut [Iop], out: &mut [f64]) {
         let up = -self.sun_w;
         let len = (-x.z / up.z).max(0.0);
         if self.scene.geometry.occluded(x, up, len) {
@@ -86,15 +88,22 @@ impl<'a> Light<'a> {
             return;
         }
         let water = &self.scene.water;
-        let samples = if water.is_uniform() { 1 } else { 4 };
-        for (b, o) in out.iter_mut().enumerate() {
-            let mut tau = 0.0;
-            for s in 0..samples {
-                let p = x + up * (len * (s as f32 + 0.5) / samples as f32);
-                tau += water.iop(p, b).c() * len as f64 / samples as f64;
+        if water.is_uniform() {
+            for (o, iop) in out.iter_mut().zip(here) {
+                *o = (-iop.c() * len as f64).exp();
             }
-            *o = (-tau).exp();
+            return;
         }
+        const SAMPLES: usize = 4;
+        out.iter_mut().for_each(|o| *o = 0.0);
+        for s in 0..SAMPLES {
+            let p = x + up * (len * (s as f32 + 0.5) / SAMPLES as f32);
+            water.iops(p, tmp);
+            for (o, iop) in out.iter_mut().zip(tmp.iter()) {
+                *o += iop.c() * len as f64 / SAMPLES as f64;
+            }
+        }
+        out.iter_mut().for_each(|o| *o = (-*o).exp());
     }
 
     /// Radiance per band arriving at `p0` (in water) travelling along `-dir`,
@@ -113,6 +122,8 @@ impl<'a> Light<'a> {
         let mut tr = vec![1.0f64; nb];
         let mut est = vec![0.0f64; nb];
         let mut sun_t = vec![0.0f64; nb];
+        let mut iops = vec![Iop::default(); nb];
+        let mut tmp = vec![Iop::default(); nb];
         let t_surface = if dir.z > 0.0 {
             -p0.z / dir.z
         } else {
@@ -134,11 +145,13 @@ impl<'a> Light<'a> {
             let dt = step.min(t_end - t0);
             let s = dt * rng.uniform_f32();
             let x = p0 + dir * (t0 + s);
-            self.est.volume(x, -dir, scratch, &mut est)?;
-            self.sun_transmittance(x, &mut sun_t);
+            scene.water.iops(x, &mut iops);
+            self.est
+                .volume_with_iops(x, -dir, &iops, scratch, &mut est)?;
+            self.sun_transmittance(x, &iops, &mut tmp, &mut sun_t);
             let mut alive = false;
             for b in 0..nb {
-                let iop = scene.water.iop(x, b);
+                let iop = iops[b];
                 let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
                 // The forward delta of the truncated phase functions puts
                 // its share of scattering back into the ray (see `peak`).
@@ -157,7 +170,8 @@ impl<'a> Light<'a> {
             let n = h.normal;
             let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
             let x = h.position + n * 1e-3;
-            self.sun_transmittance(x, &mut sun_t);
+            scene.water.iops(x, &mut iops);
+            self.sun_transmittance(x, &iops, &mut tmp, &mut sun_t);
             self.est
                 .surface(h.position, n, h.surface, scratch, &mut est)?;
             for b in 0..nb {
