@@ -181,11 +181,16 @@ impl BoundaryMode {
 
     /// Whether a surface photon at `offset` = P - O, found by a Euclidean
     /// search of radius `r`, belongs to this mode's search disc (the
-    /// offset is measured in the tangent plane).
+    /// offset is measured in the tangent plane). Unlike a volume, a surface
+    /// may go on past the lines that clip the disc (the floor under a
+    /// target), so the clipped disc keeps only photons inside its lines.
     pub fn accepts_in_disc(self, offset: Vec3, r: f32, b: &DiscDistances) -> bool {
         let [x, y] = b.coords(offset);
         match self {
-            BoundaryMode::None | BoundaryMode::ClippedSphere => x * x + y * y <= r * r,
+            BoundaryMode::None => x * x + y * y <= r * r,
+            BoundaryMode::ClippedSphere => {
+                x * x + y * y <= r * r && x <= b.d[0] && -x <= b.d[1] && y <= b.d[2] && -y <= b.d[3]
+            }
             BoundaryMode::Ellipsoid => {
                 let mut sum = 0.0f32;
                 for (c, (pos, neg)) in [(x, (b.d[0], b.d[1])), (y, (b.d[2], b.d[3]))] {

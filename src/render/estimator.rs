@@ -28,8 +28,10 @@ use glam::Vec3;
 use std::cell::RefCell;
 
 /// Surface photons count within this fraction of the search radius (plus
-/// 1 cm) of the tangent plane.
-pub const PLANE_TOLERANCE: f32 = 0.1;
+/// 5 mm) of the tangent plane: off-plane photons are on another surface
+/// (a target's side, the far side of a thin panel). Photons of such a
+/// surface within the tolerance of a junction count on both.
+pub const PLANE_TOLERANCE: f32 = 0.02;
 
 /// Reusable per-thread buffers of an estimate.
 pub struct Scratch {
@@ -283,7 +285,7 @@ impl<'a> Estimator<'a> {
     /// Radiance per band leaving a Lambertian surface at `x` with unit
     /// normal `normal` (facing the water) from the surface photon map.
     /// Photons count when they lie near the tangent plane (within
-    /// [`PLANE_TOLERANCE`] of the search radius, plus 1 cm) and arrived from
+    /// [`PLANE_TOLERANCE`] of the search radius, plus 5 mm) and arrived from
     /// the water side; the search disc is clipped where the surface ends
     /// (the waterline, targets standing on it, open domain walls).
     pub fn surface(
@@ -344,7 +346,7 @@ impl<'a> Estimator<'a> {
             // Photons on other surfaces (a target's side, the far side of a
             // thin panel) are not on this one.
             let r = self.region_radius(found, k_big);
-            let tol = PLANE_TOLERANCE * r + 0.01;
+            let tol = PLANE_TOLERANCE * r + 0.005;
             found.retain(|n| (n.photon.position - x).dot(normal).abs() <= tol);
         }
         if found.is_empty() {

@@ -80,6 +80,15 @@ pub fn check_knn(map: &PhotonMap, photons: &[Photon], at: Vec3, k: usize, max_r:
     }
     assert_eq!(got.len(), want.len(), "at {at}: neighbour count");
     check_sorted_and_real(&got, at);
+    check_any_order(
+        map,
+        at,
+        Search::Nearest {
+            k,
+            max_radius: max_r,
+        },
+        &got,
+    );
     for (i, (g, w)) in got.iter().zip(&want).enumerate() {
         assert!(
             close(g.distance_sq, *w),
@@ -102,9 +111,21 @@ pub fn check_radius(map: &PhotonMap, photons: &[Photon], at: Vec3, r: f32) {
         got.len()
     );
     check_sorted_and_real(&got, at);
+    check_any_order(map, at, Search::Radius { radius: r }, &got);
     for (i, g) in got.iter().enumerate().take(lo) {
         assert!(close(g.distance_sq, want[i]), "at {at}: photon {i}");
     }
+}
+
+/// The unordered query finds the same photons (the same distances; photons
+/// tied at the k-th distance may differ).
+fn check_any_order(map: &PhotonMap, at: Vec3, search: Search, sorted: &[Neighbour]) {
+    let mut any = Vec::new();
+    map.query_any_order_into(at, None, search, &mut any)
+        .unwrap();
+    any.sort_by(|a, b| a.distance_sq.total_cmp(&b.distance_sq));
+    let d = |v: &[Neighbour]| v.iter().map(|n| n.distance_sq).collect::<Vec<_>>();
+    assert_eq!(d(&any), d(sorted), "at {at}: unordered query");
 }
 
 /// Results are ordered and each one's distance is its photon's real distance.
