@@ -291,6 +291,21 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         )
         .into());
     }
+    // Rendering: the tile cache gets the budget less a fixed reserve for
+    // tile buffers, scratch and the quicklook image, and less the boundary
+    // grid if the scene asks for one.
+    let reserve = (32u64 << 20).min(budget / 4);
+    let grid = littoral::render::estimator::Estimator::grid_bytes(&scene)?;
+    if grid >= budget - reserve {
+        return Err(littoral::Error::Budget {
+            budget,
+            what: format!(
+                "the boundary grid ([estimate] boundary_grid_m) needs {grid} bytes, and {} are left for it and the tile cache",
+                budget - reserve
+            ),
+        }
+        .into());
+    }
     let t_scene = start.elapsed().as_secs_f64();
     let bars = Bars::new(a.quiet);
 
@@ -331,11 +346,9 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         v
     };
     let t_emit = start.elapsed().as_secs_f64();
+    littoral::mem::release_free_memory();
 
-    // Rendering: the tile cache gets the budget less a fixed reserve for
-    // tile buffers, scratch and the quicklook image.
-    let reserve = (32u64 << 20).min(budget / 4);
-    let map = littoral::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve)?;
+    let map = littoral::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve - grid)?;
     let rendered = littoral::render::render(&scene, &map, &a.out, a.threads, &bars)?;
     let t_render = start.elapsed().as_secs_f64();
     drop(map);
@@ -354,6 +367,8 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         "boundary": scene.estimate.boundary,
         "spectral": scene.estimate.spectral,
         "step_m": scene.estimate.step_m,
+        "forward_peak_deg": scene.estimate.forward_peak_deg,
+        "boundary_grid_m": scene.estimate.boundary_grid_m,
     });
     report["sensor"] = serde_json::json!({
         "pixels": scene.sensor.pixels,

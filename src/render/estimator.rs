@@ -17,7 +17,7 @@
 
 use super::peak::TruncatedPhase;
 use crate::error::Result;
-use crate::estimate::boundary::{self, AxialDistances, BoundaryMode, DiscDistances};
+use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
 use crate::estimate::spectral::{combine, BandSums, SpectralMode};
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
@@ -68,7 +68,13 @@ pub struct Estimator<'a> {
     /// (see `peak`).
     water_phase: TruncatedPhase,
     particle_phase: TruncatedPhase,
+    /// Precomputed axial distances, when the scene asks for them.
+    grid: Option<BoundaryGrid>,
 }
+
+/// Distances the boundary grid stores (m): far enough that the field stays
+/// linear next to a gently sloping floor (see `BoundaryGrid::build`).
+const GRID_MAX_DISTANCE_M: f64 = 30.0;
 
 impl<'a> Estimator<'a> {
     pub fn new(scene: &'a Scene, map: &'a PhotonMap) -> Result<Self> {
@@ -82,17 +88,43 @@ impl<'a> Estimator<'a> {
             .spectral
             .parse::<SpectralMode>()
             .map_err(|e| crate::Error::invalid("estimate.spectral", e.to_string()))?;
+        let grid = match (boundary, scene.estimate.boundary_grid_m) {
+            (BoundaryMode::None, _) | (_, None) => None,
+            (_, Some(h)) => Some(BoundaryGrid::build(
+                scene,
+                h as f32,
+                Self::grid_max_distance(scene),
+            )?),
+        };
         Ok(Estimator {
             scene,
             map,
             boundary,
             spectral,
+            grid,
             water_phase: TruncatedPhase::new(&scene.water_phase, scene.estimate.forward_peak_deg),
             particle_phase: TruncatedPhase::new(
                 &scene.particle_phase,
                 scene.estimate.forward_peak_deg,
             ),
         })
+    }
+
+    fn grid_max_distance(scene: &Scene) -> f32 {
+        GRID_MAX_DISTANCE_M.max(scene.estimate.largest_radius_m()) as f32
+    }
+
+    /// Bytes of the boundary grid `Estimator::new` would build for `scene`
+    /// (0 without one), for the memory budget.
+    pub fn grid_bytes(scene: &Scene) -> Result<u64> {
+        match scene.estimate.boundary_grid_m {
+            Some(h) if scene.estimate.boundary != "none" => Ok(BoundaryGrid::planned_bytes(
+                scene,
+                h as f32,
+                Self::grid_max_distance(scene),
+            )? as u64),
+            _ => Ok(0),
+        }
     }
 
     /// The fractions of pure-water and particle scattering that the
@@ -367,9 +399,10 @@ impl<'a> Estimator<'a> {
         let mode = self.boundary;
         let (v_local, v_expanded) = match surface {
             None => {
-                let b = match mode {
-                    BoundaryMode::None => AxialDistances::unbounded(r_big),
-                    _ => boundary::axial_distances_traced(self.scene, x, r_big),
+                let b = match (mode, &self.grid) {
+                    (BoundaryMode::None, _) => AxialDistances::unbounded(r_big),
+                    (_, Some(grid)) => grid.distances(x, r_big),
+                    (_, None) => boundary::axial_distances_traced(self.scene, x, r_big),
                 };
                 let sum = |set: &[Neighbour], r: f32, sums: &mut BandSums| -> f64 {
                     let b = b.capped(r);

@@ -139,6 +139,19 @@ pub struct EstimateSettings {
     /// Half-angle (degrees) of the forward peak of the phase functions that
     /// is treated as a delta in photon estimates (0 = exact; see `render::peak`).
     pub forward_peak_deg: f64,
+    /// Node spacing (m) of a precomputed boundary-distance grid for volume
+    /// estimates, or None to trace six rays per estimate.
+    pub boundary_grid_m: Option<f64>,
+}
+
+impl EstimateSettings {
+    /// The largest radius a volume search can have (m).
+    pub fn largest_radius_m(&self) -> f64 {
+        match self.radius_m {
+            Some(r) => r * (self.k_expanded.max(self.k) as f64 / self.k as f64).cbrt(),
+            None => self.max_radius_m,
+        }
+    }
 }
 
 /// A validated scene.

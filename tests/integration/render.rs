@@ -96,7 +96,7 @@ spectral = "naive"
 /// Photons of known uniform density in a box bounded by the surface, the
 /// floor and open domain walls. Without compensation a search at a face,
 /// an edge and a corner reads about 1/2, 1/4 and 1/8 of the truth; both
-/// compensations read the truth. With ~21,000 photons per full search
+/// compensations read the truth, with distances traced or from the grid. With ~21,000 photons per full search
 /// sphere the relative standard error is under 1 %, so 3 % is over three
 /// standard errors even at a corner (1/8 of the photons).
 #[test]
@@ -110,21 +110,27 @@ fn boundary_compensation_recovers_uniform_density() {
         ("edge", Vec3::new(e, 1.0, -1.0 + e), 0.25),
         ("corner", Vec3::new(e, e, -1.0 + e), 0.125),
     ];
-    for mode in ["none", "ellipsoid", "clipped-sphere"] {
+    // Axial distances traced per estimate, or from a 0.1 m grid.
+    let gridded = format!("{BOX_SCENE}boundary_grid_m = 0.1\n");
+    for (mode, text) in ["none", "ellipsoid", "clipped-sphere"]
+        .into_iter()
+        .flat_map(|m| [(m, BOX_SCENE), (m, gridded.as_str())])
+    {
         let o = Overrides {
             boundary: Some(mode),
             ..Overrides::default()
         };
-        let scene = Scene::parse(BOX_SCENE, Path::new("box.toml"), &o).unwrap();
+        let scene = Scene::parse(text, Path::new("box.toml"), &o).unwrap();
         let est = Estimator::new(&scene, &map).unwrap();
         let mut scratch = Scratch::new(1);
         let mut out = [0.0f64];
+        let how = if text == BOX_SCENE { "traced" } else { "grid" };
         for (name, x, fraction) in sites {
             est.volume(x, Vec3::Z, &mut scratch, &mut out).unwrap();
             let ratio = out[0] / truth;
             let want = if mode == "none" { fraction } else { 1.0 };
             let tol = if mode == "none" { 0.06 * want } else { 0.03 };
-            eprintln!("{mode:>14} {name:>8}: {ratio:.4} of truth");
+            eprintln!("{mode:>14} {how:>6} {name:>8}: {ratio:.4} of truth");
             assert!(
                 (ratio - want).abs() < tol,
                 "{mode} at {name}: {ratio} of truth, want {want}"
@@ -524,4 +530,21 @@ fn render_outputs_and_errors() {
         "cube",
     ]);
     assert_eq!(bad_mode.status.code(), Some(1));
+    // A boundary grid that cannot fit the memory budget is refused up front.
+    let grid_scene = dir.path().join("grid.toml");
+    std::fs::write(&grid_scene, deep_scene(2, "boundary_grid_m = 0.05\n")).unwrap();
+    let too_big = littoral(&[
+        "render",
+        grid_scene.to_str().unwrap(),
+        "--out",
+        dir.path().join("o3").to_str().unwrap(),
+        "--mem-budget",
+        "64MiB",
+    ]);
+    assert_eq!(too_big.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&too_big.stderr);
+    assert!(
+        err.contains("boundary_grid_m") && err.trim_end().lines().count() == 1,
+        "{err}"
+    );
 }

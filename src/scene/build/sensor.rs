@@ -185,6 +185,14 @@ pub(super) fn render_settings(
             "must be between 0 and 90 degrees (0 keeps the exact phase function)",
         ));
     }
+    if let Some(h) = e.boundary_grid_m {
+        if !finite_in(h, 0.01, 100.0) {
+            return Err(ctx.err(
+                &ek("boundary_grid_m"),
+                "must be a grid spacing between 0.01 and 100 m",
+            ));
+        }
+    }
     let estimate = EstimateSettings {
         k,
         radius_m: e.radius_m,
@@ -194,6 +202,7 @@ pub(super) fn render_settings(
         spectral,
         step_m,
         forward_peak_deg,
+        boundary_grid_m: e.boundary_grid_m,
     };
     Ok((sensor, radiometers, estimate))
 }
