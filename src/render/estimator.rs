@@ -18,7 +18,7 @@
 use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
-use crate::estimate::spectral::{combine, BandSums, SpectralMode};
+use crate::estimate::spectral::{combine, combine_with_coarse, BandSums, SpectralMode};
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
 use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
@@ -42,6 +42,7 @@ pub struct Scratch {
     extra: Vec<Neighbour>,
     local: BandSums,
     expanded: BandSums,
+    coarse: BandSums,
 }
 
 impl Scratch {
@@ -54,6 +55,7 @@ impl Scratch {
             extra: Vec::new(),
             local: BandSums::new(bands),
             expanded: BandSums::new(bands),
+            coarse: BandSums::new(bands),
         }
     }
 }
@@ -304,10 +306,11 @@ impl<'a> Estimator<'a> {
         }));
         let mix = std::mem::take(&mut scratch.mix);
         let (pw, pp) = (&self.water_phase, &self.particle_phase);
-        let weight = |n: &Neighbour| -> f64 {
+        let weight = |n: &Neighbour| -> (f64, bool) {
             let fw = mix[n.photon.band as usize] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
-            (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64
+            let w = (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64;
+            (w, cos > 0.0)
         };
         let r = self.estimate(x, LAYER_VOLUME, &weight, None, scratch, out);
         scratch.mix = mix;
@@ -329,13 +332,13 @@ impl<'a> Estimator<'a> {
         out: &mut [f64],
     ) -> Result<()> {
         let scene = self.scene;
-        let weight = |n: &Neighbour| -> f64 {
+        let weight = |n: &Neighbour| -> (f64, bool) {
             // Only light arriving on this side of the surface counts.
             if n.photon.direction.dot(normal) >= 0.0 {
-                return 0.0;
+                return (0.0, false);
             }
-            scene.reflectance(surface, x, n.photon.band as usize) / std::f64::consts::PI
-                * n.photon.power as f64
+            let r = scene.reflectance(surface, x, n.photon.band as usize);
+            (r / std::f64::consts::PI * n.photon.power as f64, false)
         };
         self.estimate(
             x,
@@ -348,13 +351,19 @@ impl<'a> Estimator<'a> {
     }
 
     /// One search serves both sizes: the expanded search (or the local one
-    /// alone in naive mode) is found, its nearest photons are the local
-    /// search, and the boundaries are traced once at the larger radius.
+    /// alone when only one size is needed) is found, its nearest photons are
+    /// the local search, and the boundaries are traced once at the larger
+    /// radius. Volume estimates count the photons travelling toward the
+    /// viewer's hemisphere (`weight` returns them as heavy) at the expanded
+    /// scale: through the phase function's forward lobe a few of them carry
+    /// most of the in-scatter (upwelling light seen looking down rests on
+    /// the few photons travelling up), and a local search of k holds too
+    /// few of them for a steady estimate.
     fn estimate(
         &self,
         x: Vec3,
         layer: u16,
-        weight: &dyn Fn(&Neighbour) -> f64,
+        weight: &dyn Fn(&Neighbour) -> (f64, bool),
         surface: Option<(Vec3, SurfaceId)>,
         scratch: &mut Scratch,
         out: &mut [f64],
@@ -364,11 +373,14 @@ impl<'a> Estimator<'a> {
             extra,
             local,
             expanded,
+            coarse,
             ..
         } = scratch;
         let compensated = self.spectral == SpectralMode::Compensated;
+        let split = surface.is_none();
+        let two_sizes = compensated || split;
         let k = self.scene.estimate.k;
-        let k_big = if compensated {
+        let k_big = if two_sizes {
             self.scene.estimate.k_expanded.max(k)
         } else {
             k
@@ -386,76 +398,100 @@ impl<'a> Estimator<'a> {
             return Ok(());
         }
         let r_big = self.region_radius(found, k_big);
-        let n_local = if compensated {
+        let n_local = if two_sizes {
             self.take_local(found, k)
         } else {
             found.len()
         };
-        let r_local = if compensated {
+        let r_local = if two_sizes {
             self.region_radius(&found[..n_local], k)
         } else {
             r_big
         };
         let mode = self.boundary;
-        let (v_local, v_expanded) = match surface {
-            None => {
-                let b = match (mode, &self.grid) {
-                    (BoundaryMode::None, _) => AxialDistances::unbounded(r_big),
-                    (_, Some(grid)) => grid.distances(x, r_big),
-                    (_, None) => boundary::axial_distances_traced(self.scene, x, r_big),
-                };
-                let sum = |set: &[Neighbour], r: f32, sums: &mut BandSums| -> f64 {
-                    let b = b.capped(r);
-                    sums.clear();
-                    for n in set {
-                        if mode.accepts(n.photon.position - x, r, &b) {
-                            sums.add(n.photon.band, weight(n));
-                        }
-                    }
-                    mode.volume(r, &b)
-                };
-                let v_local = sum(&found[..n_local], r_local, local);
-                (
-                    v_local,
-                    if compensated {
-                        sum(found, r_big, expanded)
-                    } else {
-                        0.0
-                    },
-                )
-            }
-            Some((normal, id)) => {
-                let d = match mode {
-                    BoundaryMode::None => DiscDistances::unbounded(r_big, normal),
-                    _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_big),
-                };
-                let sum = |set: &[Neighbour], r: f32, sums: &mut BandSums| -> f64 {
-                    let d = d.capped(r);
-                    sums.clear();
-                    for n in set {
-                        if mode.accepts_in_disc(n.photon.position - x, r, &d) {
-                            sums.add(n.photon.band, weight(n));
-                        }
-                    }
-                    mode.area(r, &d)
-                };
-                let v_local = sum(&found[..n_local], r_local, local);
-                (
-                    v_local,
-                    if compensated {
-                        sum(found, r_big, expanded)
-                    } else {
-                        0.0
-                    },
-                )
-            }
+        let big = match surface {
+            None => Region::Volume(match (mode, &self.grid) {
+                (BoundaryMode::None, _) => AxialDistances::unbounded(r_big),
+                (_, Some(grid)) => grid.distances(x, r_big),
+                (_, None) => boundary::axial_distances_traced(self.scene, x, r_big),
+            }),
+            Some((normal, id)) => Region::Disc(match mode {
+                BoundaryMode::None => DiscDistances::unbounded(r_big, normal),
+                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_big),
+            }),
         };
+        let small = big.capped(r_local);
+        local.clear();
+        expanded.clear();
+        coarse.clear();
+        for (i, n) in found.iter().enumerate() {
+            let offset = n.photon.position - x;
+            let in_local = i < n_local && small.accepts(mode, offset, r_local);
+            let in_big = two_sizes && big.accepts(mode, offset, r_big);
+            if !(in_local || in_big) {
+                continue;
+            }
+            let (w, heavy) = weight(n);
+            let heavy = split && heavy;
+            if in_local && !heavy {
+                local.add(n.photon.band, w);
+            }
+            if in_big {
+                expanded.add(n.photon.band, w);
+                if heavy {
+                    coarse.add(n.photon.band, w);
+                }
+            }
+        }
+        let v_local = small.size(mode, r_local);
         if v_local <= 0.0 {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
         }
-        combine(self.spectral, local, v_local, expanded, v_expanded, out);
+        let v_big = if two_sizes {
+            big.size(mode, r_big)
+        } else {
+            0.0
+        };
+        if split {
+            combine_with_coarse(self.spectral, local, v_local, coarse, expanded, v_big, out);
+        } else {
+            combine(self.spectral, local, v_local, expanded, v_big, out);
+        }
         Ok(())
+    }
+}
+
+/// The search region of an estimate: a sphere or a disc with its boundary
+/// distances.
+#[derive(Clone, Copy)]
+enum Region {
+    Volume(AxialDistances),
+    Disc(DiscDistances),
+}
+
+impl Region {
+    /// The region of a smaller search of radius `r`.
+    fn capped(&self, r: f32) -> Region {
+        match self {
+            Region::Volume(b) => Region::Volume(b.capped(r)),
+            Region::Disc(d) => Region::Disc(d.capped(r)),
+        }
+    }
+
+    fn accepts(&self, mode: BoundaryMode, offset: Vec3, r: f32) -> bool {
+        match self {
+            Region::Volume(b) => mode.accepts(offset, r, b),
+            Region::Disc(d) => mode.accepts_in_disc(offset, r, d),
+        }
+    }
+
+    /// Volume (m^3) or area (m^2).
+    fn size(&self, mode: BoundaryMode, r: f32) -> f64 {
+        match self {
+            Region::Volume(b) => mode.volume(r, b),
+            Region::Disc(d) => mode.area(r, d),
+        }
     }
 }
 

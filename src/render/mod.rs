@@ -48,7 +48,7 @@ pub struct RadiometerReading {
     /// Standard error per band of the mean over the jittered samples: the
     /// march's sampling error. Photon-map noise is correlated over the
     /// search radius, so it is not in this figure (in deep water at 8 M
-    /// photons and k = 800 it was 6-15 % between distant positions).
+    /// photons and k = 800 it was 3-7 % between distant positions).
     pub stderr: Vec<f64>,
 }
 
