@@ -219,9 +219,9 @@ fn valid_volume(v: f64) -> bool {
 /// [`combine`] with part of the signal estimated at the expanded scale:
 /// `coarse` holds the contributions of one class of photons (those the
 /// caller counts only in the expanded search) and the local sums the rest.
-/// `Naive` -> local_i / V + coarse_i / V'; `Compensated` -> (Lbar + C'bar)
-/// * L'_i / L'bar, with Lbar = local total / V and C'bar = coarse total /
-/// V'. Splitting a density estimate by photon class and estimating each
+/// `Naive` -> local_i / V + coarse_i / V'; `Compensated` ->
+/// (Lbar + C'bar) L'_i / L'bar, with Lbar = local total / V and C'bar =
+/// coarse total / V'. Splitting a density estimate by photon class and estimating each
 /// class with its own bandwidth keeps it consistent; the renderer uses it
 /// for the few heavy photons travelling toward the viewer (see
 /// `render::estimator`). With an empty `coarse` this is [`combine`].
