@@ -1,5 +1,6 @@
 //! Radiance estimates per second on the built-in coastal scene's photon map
-//! (2 M photons, 128 bands; clipped-sphere boundary, compensated spectra),
+//! (its 4 M photons, 128 bands; k 200 / 2000, clipped-sphere boundary,
+//! compensated spectra),
 //! with a tile cache of 100 %, 25 % and 5 % of the decoded map; sites along
 //! nadir rays of a 64 x 64 image in render (tile) order, one thread.
 
@@ -16,7 +17,7 @@ use littoral::store::{BuildOptions, MapFile};
 
 fn estimate(c: &mut Criterion) {
     let scene = Scene::coastal(&Overrides::default()).unwrap();
-    let path = bench_dir().join("coastal-2M.map");
+    let path = bench_dir().join(format!("coastal-{}.map", scene.photons));
     if !path.exists() {
         littoral::emit::emit(
             &scene,
@@ -51,7 +52,7 @@ fn estimate(c: &mut Criterion) {
         .iter()
         .map(|t| tile_bytes(t.count))
         .sum();
-    let mut g = c.benchmark_group("estimate_coastal_2M");
+    let mut g = c.benchmark_group("estimate_coastal");
     g.sample_size(10);
     g.throughput(Throughput::Elements(sites.len() as u64));
     for (name, share) in [
