@@ -2,6 +2,7 @@
 use super::*;
 use crate::rng::Pcg32;
 use crate::scene::Overrides;
+use rayon::prelude::*;
 use std::path::Path;
 
 fn cap_volume(r: f64, d: f64) -> f64 {
