@@ -1,7 +1,7 @@
 //! The emission report: irradiance profiles, apparent optical properties
 //! and the energy budget, per band, in absolute units.
 
-use super::tally::{lu_cone_projected_solid_angle, Totals, ED, EOD, EOU, EU, LU};
+use super::tally::{lu_cone_projected_solid_angle, Totals, ED, EOD, EOU, EU, LD, LU};
 use crate::scene::Scene;
 use serde::Serialize;
 
@@ -23,6 +23,11 @@ pub struct DepthTally {
     /// W m^-2 sr^-1 nm^-1.
     pub Lu: Vec<f64>,
     pub Lu_stderr: Vec<f64>,
+    /// Downwelling radiance travelling within the same cone of straight
+    /// down (what a radiometer looking at the zenith measures; direct sun
+    /// within the cone included), W m^-2 sr^-1 nm^-1.
+    pub Ld: Vec<f64>,
+    pub Ld_stderr: Vec<f64>,
     /// Irradiance reflectance Eu / Ed.
     pub R: Vec<f64>,
 }
@@ -110,13 +115,15 @@ impl EmissionReport {
             let (eod, eod_se) = series(totals.slot(d, EOD));
             let (eou, eou_se) = series(totals.slot(d, EOU));
             let omega = lu_cone_projected_solid_angle();
-            let (lu, lu_se): (Vec<f64>, Vec<f64>) = {
-                let (l, s) = series(totals.slot(d, LU));
+            let radiance = |q: usize| -> (Vec<f64>, Vec<f64>) {
+                let (l, s) = series(totals.slot(d, q));
                 (
                     l.iter().map(|v| v / omega).collect(),
                     s.iter().map(|v| v / omega).collect(),
                 )
             };
+            let (lu, lu_se) = radiance(LU);
+            let (ld, ld_se) = radiance(LD);
             let r = ed
                 .iter()
                 .zip(&eu)
@@ -134,6 +141,8 @@ impl EmissionReport {
                 Eou_stderr: eou_se,
                 Lu: lu,
                 Lu_stderr: lu_se,
+                Ld: ld,
+                Ld_stderr: ld_se,
                 R: r,
             });
         }

@@ -18,21 +18,25 @@ pub const EOU: usize = 3;
 /// Upward crossings within [`LU_CONE_DEG`] of the zenith: nadir-viewing
 /// upwelling radiance, an oracle for the renderer's radiometers.
 pub const LU: usize = 4;
-pub const QUANTITIES: usize = 5;
+/// Downward crossings within [`LU_CONE_DEG`] of straight down: the
+/// radiance a radiometer looking at the zenith measures.
+pub const LD: usize = 5;
+pub const QUANTITIES: usize = 6;
 
-/// Half-angle of the cone around straight up in which crossings count
-/// toward `LU`. The tally is the cone average of L weighted by cos(theta);
+/// Half-angle of the cones around straight up and straight down in which
+/// crossings count toward `LU` and `LD`. The tally is the cone average of L weighted by cos(theta);
 /// 10 degrees keeps that within a fraction of a per cent of nadir L for the
 /// smooth upwelling light field while catching 3 % of the upward photons.
 pub const LU_CONE_DEG: f64 = 10.0;
 
-/// Projected solid angle of the `LU` cone, pi sin^2(theta_c) (sr): power
+/// Projected solid angle of the `LU` (and `LD`) cone, pi sin^2(theta_c) (sr): power
 /// per area through it divided by this is radiance.
 pub fn lu_cone_projected_solid_angle() -> f64 {
     std::f64::consts::PI * LU_CONE_DEG.to_radians().sin().powi(2)
 }
 
-/// Whether an upward direction with vertical component `mu` counts toward `LU`.
+/// Whether a direction with vertical component `mu` lies within
+/// [`LU_CONE_DEG`] of straight up (`LU`), or with `-mu` of straight down (`LD`).
 #[inline]
 pub fn in_lu_cone(mu: f64) -> bool {
     mu >= LU_CONE_DEG.to_radians().cos()

@@ -16,7 +16,7 @@
 //! (transmitted once through the surface) is not stored unless the scene
 //! asks for it, since the renderer adds that single scattering directly.
 
-use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LU, MIN_ABS_MU};
+use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LD, LU, MIN_ABS_MU};
 use crate::optics::phase::scatter;
 use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use crate::rng::Pcg32;
@@ -222,6 +222,9 @@ fn cross_surface_down(scene: &Scene, tally: &mut PhotonTally, dir: Vec3) {
     if scene.tally_depths.first() == Some(&0.0) {
         tally.add(0, ED, 1.0);
         tally.add(0, EOD, 1.0 / (dir.z as f64).abs().max(MIN_ABS_MU));
+        if in_lu_cone(-dir.z as f64) {
+            tally.add(0, LD, 1.0);
+        }
     }
 }
 
@@ -237,6 +240,9 @@ fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir:
         if a.z > z && b.z <= z {
             tally.add(i, ED, 1.0);
             tally.add(i, EOD, inv_mu);
+            if in_lu_cone(-dir.z as f64) {
+                tally.add(i, LD, 1.0);
+            }
         } else if a.z < z && b.z >= z {
             tally.add(i, EU, 1.0);
             tally.add(i, EOU, inv_mu);

@@ -294,8 +294,8 @@ pixels = [4, 4]
 gsd_m = 1.0
 samples_per_pixel = 8
 [estimate]
-k = 800
-k_expanded = 800
+k = 400
+k_expanded = 3200
 max_radius_m = 3.0
 step_m = 0.25
 {extra}
@@ -342,88 +342,117 @@ fn mean_se(v: &[f64]) -> (f64, f64) {
     (m, (var / n).sqrt())
 }
 
+/// Radiometer positions in the deep scene, 10 m or more apart (beyond the
+/// 3 m search radius), so their photon noise is independent.
+const POSITIONS: [(f64, f64); 8] = [
+    (4.0, 4.0),
+    (14.0, 24.0),
+    (24.0, 14.0),
+    (34.0, 34.0),
+    (4.0, 34.0),
+    (34.0, 4.0),
+    (19.0, 34.0),
+    (34.0, 19.0),
+];
+
+/// `[[radiometer]]` tables looking along `view` at every position and depth.
+fn radiometer_grid(depths: &[f64], view: &str) -> String {
+    let mut text = String::new();
+    for d in depths {
+        for (x, y) in POSITIONS {
+            text += &format!(
+                "[[radiometer]]\ndepth_m = {d}\nview = \"{view}\"\nposition_m = [{x:.1}, {y:.1}]\n"
+            );
+        }
+    }
+    text
+}
+
+/// Band-mean readings of the radiometers at depth number `depth_index` of
+/// [`radiometer_grid`], one per position (the bands share their photons
+/// through the spectral compensation, so each position is one sample).
+fn readings(r: &serde_json::Value, depth_index: usize, bands: usize) -> Vec<f64> {
+    (0..POSITIONS.len())
+        .map(|i| {
+            let rd = &r["radiometers"][depth_index * POSITIONS.len() + i];
+            (0..bands)
+                .map(|b| rd["L"][b].as_f64().unwrap())
+                .sum::<f64>()
+                / bands as f64
+        })
+        .collect()
+}
+
+/// Band mean of tally `key` at tally row `row`, with its standard error.
+fn tally_mean(r: &serde_json::Value, row: usize, key: &str, bands: usize) -> (f64, f64) {
+    let nb = bands as f64;
+    let mean = (0..bands)
+        .map(|b| r["tally"][row][key][b].as_f64().unwrap())
+        .sum::<f64>()
+        / nb;
+    let se = (0..bands)
+        .map(|b| {
+            r["tally"][row][format!("{key}_stderr")][b]
+                .as_f64()
+                .unwrap()
+                .powi(2)
+        })
+        .sum::<f64>()
+        .sqrt()
+        / nb;
+    (mean, se)
+}
+
+/// Radiometers against a radiance tally: within 3 standard errors plus
+/// `allowance` (relative). Returns the radiometers' mean.
+fn check_against_tally(
+    r: &serde_json::Value,
+    depth_index: usize,
+    depth: f64,
+    row: usize,
+    key: &str,
+    bands: usize,
+    allowance: f64,
+) -> f64 {
+    let (m, se) = mean_se(&readings(r, depth_index, bands));
+    let (want, want_se) = tally_mean(r, row, key, bands);
+    let sigma = (se * se + want_se * want_se).sqrt();
+    eprintln!(
+        "{key} at {depth} m: radiometers {m:.4e} ± {se:.1e}, tally {want:.4e} ± {want_se:.1e} ({:.3})",
+        m / want
+    );
+    assert!(
+        (m - want).abs() < 3.0 * sigma + allowance * want,
+        "{key} at {depth} m: radiometers {m} vs tally {want} (sigma {sigma})"
+    );
+    m
+}
+
 /// In deep homogeneous water (identical IOPs in 8 bands): radiometers looking
 /// at nadir read the upwelling radiance that the emission tallies count
 /// directly (photons crossing the depth within 10 degrees of straight up),
 /// Lu(z) decays with Kd from the irradiance tallies within 10 %, and the
 /// camera equals the radiometer just below the surface carried through it
-/// (Fresnel, n^2).
+/// (Fresnel, n^2). The 3 % allowed beyond three standard errors covers the
+/// tally's cone average and the forward-peak delta of the estimate
+/// (`render::peak`, measured there within +4 %).
 #[test]
 fn radiometers_match_the_lu_tally_and_decay_with_kd() {
     let dir = tempdir();
-    let positions = [
-        (4.0, 4.0),
-        (14.0, 24.0),
-        (24.0, 14.0),
-        (34.0, 34.0),
-        (4.0, 34.0),
-        (34.0, 4.0),
-        (19.0, 34.0),
-        (34.0, 19.0),
-    ];
     let depths = [0.01, 1.0, 6.0];
-    let mut radiometers = String::new();
-    for d in depths {
-        for (x, y) in positions {
-            radiometers +=
-                &format!("[[radiometer]]\ndepth_m = {d}\nposition_m = [{x:.1}, {y:.1}]\n");
-        }
-    }
     let bands = 8;
     let r = render_json(
         dir.path(),
-        &deep_scene(bands, &radiometers),
+        &deep_scene(bands, &radiometer_grid(&depths, "nadir")),
         &["--threads", "2", "--photons", "8000000"],
     );
-    // Positions 10 m or more apart (beyond the 3 m search radius) give
-    // independent photon noise; the bands share their photons (spectral
-    // compensation), so each position's band mean is one sample.
-    let lu_at = |depth_index: usize| -> Vec<f64> {
-        (0..positions.len())
-            .map(|i| {
-                let rd = &r["radiometers"][depth_index * positions.len() + i];
-                (0..bands)
-                    .map(|b| rd["L"][b].as_f64().unwrap())
-                    .sum::<f64>()
-                    / bands as f64
-            })
-            .collect()
-    };
-    let tally = |t: usize, key: &str| -> (f64, f64) {
-        let v: Vec<f64> = (0..bands)
-            .map(|b| r["tally"][t][key][b].as_f64().unwrap())
-            .collect();
-        let se: Vec<f64> = (0..bands)
-            .map(|b| r["tally"][t][format!("{key}_stderr")][b].as_f64().unwrap())
-            .collect();
-        let nb = bands as f64;
-        (
-            v.iter().sum::<f64>() / nb,
-            (se.iter().map(|s| s * s).sum::<f64>()).sqrt() / nb,
-        )
-    };
     // Tally rows: depths 0, 1, 2 and 6 m.
-    let mut lu = Vec::new();
-    for (i, t) in [(0usize, 0usize), (1, 1), (2, 3)] {
-        let (m, se) = mean_se(&lu_at(i));
-        let (want, want_se) = tally(t, "Lu");
-        let sigma = (se * se + want_se * want_se).sqrt();
-        eprintln!(
-            "depth {}: radiometers {m:.4e} ± {se:.1e}, tally {want:.4e} ± {want_se:.1e} ({:.3})",
-            depths[i],
-            m / want
-        );
-        // 3 standard errors, plus 3 % for the tally's 10-degree cone average
-        // and the forward-peak delta of the estimate (render::peak).
-        assert!(
-            (m - want).abs() < 3.0 * sigma + 0.03 * want,
-            "depth {}: radiometers {m} vs tally {want} (sigma {sigma})",
-            depths[i]
-        );
-        lu.push(m);
-    }
+    let lu: Vec<f64> = [(0usize, 0usize), (1, 1), (2, 3)]
+        .iter()
+        .map(|&(i, row)| check_against_tally(&r, i, depths[i], row, "Lu", bands, 0.03))
+        .collect();
     let k_lu = (lu[1] / lu[2]).ln() / 5.0;
-    let kd = (tally(1, "Ed").0 / tally(3, "Ed").0).ln() / 5.0;
+    let kd = (tally_mean(&r, 1, "Ed", bands).0 / tally_mean(&r, 3, "Ed", bands).0).ln() / 5.0;
     eprintln!("K_Lu {k_lu:.4} against Kd {kd:.4}");
     assert!((k_lu / kd - 1.0).abs() < 0.10, "K_Lu {k_lu} vs Kd {kd}");
 
@@ -439,7 +468,7 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
         })
         .collect();
     let (cam, cam_se) = mean_se(&pixels);
-    let (lu0, lu0_se) = mean_se(&lu_at(0));
+    let (lu0, lu0_se) = mean_se(&readings(&r, 0, bands));
     let want = lu0 * t / (n * n);
     let se = (cam_se * cam_se + (lu0_se * t / (n * n)).powi(2)).sqrt();
     eprintln!("camera {cam:.4e} ± {cam_se:.1e}, radiometer through the surface {want:.4e}");
@@ -447,6 +476,29 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
         (cam - want).abs() < 3.0 * se,
         "camera {cam} vs radiometer {want} (se {se})"
     );
+}
+
+/// Looking up in the same water with the sun at 60 degrees (its aureole far
+/// from the zenith): radiometers read the downwelling radiance the tallies
+/// count within 10 degrees of straight down. Measured 3-4 % low with the
+/// default 10-degree forward-peak delta (`render::peak`: looking up, the
+/// light field brightens toward the sun inside the peak), hence the 5 %
+/// allowed beyond three standard errors.
+#[test]
+fn zenith_radiometers_match_the_ld_tally() {
+    let dir = tempdir();
+    let depths = [1.0, 6.0];
+    let bands = 4;
+    let scene = deep_scene(bands, &radiometer_grid(&depths, "zenith"))
+        .replace("zenith_deg = 20.0", "zenith_deg = 60.0");
+    let r = render_json(
+        dir.path(),
+        &scene,
+        &["--threads", "2", "--photons", "4000000"],
+    );
+    for (i, row) in [(0usize, 1usize), (1, 3)] {
+        check_against_tally(&r, i, depths[i], row, "Ld", bands, 0.05);
+    }
 }
 
 /// The cube is bit-identical for 1 and 2 threads.
