@@ -368,6 +368,7 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         "spectral": scene.estimate.spectral,
         "step_m": scene.estimate.step_m,
         "forward_peak_deg": scene.estimate.forward_peak_deg,
+        "forward_peak_down_deg": scene.estimate.forward_peak_down_deg,
         "boundary_grid_m": scene.estimate.boundary_grid_m,
     });
     report["sensor"] = serde_json::json!({

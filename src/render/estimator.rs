@@ -68,8 +68,9 @@ pub struct Estimator<'a> {
     pub spectral: SpectralMode,
     /// Phase functions with the forward peak truncated, for photon weights
     /// (see `peak`).
-    water_phase: TruncatedPhase,
-    particle_phase: TruncatedPhase,
+    /// [water, particle] for rays looking up or sideways, then for rays
+    /// looking down.
+    phases: [[TruncatedPhase; 2]; 2],
     /// Precomputed axial distances, when the scene asks for them.
     grid: Option<BoundaryGrid>,
 }
@@ -104,11 +105,16 @@ impl<'a> Estimator<'a> {
             boundary,
             spectral,
             grid,
-            water_phase: TruncatedPhase::new(&scene.water_phase, scene.estimate.forward_peak_deg),
-            particle_phase: TruncatedPhase::new(
-                &scene.particle_phase,
+            phases: [
                 scene.estimate.forward_peak_deg,
-            ),
+                scene.estimate.forward_peak_down_deg,
+            ]
+            .map(|deg| {
+                [
+                    TruncatedPhase::new(&scene.water_phase, deg),
+                    TruncatedPhase::new(&scene.particle_phase, deg),
+                ]
+            }),
         })
     }
 
@@ -129,14 +135,20 @@ impl<'a> Estimator<'a> {
         }
     }
 
+    /// The truncated [water, particle] phase functions for light leaving
+    /// toward the viewer along `toward_viewer` (a ray looking down sees
+    /// light travelling up).
+    fn phases_for(&self, toward_viewer: Vec3) -> &[TruncatedPhase; 2] {
+        &self.phases[usize::from(toward_viewer.z > 0.0)]
+    }
+
     /// The fractions of pure-water and particle scattering that the
-    /// truncated phase functions leave in the forward delta: a ray is
-    /// marched with extinction c - f_w b_w - f_p b_p.
-    pub fn forward_fractions(&self) -> (f64, f64) {
-        (
-            self.water_phase.forward_fraction(),
-            self.particle_phase.forward_fraction(),
-        )
+    /// truncated phase functions leave in the forward delta along a ray
+    /// looking along `view`: it is marched with extinction
+    /// c - f_w b_w - f_p b_p.
+    pub fn forward_fractions(&self, view: Vec3) -> (f64, f64) {
+        let [w, p] = self.phases_for(-view);
+        (w.forward_fraction(), p.forward_fraction())
     }
 
     fn search(&self, k: usize) -> Search {
@@ -305,7 +317,7 @@ impl<'a> Estimator<'a> {
             }
         }));
         let mix = std::mem::take(&mut scratch.mix);
-        let (pw, pp) = (&self.water_phase, &self.particle_phase);
+        let [pw, pp] = self.phases_for(toward_viewer);
         let weight = |n: &Neighbour| -> (f64, bool) {
             let fw = mix[n.photon.band as usize] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;

@@ -134,7 +134,7 @@ impl<'a> Light<'a> {
         let t_end = hit.map_or(limit, |h| h.t);
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
-        let (fw, fp) = self.est.forward_fractions();
+        let (fw, fp) = self.est.forward_fractions(dir);
         let cos_ss = self.sun_w.dot(-dir) as f64;
         let (pw_ss, pp_ss) = (pw.eval(cos_ss), pp.eval(cos_ss));
         // Stratified: one jittered sample in each step, weighted by the

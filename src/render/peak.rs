@@ -19,8 +19,10 @@
 //! function and the full extinction, since the direct beam is not in the
 //! photon map.
 //!
-//! theta_t is `[estimate] forward_peak_deg` (default
-//! [`DEFAULT_FORWARD_PEAK_DEG`]; 0 = the exact phase function, f = 0).
+//! theta_t is `[estimate] forward_peak_deg` along rays looking up or
+//! sideways (default [`DEFAULT_FORWARD_PEAK_DEG`]) and `forward_peak_down_deg`
+//! along rays looking down (default [`DEFAULT_FORWARD_PEAK_DOWN_DEG`]);
+//! 0 = the exact phase function, f = 0.
 //!
 //! Measured in deep water (a = 0.3, b = 0.6, Fournier–Forand bb = 0.02, 10 M
 //! photons, 8 identical bands, 4 positions), as the ratio of radiometers to
@@ -46,9 +48,12 @@
 //! peak reads lower. With the sun at 20 degrees the zenith view is 15
 //! degrees from the refracted sun and the 20-degree delta reads 10 %
 //! below the 10-degree one (no oracle there: the tally's 10-degree cone
-//! reaches into the aureole). Hence the default of 10 degrees; the noise it
-//! costs over 20 is taken back by counting photons travelling toward the
-//! viewer at the expanded scale. Averaging the phase
+//! reaches into the aureole). Each ray's equation holds for any theta_t, so
+//! the angle is chosen by where the ray looks: 10 degrees looking up or
+//! sideways (`forward_peak_deg`), 20 looking down into the smooth upwelling
+//! light (`forward_peak_down_deg`), where it cuts the pixel noise of the
+//! built-in scene from 9.3 % to 6.9 % per band at no measured bias.
+//! Averaging the phase
 //! function over a cone instead (tried first) smooths the radiance the
 //! forward peak re-scatters over the whole cone, and biased the decay of
 //! upwelling radiance low (K_Lu 0.279 1/m against Kd 0.358 with a 30-degree
@@ -58,8 +63,11 @@
 
 use crate::optics::phase::PhaseFunction;
 
-/// Default half-angle of the truncated forward peak (degrees).
+/// Default half-angle of the truncated forward peak (degrees) along rays
+/// looking up or sideways, into the downwelling light and the sun's aureole.
 pub const DEFAULT_FORWARD_PEAK_DEG: f64 = 10.0;
+/// Default along rays looking down, into the smooth upwelling light.
+pub const DEFAULT_FORWARD_PEAK_DOWN_DEG: f64 = 20.0;
 /// Table entries over cos(theta) in [-1, 1].
 const TABLE: usize = 8192;
 

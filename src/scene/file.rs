@@ -74,6 +74,7 @@ pub struct EstimateFile {
     pub spectral: Option<String>,
     pub step_m: Option<f64>,
     pub forward_peak_deg: Option<f64>,
+    pub forward_peak_down_deg: Option<f64>,
     pub boundary_grid_m: Option<f64>,
 }
 

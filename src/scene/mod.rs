@@ -137,8 +137,11 @@ pub struct EstimateSettings {
     /// Ray-marching step in water (m).
     pub step_m: f64,
     /// Half-angle (degrees) of the forward peak of the phase functions that
-    /// is treated as a delta in photon estimates (0 = exact; see `render::peak`).
+    /// is treated as a delta in photon estimates along rays looking up or
+    /// sideways (0 = exact; see `render::peak`).
     pub forward_peak_deg: f64,
+    /// The same along rays looking down (into upwelling light).
+    pub forward_peak_down_deg: f64,
     /// Node spacing (m) of a precomputed boundary-distance grid for volume
     /// estimates, or None to trace six rays per estimate.
     pub boundary_grid_m: Option<f64>,

@@ -480,8 +480,8 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
 
 /// Looking up in the same water with the sun at 60 degrees (its aureole far
 /// from the zenith): radiometers read the downwelling radiance the tallies
-/// count within 10 degrees of straight down. Measured 3-4 % low with the
-/// default 10-degree forward-peak delta (`render::peak`: looking up, the
+/// count within 10 degrees of straight down. Measured 2-4 % low with the
+/// default 10-degree forward-peak delta for rays looking up (`render::peak`: looking up, the
 /// light field brightens toward the sun inside the peak), hence the 5 %
 /// allowed beyond three standard errors.
 #[test]

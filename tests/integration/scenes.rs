@@ -74,6 +74,7 @@ fn bad_scenes_name_the_key_and_line() {
         (MINIMAL.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = 0.1, b = 0.2 }\nphase = { kind = \"fournier-forand\", bb_ratio = 0.5 }"), "water.phase.bb_ratio"),
         (format!("{MINIMAL}\n[estimate]\nboundary_grid_m = 0.0\n"), "estimate.boundary_grid_m"),
         (format!("{MINIMAL}\n[estimate]\nforward_peak_deg = 95.0\n"), "estimate.forward_peak_deg"),
+        (format!("{MINIMAL}\n[estimate]\nforward_peak_down_deg = -1.0\n"), "estimate.forward_peak_down_deg"),
         (format!("{MINIMAL}\n[estimate]\nk = 10\nk_expanded = 5\n"), "estimate.k_expanded"),
     ];
     for (text, needle) in cases {

@@ -176,15 +176,27 @@ pub(super) fn render_settings(
             format!("'{spectral}': use \"naive\" or \"compensated\""),
         ));
     }
-    let forward_peak_deg = e
-        .forward_peak_deg
-        .unwrap_or(crate::render::peak::DEFAULT_FORWARD_PEAK_DEG);
-    if !finite_in(forward_peak_deg, 0.0, 90.0) {
-        return Err(ctx.err(
-            &ek("forward_peak_deg"),
-            "must be between 0 and 90 degrees (0 keeps the exact phase function)",
-        ));
-    }
+    let peak = |key: &'static str, value: Option<f64>, default: f64| -> Result<f64> {
+        let v = value.unwrap_or(default);
+        if finite_in(v, 0.0, 90.0) {
+            Ok(v)
+        } else {
+            Err(ctx.err(
+                &ek(key),
+                "must be between 0 and 90 degrees (0 keeps the exact phase function)",
+            ))
+        }
+    };
+    let forward_peak_deg = peak(
+        "forward_peak_deg",
+        e.forward_peak_deg,
+        crate::render::peak::DEFAULT_FORWARD_PEAK_DEG,
+    )?;
+    let forward_peak_down_deg = peak(
+        "forward_peak_down_deg",
+        e.forward_peak_down_deg,
+        crate::render::peak::DEFAULT_FORWARD_PEAK_DOWN_DEG,
+    )?;
     if let Some(h) = e.boundary_grid_m {
         if !finite_in(h, 0.01, 100.0) {
             return Err(ctx.err(
@@ -202,6 +214,7 @@ pub(super) fn render_settings(
         spectral,
         step_m,
         forward_peak_deg,
+        forward_peak_down_deg,
         boundary_grid_m: e.boundary_grid_m,
     };
     Ok((sensor, radiometers, estimate))
