@@ -380,6 +380,7 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         "hdr": rendered.hdr.display().to_string(),
         "bsq": rendered.bsq.display().to_string(),
         "png": rendered.png.display().to_string(),
+        "exr": rendered.exr.display().to_string(),
     });
     report["timings_s"] = serde_json::json!({
         "scene": t_scene,

@@ -1,12 +1,12 @@
 //! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
 //! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
-//! a true-colour quicklook.
+//! a true-colour quicklook, and a spectral OpenEXR copy.
 //!
 //! Thin, like `littoral`: arguments and exit codes here, the reading and
 //! image writing in the library (`littoral::cube`). Every command reads the
 //! cube with positioned reads and holds at most one band (plus, for the
 //! quicklook, the RGB image), so it works on cubes larger than memory.
-//! Not for: converting or editing cubes (not written yet), or other formats.
+//! Not for: editing cubes, or other formats.
 
 use clap::{Parser, Subcommand};
 use littoral::cube::quicklook::{write_grey_png, write_png};
@@ -65,6 +65,15 @@ enum Command {
         /// luminance maps to white).
         #[arg(long)]
         exposure: Option<f32>,
+    },
+    /// Write the cube as a spectral OpenEXR file (one channel per band,
+    /// named S0.<nm>nm), tile by tile.
+    Exr {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// EXR file to write.
+        #[arg(long)]
+        out: PathBuf,
     },
 }
 
@@ -133,6 +142,10 @@ fn run(cli: Cli) -> AnyResult<()> {
             }
             let rgb = q.cube_rgb(&cube)?;
             write_png(&out, cube.samples(), cube.lines(), &rgb, exposure)?;
+            Ok(())
+        }
+        Command::Exr { cube, out } => {
+            littoral::cube::exr::write_spectral_exr(&EnviCube::open(&cube)?, &out)?;
             Ok(())
         }
     }

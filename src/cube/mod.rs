@@ -8,11 +8,14 @@
 //! reads. The quicklook ([`quicklook::Quicklook`]) reduces each spectrum to
 //! three numbers, so a whole RGB image is small enough to hold.
 //!
-//! Not for: rendering (the sensor produces the spectra), spectral OpenEXR
-//! (not written yet), or other ENVI data types and interleaves than 32-bit
+//! The spectral OpenEXR copy ([`exr::write_spectral_exr`]) is made from the
+//! finished ENVI cube, one tile of all bands at a time.
+//!
+//! Not for: rendering (the sensor produces the spectra), or other ENVI data types and interleaves than 32-bit
 //! float BSQ — the reader refuses those with an error rather than guessing.
 
 pub mod envi;
+pub mod exr;
 pub mod quicklook;
 
 pub use envi::{CubeSpec, EnviCube, EnviWriter};

@@ -57,6 +57,7 @@ pub struct RadiometerReading {
 pub struct Rendered {
     pub hdr: PathBuf,
     pub bsq: PathBuf,
+    pub exr: PathBuf,
     pub png: PathBuf,
     pub radiometers: Vec<RadiometerReading>,
     /// Tile-cache counters after the render.
@@ -152,6 +153,9 @@ pub fn render(
     let png = dir.join(format!("{}.png", scene.name));
     write_png(&png, w, h, &image, None)?;
     let (hdr, bsq) = writer.finish()?;
+    // The spectral OpenEXR copy, tile by tile from the finished cube.
+    let exr = dir.join(format!("{}.exr", scene.name));
+    crate::cube::exr::write_spectral_exr(&crate::cube::EnviCube::open(&hdr)?, &exr)?;
     let radiometers = pool.install(|| {
         scene
             .radiometers
@@ -163,6 +167,7 @@ pub fn render(
     Ok(Rendered {
         hdr,
         bsq,
+        exr,
         png,
         radiometers,
         cache: map.cache_stats(),

@@ -133,6 +133,15 @@ fn info_spectrum_band_and_quicklook() {
         (6, 4, png::ColorType::Rgb)
     );
     assert_eq!(px.len(), 6 * 4 * 3);
+
+    // The spectral EXR copy has one channel per band, 6 x 4 pixels.
+    let exr_path = dir.path().join("c.exr");
+    stdout(&cube_tool(&["exr", p(&hdr), "--out", p(&exr_path)]));
+    let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let layer = &image.layer_data[0];
+    assert_eq!((layer.size.width(), layer.size.height()), (6, 4));
+    let cube = littoral::cube::EnviCube::open(&hdr).unwrap();
+    assert_eq!(layer.channel_data.list.len(), cube.bands());
 }
 
 fn decode_png(path: &Path) -> (png::OutputInfo, Vec<u8>) {

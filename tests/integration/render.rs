@@ -533,7 +533,7 @@ fn render_outputs_and_errors() {
             "naive",
         ],
     );
-    for f in ["deep.hdr", "deep.bsq", "deep.png", "deep.json"] {
+    for f in ["deep.hdr", "deep.bsq", "deep.exr", "deep.png", "deep.json"] {
         assert!(dir.path().join("out").join(f).is_file(), "{f}");
     }
     let hdr = std::fs::read_to_string(dir.path().join("out/deep.hdr")).unwrap();

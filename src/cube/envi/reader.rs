@@ -251,6 +251,30 @@ impl EnviCube {
         Ok(values)
     }
 
+    /// The window `x0..x0+w` x `y0..y0+h` of band `b`, in row order (one
+    /// positioned read per line).
+    pub fn window(&self, b: usize, x0: usize, y0: usize, w: usize, h: usize) -> Result<Vec<f32>> {
+        let inside = |start: usize, len: usize, size: usize| {
+            start.checked_add(len).is_some_and(|end| end <= size)
+        };
+        if b >= self.bands || !inside(x0, w, self.samples) || !inside(y0, h, self.lines) {
+            return Err(Error::data(
+                &self.data_path,
+                None,
+                "window",
+                format!(
+                    "band {b}, {w} x {h} at ({x0}, {y0}) is not within the {} x {} x {} cube",
+                    self.samples, self.lines, self.bands
+                ),
+            ));
+        }
+        let mut values = vec![0f32; w * h];
+        for (row, out) in values.chunks_mut(w.max(1)).enumerate().take(h) {
+            self.read_values(self.index(b, y0 + row) + x0 as u64, out)?;
+        }
+        Ok(values)
+    }
+
     /// The band whose centre is nearest `nm` (the first of equals; band 0
     /// for a NaN).
     pub fn band_index_nearest(&self, nm: f64) -> usize {
