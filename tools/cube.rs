@@ -1,6 +1,7 @@
 //! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
 //! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
-//! a true-colour quicklook, and a spectral OpenEXR copy.
+//! a true-colour quicklook, a window cut into a new cube, the per-band
+//! difference of two cubes, and a spectral OpenEXR copy.
 //!
 //! Thin, like `littoral`: arguments and exit codes here, the reading and
 //! image writing in the library (`littoral::cube`). Every command reads the
@@ -65,6 +66,30 @@ enum Command {
         /// luminance maps to white).
         #[arg(long)]
         exposure: Option<f32>,
+    },
+    /// Cut the window of W x H pixels at (X, Y) into a new cube.
+    Window {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// Left column of the window.
+        x: usize,
+        /// Top line of the window.
+        y: usize,
+        /// Width in pixels.
+        w: usize,
+        /// Height in lines.
+        h: usize,
+        /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Print how cube B differs from cube A as JSON: per band RMSE, largest
+    /// difference and means, and the RMSE over the whole cube.
+    Diff {
+        /// The reference cube's header or data file.
+        a: PathBuf,
+        /// The other cube's header or data file.
+        b: PathBuf,
     },
     /// Write the cube as a spectral OpenEXR file (one channel per band,
     /// named S0.<nm>nm), tile by tile.
@@ -143,6 +168,28 @@ fn run(cli: Cli) -> AnyResult<()> {
             let rgb = q.cube_rgb(&cube)?;
             write_png(&out, cube.samples(), cube.lines(), &rgb, exposure)?;
             Ok(())
+        }
+        Command::Window {
+            cube,
+            x,
+            y,
+            w,
+            h,
+            out,
+        } => {
+            let cube = EnviCube::open(&cube)?;
+            let name = out
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let dir = littoral::output::parent_dir(&out);
+            let (hdr, bsq) = littoral::cube::ops::window(&cube, (x, y, w, h), dir, &name)?;
+            let summary = serde_json::json!({ "hdr": hdr, "bsq": bsq, "samples": w, "lines": h });
+            print(&format!("{summary}\n"))
+        }
+        Command::Diff { a, b } => {
+            let d = littoral::cube::ops::diff(&EnviCube::open(&a)?, &EnviCube::open(&b)?)?;
+            print(&format!("{}\n", serde_json::to_string_pretty(&d)?))
         }
         Command::Exr { cube, out } => {
             littoral::cube::exr::write_spectral_exr(&EnviCube::open(&cube)?, &out)?;

@@ -16,6 +16,7 @@
 
 pub mod envi;
 pub mod exr;
+pub mod ops;
 pub mod quicklook;
 
 pub use envi::{CubeSpec, EnviCube, EnviWriter};
