@@ -5,12 +5,18 @@
 //!   L_i(x, w) = sum over photons p of band i of p(w_p, w) Phi_p / V,
 //! where photons were stored at real scattering events, so the density
 //! already carries the scattering coefficient (Jensen 2001); p is the local
-//! mixture phase function (b_w p_w + b_p p_p) / b. Surface radiance leaving
-//! a Lambertian floor or target: L_i = sum f_r Phi_p / A with f_r = R_i / pi.
+//! mixture phase function (b_w p_w + b_p p_p) / b, with its forward peak
+//! taken out as a delta (`render::peak`). Surface radiance leaving a
+//! Lambertian floor or target: L_i = sum f_r Phi_p / A with f_r = R_i / pi,
+//! over photons near the tangent plane that arrived from the water side.
 //! The search is k nearest within a maximum radius (or a fixed radius);
 //! V and A follow the boundary mode (`estimate::boundary`), and the band
 //! estimates are combined with a larger search by the spectral mode
-//! (`estimate::spectral`).
+//! (`estimate::spectral`). One search of the larger size serves both: its k
+//! nearest are the local search. In volume estimates the photons travelling
+//! toward the viewer's hemisphere are counted at the larger scale
+//! (`estimate::spectral::combine_with_coarse`): through the forward lobe a
+//! few of them carry much of the in-scatter, too few in a search of k.
 //!
 //! Not for: direct light (the renderer adds single scattering of the sun
 //! and direct sun on the floor by next-event estimation).
