@@ -404,13 +404,6 @@ impl<'a> Estimator<'a> {
             k
         };
         self.find(x, layer, k_big, found, extra)?;
-        if let Some((normal, _)) = surface {
-            // Photons on other surfaces (a target's side, the far side of a
-            // thin panel) are not on this one.
-            let r = self.region_radius(found, k_big);
-            let tol = PLANE_TOLERANCE * r + 0.005;
-            found.retain(|n| (n.photon.position - x).dot(normal).abs() <= tol);
-        }
         if found.is_empty() {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
@@ -439,11 +432,18 @@ impl<'a> Estimator<'a> {
             }),
         };
         let small = big.capped(r_local);
+        // Photons on other surfaces (a target's side, the far side of a thin
+        // panel) are not on this one; they still bound the search, whose
+        // radius comes from every photon found.
+        let plane = surface.map(|(normal, _)| (normal, PLANE_TOLERANCE * r_big + 0.005));
         local.clear();
         expanded.clear();
         coarse.clear();
         for (i, n) in found.iter().enumerate() {
             let offset = n.photon.position - x;
+            if plane.is_some_and(|(normal, tol)| offset.dot(normal).abs() > tol) {
+                continue;
+            }
             let in_local = i < n_local && small.accepts(mode, offset, r_local);
             let in_big = two_sizes && big.accepts(mode, offset, r_big);
             if !(in_local || in_big) {
