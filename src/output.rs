@@ -40,6 +40,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = temp_beside(path)?;
     tmp.write_all(bytes)
         .map_err(|e| Error::io(path, "write", e))?;
+    publish(tmp, path)
+}
+
+/// Sync a fully written temporary file from [`temp_beside`], make it
+/// readable like a normal output file, and rename it to `path`.
+pub fn publish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
     tmp.as_file()
         .sync_all()
         .map_err(|e| Error::io(path, "write", e))?;

@@ -16,7 +16,7 @@
 
 use super::envi::EnviCube;
 use crate::error::{Error, Result};
-use crate::output::temp_beside;
+use crate::output::{publish, temp_beside};
 use exr::block::UncompressedBlock;
 use exr::math::RoundingMode;
 use exr::meta::attribute::LevelMode;
@@ -136,18 +136,7 @@ pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
         })
         .map_err(|e| failure.take().unwrap_or_else(|| exr_error(e)))?;
     }
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| Error::io(path, "write", e))?;
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| Error::io(path, "write", e))?;
-    }
-    tmp.persist(path)
-        .map_err(|e| Error::io(path, "rename into place", e.error))?;
-    Ok(())
+    publish(tmp, path)
 }
 
 #[cfg(test)]
