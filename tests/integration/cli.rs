@@ -5,17 +5,6 @@ use crate::common::*;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn littoral(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
 fn json(out: &Output) -> serde_json::Value {
     assert!(
         out.status.success(),
@@ -23,20 +12,6 @@ fn json(out: &Output) -> serde_json::Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap()
-}
-
-/// The failure is one line on stderr that mentions `needle`.
-fn assert_clean_failure(out: &Output, needle: &str) {
-    assert!(!out.status.success());
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "exit by error, not by signal or panic"
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.contains(needle), "'{needle}' not in: {err}");
-    assert!(!err.contains("panicked"), "{err}");
 }
 
 /// No final file and no temporary left behind in `dir`.

@@ -62,3 +62,30 @@ pub fn brute_sorted(photons: &[Photon], at: Vec3) -> Vec<f32> {
 pub fn tempdir() -> tempfile::TempDir {
     tempfile::tempdir().unwrap()
 }
+
+/// Run the `littoral` binary.
+pub fn littoral(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_littoral"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A path as a command-line argument.
+pub fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// The failure is one line on stderr that mentions `needle`, with exit
+/// code 1 (an error, not a signal or a panic).
+pub fn assert_clean_failure(out: &std::process::Output, needle: &str) {
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "exit by error, not by signal or panic"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains(needle), "'{needle}' not in: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}

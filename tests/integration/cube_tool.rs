@@ -14,10 +14,6 @@ fn cube_tool(args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
 fn stdout(out: &Output) -> String {
     assert!(
         out.status.success(),
@@ -25,18 +21,6 @@ fn stdout(out: &Output) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-fn assert_clean_failure(out: &Output, needle: &str) {
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "exit by error, not by signal or panic"
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.contains(needle), "'{needle}' not in: {err}");
-    assert!(!err.contains("panicked"), "{err}");
 }
 
 /// Value of pixel (x, y) in band b of the test cube.

@@ -13,7 +13,6 @@ use littoral::scene::{Overrides, Scene};
 use littoral::store::{build_map, Aabb, BuildOptions, MapFile, PhotonSource, StagedPhoton};
 use std::ops::Range;
 use std::path::Path;
-use std::process::Command;
 
 /// Photons of one band, uniform in a box, isotropic directions, equal power.
 struct UniformBox {
@@ -313,13 +312,6 @@ step_m = 0.25
 {extra}
 "#
     )
-}
-
-fn littoral(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 fn render_json(dir: &Path, scene: &str, extra: &[&str]) -> serde_json::Value {

@@ -3,7 +3,6 @@
 use crate::common::*;
 use littoral::scene::{Overrides, Scene, COASTAL_TOML};
 use std::path::Path;
-use std::process::Command;
 
 fn parse_err(text: &str) -> String {
     match Scene::parse(text, Path::new("bad.toml"), &Overrides::default()) {
@@ -88,13 +87,6 @@ fn bad_scenes_name_the_key_and_line() {
     let text = MINIMAL.replace("zenith_deg = 30.0", "zenith_deg = 95.0");
     let want = text.lines().position(|l| l.contains("zenith_deg")).unwrap() + 1;
     assert!(parse_err(&text).starts_with(&format!("bad.toml:{want}:")));
-}
-
-fn littoral(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 #[test]
