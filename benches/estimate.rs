@@ -9,11 +9,11 @@ mod common;
 use common::*;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
-use littoral::cache::tile_bytes;
-use littoral::query::PhotonMap;
-use littoral::render::estimator::{Estimator, Scratch};
+use littoral::estimate::estimator::{Estimator, Scratch};
 use littoral::scene::{Overrides, Scene};
+use littoral::store::cache::tile_bytes;
 use littoral::store::{BuildOptions, MapFile};
+use littoral::store::{PhotonMap, PhotonQuery};
 
 fn estimate(c: &mut Criterion) {
     let scene = Scene::coastal(&Overrides::default()).unwrap();

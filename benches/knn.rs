@@ -6,10 +6,10 @@ mod common;
 
 use common::*;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use littoral::cache::tile_bytes;
-use littoral::query::{PhotonMap, Search};
+use littoral::store::cache::tile_bytes;
 use littoral::store::codec::TileDecoder;
 use littoral::store::MapFile;
+use littoral::store::{PhotonMap, PhotonQuery, Search};
 use std::num::NonZeroUsize;
 
 const PHOTONS: u64 = 10_000_000;

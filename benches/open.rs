@@ -5,8 +5,8 @@ mod common;
 
 use common::*;
 use criterion::{criterion_group, criterion_main, Criterion};
-use littoral::query::{PhotonMap, Search};
 use littoral::store::MapFile;
+use littoral::store::{PhotonMap, PhotonQuery, Search};
 
 fn open(c: &mut Criterion) {
     let path = water_map(10_000_000, 64);

@@ -10,21 +10,23 @@
 //! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
 //! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
 //! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
-//! - [`store`]: the map file — streaming tile sort, codec, format, reader
-//!   ([`store::build_map`], [`store::MapFile`]).
-//! - [`cache`]: decoded tiles and their k-d trees under a byte budget ([`cache::TileCache`]).
-//! - [`query`]: exact kNN and radius queries over a map ([`query::PhotonMap`]).
-//! - [`estimate`]: boundary-bias volumes and spectral-bias compensation
-//!   ([`estimate::spectral::SpectralEstimator`]).
-//! - [`render`]: sensor, ray marching and radiometers ([`render::render`]).
-//! - [`cube`]: the radiance cube on disk (ENVI) and its quicklook (PNG).
+//! - [`store`]: the map file — streaming tile sort, codec, format, reader —
+//!   and its read side: the tile cache ([`store::cache::TileCache`]) and exact
+//!   kNN and radius queries behind one interface ([`store::PhotonQuery`]),
+//!   implemented by the tiled map ([`store::PhotonMap`]) and an in-memory map
+//!   ([`store::InMemoryMap`]).
+//! - [`estimate`]: radiance from photons, with boundary- and spectral-bias
+//!   compensation and the forward peak as a delta ([`estimate::Estimator`]).
+//! - [`render`]: sensor, ray marching and radiometers ([`render::render`],
+//!   [`render::march::RayMarcher`]).
+//! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR) and its quicklook (PNG).
 //!
-//! Support: [`error`] (typed errors naming file, tile and field), [`rng`]
+//! Support: [`bounds`] (axis-aligned boxes), [`error`] (typed errors naming file, tile and field), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
 //! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory),
 //! [`output`] (files written whole or not at all).
 
-pub mod cache;
+pub mod bounds;
 pub mod cube;
 pub mod emit;
 pub mod error;
@@ -35,7 +37,6 @@ pub mod optics;
 pub mod output;
 pub mod photon;
 pub mod progress;
-pub mod query;
 pub mod render;
 pub mod rng;
 pub mod scene;

@@ -4,9 +4,9 @@
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use littoral::progress::Progress;
-use littoral::query::{PhotonMap, Search};
 use littoral::scene::{Overrides, Scene};
 use littoral::store::{build_map, BuildOptions, MapFile};
+use littoral::store::{PhotonMap, PhotonQuery, Search};
 use littoral::synth::{Distribution, SynthSource};
 use std::io::Write;
 use std::path::PathBuf;
@@ -295,7 +295,7 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     // tile buffers, scratch and the quicklook image, and less the boundary
     // grid if the scene asks for one.
     let reserve = (32u64 << 20).min(budget / 4);
-    let grid = littoral::render::estimator::Estimator::grid_bytes(&scene)?;
+    let grid = littoral::estimate::estimator::Estimator::grid_bytes(&scene)?;
     if grid >= budget - reserve {
         return Err(littoral::Error::Budget {
             budget,
@@ -348,7 +348,8 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     let t_emit = start.elapsed().as_secs_f64();
     littoral::mem::release_free_memory();
 
-    let map = littoral::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve - grid)?;
+    let map =
+        littoral::store::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve - grid)?;
     let rendered = littoral::render::render(&scene, &map, &a.out, a.threads, &bars)?;
     let t_render = start.elapsed().as_secs_f64();
     drop(map);

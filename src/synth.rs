@@ -12,10 +12,11 @@
 //!   bottom, arriving from above (surface layer). Powers take the two values a Russian-roulette emission from
 //!   sun and sky gives (equal power per source).
 
+use crate::bounds::Aabb;
 use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use crate::rng::Pcg32;
 use crate::spectral::BandGrid;
-use crate::store::{Aabb, PhotonSource, StagedPhoton};
+use crate::store::{PhotonSource, StagedPhoton};
 use glam::Vec3;
 use std::ops::Range;
 

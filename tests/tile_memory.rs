@@ -3,8 +3,8 @@
 //! (this test binary holds one test so nothing else allocates meanwhile).
 
 use glam::Vec3;
-use littoral::cache::tile_bytes;
 use littoral::photon::PackedPhoton;
+use littoral::store::cache::tile_bytes;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 

@@ -38,7 +38,7 @@ pub fn query_points(n: usize, bands: usize) -> Vec<Vec3> {
 
 /// Sort points along a Morton curve over the synthetic domain.
 pub fn coherent(points: &[Vec3]) -> Vec<Vec3> {
-    let b = littoral::store::Aabb {
+    let b = littoral::bounds::Aabb {
         min: Vec3::new(0.0, 0.0, -10.0),
         max: Vec3::new(100.0, 100.0, 0.0),
     };

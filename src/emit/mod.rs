@@ -16,12 +16,13 @@ pub mod report;
 pub mod tally;
 pub mod trace;
 
+use crate::bounds::Aabb;
 use crate::error::Result;
 use crate::progress::Progress;
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectral::BandGrid;
-use crate::store::{build_map, Aabb, BuildOptions, PhotonSource, StagedPhoton, WriteSummary};
+use crate::store::{build_map, BuildOptions, PhotonSource, StagedPhoton, WriteSummary};
 use glam::Vec3;
 use std::ops::Range;
 use std::path::Path;

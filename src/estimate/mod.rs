@@ -1,5 +1,22 @@
-//! Radiance-estimate compensations: boundary bias (search volumes cut by
-//! the surface, floor, targets and open edges) and spectral bias.
+//! Radiance from photons: the photon-map estimate at a point along a ray,
+//! with the paper's boundary-bias compensation (search volumes cut by the
+//! surface, floor, targets and open edges) and spectral-bias compensation,
+//! and the forward peak of the phase functions taken out as a delta.
+//!
+//! - [`estimator`]: the estimate itself ([`Estimator`]): one search, the
+//!   volume or disc, the phase weights, the band combination.
+//! - [`boundary`]: search volumes and discs cut by boundaries ([`BoundaryMode`]).
+//! - [`spectral`]: band sums and their combination ([`SpectralMode`]).
+//! - [`peak`]: phase functions with the forward peak as a delta ([`peak::TruncatedPhase`]).
+//!
+//! Not for: finding photons (`store::query`), marching rays or direct
+//! light (`render`).
 
 pub mod boundary;
+pub mod estimator;
+pub mod peak;
 pub mod spectral;
+
+pub use boundary::BoundaryMode;
+pub use estimator::{Estimator, Scratch};
+pub use spectral::SpectralMode;

@@ -44,18 +44,18 @@
 //! per site and one product per band, and the band-sum identity then holds to
 //! rounding (tested to 1e-12 relative).
 //!
-//! **Hot path.** [`BandSums`] (and [`SpectralEstimator`], which holds two of
-//! them) is allocated once per thread and cleared per site; nothing in the
+//! **Hot path.** [`BandSums`] (the estimator holds three per thread:
+//! local, expanded, coarse) is allocated once and cleared per site; nothing in the
 //! accumulate/combine loop allocates. Clearing and combining cost O(N) per
 //! site, as writing the N-band result does anyway.
 //!
-//! Not for: finding photons ([`crate::query`]), search volumes and boundary
+//! Not for: finding photons ([`crate::store::query`]), search volumes and boundary
 //! compensation (the caller passes the volumes), or the weights themselves
 //! (`crate::optics`).
 
 use crate::error::Error;
 use crate::photon::Photon;
-use crate::query::Neighbour;
+use crate::store::query::Neighbour;
 use std::fmt;
 use std::str::FromStr;
 
@@ -224,7 +224,7 @@ fn valid_volume(v: f64) -> bool {
 /// coarse total / V'. Splitting a density estimate by photon class and estimating each
 /// class with its own bandwidth keeps it consistent; the renderer uses it
 /// for the few heavy photons travelling toward the viewer (see
-/// `render::estimator`). With an empty `coarse` this is [`combine`].
+/// `estimate::estimator`). With an empty `coarse` this is [`combine`].
 pub fn combine_with_coarse(
     mode: SpectralMode,
     local: &BandSums,
@@ -303,83 +303,6 @@ pub fn combine(
                 *o = scale * e;
             }
         }
-    }
-}
-
-/// The per-thread state of spectral estimation: a mode and the two band
-/// accumulators it needs, reused from site to site.
-#[derive(Clone, Debug)]
-pub struct SpectralEstimator {
-    mode: SpectralMode,
-    local: BandSums,
-    expanded: BandSums,
-}
-
-impl SpectralEstimator {
-    /// An estimator over `bands` bands.
-    pub fn new(mode: SpectralMode, bands: usize) -> Self {
-        SpectralEstimator {
-            mode,
-            local: BandSums::new(bands),
-            expanded: BandSums::new(bands),
-        }
-    }
-
-    /// The mode.
-    pub fn mode(&self) -> SpectralMode {
-        self.mode
-    }
-
-    /// Number of bands.
-    pub fn bands(&self) -> usize {
-        self.local.bands()
-    }
-
-    /// Per-band radiance at one site into `out` (length = bands).
-    ///
-    /// `local` and `expanded` are the two searches' photons and `v_local`,
-    /// `v_expanded` their volumes (or areas); `weight` gives each photon's
-    /// weight (phase function, BRDF, filter kernel). When the local search is
-    /// the nearest part of the expanded one, pass `&all[..k]` and `&all`. In
-    /// `Naive` mode the expanded search is ignored (pass `&[]`).
-    pub fn estimate(
-        &mut self,
-        local: &[Neighbour],
-        v_local: f64,
-        expanded: &[Neighbour],
-        v_expanded: f64,
-        mut weight: impl FnMut(&Neighbour) -> f64,
-        out: &mut [f64],
-    ) {
-        self.local.clear();
-        self.local.add_neighbours(local, &mut weight);
-        self.expanded.clear();
-        if self.mode.needs_expanded() {
-            self.expanded.add_neighbours(expanded, &mut weight);
-        }
-        combine(
-            self.mode,
-            &self.local,
-            v_local,
-            &self.expanded,
-            v_expanded,
-            out,
-        );
-    }
-
-    /// The local sums of the last estimate.
-    pub fn local(&self) -> &BandSums {
-        &self.local
-    }
-
-    /// The expanded sums of the last estimate (empty in `Naive` mode).
-    pub fn expanded(&self) -> &BandSums {
-        &self.expanded
-    }
-
-    /// Contributions dropped (bad band or weight) in the last estimate.
-    pub fn dropped(&self) -> u64 {
-        self.local.dropped() + self.expanded.dropped()
     }
 }
 

@@ -10,7 +10,7 @@ use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
 use super::{parse, Axis, Geometry, SurfaceId, EDGE_MARGIN_REL, EPSILON_MIN_M, EPSILON_REL};
-use crate::store::Aabb;
+use crate::bounds::Aabb;
 use crate::{Error, Result};
 
 /// Collects scene triangles with their surface ids; [`GeometryBuilder::build`]

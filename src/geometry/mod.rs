@@ -44,7 +44,7 @@ use glam::Vec3;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 
-use crate::store::Aabb;
+use crate::bounds::Aabb;
 
 /// Which reflecting surface a triangle belongs to (index into the scene's
 /// surface list; the caller assigns meaning, e.g. 0 = floor, 1.. = targets).

@@ -8,8 +8,8 @@ use glam::{DVec3, Vec3};
 
 use super::builder::GeometryBuilder;
 use super::{Axis, Geometry, Hit, SurfaceId, EPSILON_MIN_M};
+use crate::bounds::Aabb;
 use crate::rng::Pcg32;
-use crate::store::Aabb;
 use crate::Error;
 
 const FLOOR: SurfaceId = 0;

@@ -11,20 +11,18 @@
 //! Not for: emission (see `emit`) or file formats (see `cube`).
 
 pub mod camera;
-pub mod estimator;
-pub mod light;
-pub mod peak;
+pub mod march;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
 use crate::error::{Error, Result};
+use crate::estimate::estimator::{with_scratch, Estimator};
 use crate::progress::Progress;
-use crate::query::PhotonMap;
 use crate::rng::{mix64, Pcg32};
 use crate::scene::{Radiometer, Scene};
-use estimator::{with_scratch, Estimator};
+use crate::store::PhotonQuery;
 use glam::Vec3;
-use light::Light;
+use march::RayMarcher;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -61,14 +59,14 @@ pub struct Rendered {
     pub png: PathBuf,
     pub radiometers: Vec<RadiometerReading>,
     /// Tile-cache counters after the render.
-    pub cache: crate::cache::CacheStats,
+    pub cache: crate::store::cache::CacheStats,
 }
 
 /// Render `scene` from `map` into `dir/NAME.{hdr,bsq,png}` with `threads`
 /// threads (0 = all cores).
 pub fn render(
     scene: &Scene,
-    map: &PhotonMap,
+    map: &dyn PhotonQuery,
     dir: &Path,
     threads: usize,
     progress: &dyn Progress,
@@ -77,7 +75,7 @@ pub fn render(
         .num_threads(threads)
         .build()
         .map_err(|e| Error::invalid("threads", e.to_string()))?;
-    let light = Light::new(scene, Estimator::new(scene, map)?);
+    let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
     let nb = scene.bands.len();
     let [w, h] = scene.sensor.pixels;
     let spec = CubeSpec {
@@ -175,8 +173,8 @@ pub fn render(
 }
 
 /// Radiometer readings only (no image).
-pub fn radiometers(scene: &Scene, map: &PhotonMap) -> Result<Vec<RadiometerReading>> {
-    let light = Light::new(scene, Estimator::new(scene, map)?);
+pub fn radiometers(scene: &Scene, map: &dyn PhotonQuery) -> Result<Vec<RadiometerReading>> {
+    let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
     scene
         .radiometers
         .iter()
@@ -185,7 +183,7 @@ pub fn radiometers(scene: &Scene, map: &PhotonMap) -> Result<Vec<RadiometerReadi
         .collect()
 }
 
-fn read_radiometer(light: &Light, index: u64, r: &Radiometer) -> Result<RadiometerReading> {
+fn read_radiometer(light: &RayMarcher, index: u64, r: &Radiometer) -> Result<RadiometerReading> {
     let nb = light.scene.bands.len();
     let mut sum = vec![0f64; nb];
     let mut sum_sq = vec![0f64; nb];

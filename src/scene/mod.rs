@@ -138,7 +138,7 @@ pub struct EstimateSettings {
     pub step_m: f64,
     /// Half-angle (degrees) of the forward peak of the phase functions that
     /// is treated as a delta in photon estimates along rays looking up or
-    /// sideways (0 = exact; see `render::peak`).
+    /// sideways (0 = exact; see `estimate::peak`).
     pub forward_peak_deg: f64,
     /// The same along rays looking down (into upwelling light).
     pub forward_peak_down_deg: f64,

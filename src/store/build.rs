@@ -8,9 +8,9 @@
 //! is bounded by the writer's budget plus a few batches.
 
 use super::codec::StagedPhoton;
-use super::format::Aabb;
 use super::partition::Partition;
 use super::writer::{MapWriter, WriteSummary, WriterPlan};
+use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::spectral::BandGrid;

@@ -17,7 +17,8 @@
 //! small and the shuffle puts their zero high bytes — and the few distinct
 //! band and power values — into long runs that zstd removes.
 
-use super::format::{Aabb, TileEntry};
+use super::format::TileEntry;
+use crate::bounds::Aabb;
 use crate::photon::{AxisQuantizer, PackedPhoton, Photon};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

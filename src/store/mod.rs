@@ -5,15 +5,20 @@
 //! and never modified; readers map it read-only with [`MapFile::open`].
 
 pub mod build;
+pub mod cache;
 pub mod codec;
 pub mod format;
+pub mod memory;
 pub mod partition;
+pub mod query;
 pub mod reader;
 pub mod writer;
 
 pub use build::{build_map, BuildOptions, PhotonSource};
 pub use codec::StagedPhoton;
-pub use format::{Aabb, Header, TileEntry};
+pub use format::{Header, TileEntry};
+pub use memory::InMemoryMap;
 pub use partition::Partition;
+pub use query::{Neighbour, PhotonMap, PhotonQuery, Search};
 pub use reader::MapFile;
 pub use writer::{MapWriter, WriteSummary, WriterPlan};

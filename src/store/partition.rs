@@ -7,7 +7,8 @@
 //! The partition is approximate by design: a cell that still overflows is
 //! split again when the map is finished (see `writer`).
 
-use super::format::{Aabb, PartitionNode};
+use super::format::PartitionNode;
+use crate::bounds::Aabb;
 use glam::Vec3;
 
 /// A k-d partition of space into cells (tiles), stored in preorder.

@@ -14,6 +14,7 @@
 
 use super::codec::{TileDecoder, RECORD_BYTES};
 use super::format::*;
+use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::photon::{PackedPhoton, LAYERS};
 use memmap2::Mmap;

@@ -20,8 +20,9 @@
 //! Not for: reading maps (see `reader`), or choosing which photons to store.
 
 use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON, ZSTD_LEVEL};
-use super::format::{Aabb, ByteWriter, Footer, Header, TileEntry, FORMAT_VERSION};
+use super::format::{ByteWriter, Footer, Header, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
+use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::photon::LAYERS;
 use crate::progress::Progress;

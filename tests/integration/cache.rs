@@ -4,9 +4,9 @@
 
 use crate::common::*;
 use glam::Vec3;
-use littoral::cache::tile_bytes;
-use littoral::query::{PhotonMap, Search};
+use littoral::store::cache::tile_bytes;
 use littoral::store::MapFile;
+use littoral::store::{PhotonMap, PhotonQuery, Search};
 use littoral::synth::Distribution;
 use std::sync::atomic::{AtomicBool, Ordering};
 

@@ -2,6 +2,10 @@
 //! force search over every decoded photon — at random points, on and near
 //! tile borders, outside the bounds and on the flat floor layer.
 //!
+//! The same checks run against the in-memory map built from the map's
+//! decoded photons, and the two implementations of `PhotonQuery` are
+//! compared with each other.
+//!
 //! Distances are compared with a relative slack of 1e-6 (f32 rounding in the
 //! two distance computations); photons at distances within that slack of the
 //! cut-off are ties and may be in either result.
@@ -9,8 +13,7 @@
 use crate::common::*;
 use glam::Vec3;
 use littoral::photon::Photon;
-use littoral::query::{Neighbour, PhotonMap, Search};
-use littoral::store::MapFile;
+use littoral::store::{InMemoryMap, MapFile, Neighbour, PhotonMap, PhotonQuery, Search};
 use littoral::synth::Distribution;
 use proptest::prelude::*;
 use std::sync::OnceLock;
@@ -20,7 +23,15 @@ const REL: f32 = 1e-6;
 struct Fixture {
     _dir: tempfile::TempDir,
     map: PhotonMap,
+    memory: InMemoryMap,
     photons: Vec<Photon>,
+}
+
+impl Fixture {
+    /// Both implementations of the query interface over the same photons.
+    fn maps(&self) -> [&dyn PhotonQuery; 2] {
+        [&self.map, &self.memory]
+    }
 }
 
 fn fixture(d: Distribution) -> &'static Fixture {
@@ -38,10 +49,12 @@ fn fixture(d: Distribution) -> &'static Fixture {
         assert!(summary.tiles >= 30, "{summary:?}");
         let file = MapFile::open(&path).unwrap();
         let photons = all_photons(&file);
+        let memory = InMemoryMap::from_file(&file).unwrap();
         let map = PhotonMap::new(file, 1024 * MIB).unwrap();
         Fixture {
             _dir: dir,
             map,
+            memory,
             photons,
         }
     })
@@ -51,7 +64,13 @@ fn close(a: f32, b: f32) -> bool {
     (a - b).abs() <= REL * a.abs().max(b.abs()) + 1e-12
 }
 
-pub fn check_knn(map: &PhotonMap, photons: &[Photon], at: Vec3, k: usize, max_r: Option<f32>) {
+pub fn check_knn(
+    map: &dyn PhotonQuery,
+    photons: &[Photon],
+    at: Vec3,
+    k: usize,
+    max_r: Option<f32>,
+) {
     let got = map
         .query(
             at,
@@ -99,7 +118,7 @@ pub fn check_knn(map: &PhotonMap, photons: &[Photon], at: Vec3, k: usize, max_r:
     }
 }
 
-pub fn check_radius(map: &PhotonMap, photons: &[Photon], at: Vec3, r: f32) {
+pub fn check_radius(map: &dyn PhotonQuery, photons: &[Photon], at: Vec3, r: f32) {
     let got = map.query(at, Search::Radius { radius: r }).unwrap();
     let want = brute_sorted(photons, at);
     let r_sq = r * r;
@@ -119,7 +138,7 @@ pub fn check_radius(map: &PhotonMap, photons: &[Photon], at: Vec3, r: f32) {
 
 /// The unordered query finds the same photons (the same distances; photons
 /// tied at the k-th distance may differ).
-fn check_any_order(map: &PhotonMap, at: Vec3, search: Search, sorted: &[Neighbour]) {
+fn check_any_order(map: &dyn PhotonQuery, at: Vec3, search: Search, sorted: &[Neighbour]) {
     let mut any = Vec::new();
     map.query_any_order_into(at, None, search, &mut any)
         .unwrap();
@@ -163,9 +182,11 @@ fn knn_and_radius_at_tile_borders() {
     for d in [Distribution::Uniform, Distribution::Water] {
         let f = fixture(d);
         for at in border_points(f.map.file()) {
-            check_knn(&f.map, &f.photons, at, 10, None);
-            check_knn(&f.map, &f.photons, at, 50, Some(1.5));
-            check_radius(&f.map, &f.photons, at, 1.2);
+            for map in f.maps() {
+                check_knn(map, &f.photons, at, 10, None);
+                check_knn(map, &f.photons, at, 50, Some(1.5));
+                check_radius(map, &f.photons, at, 1.2);
+            }
         }
     }
 }
@@ -182,9 +203,11 @@ fn knn_on_the_floor_layer_and_far_outside() {
         Vec3::new(50.0, 50.0, 1000.0),
         Vec3::new(1e6, -1e6, -1e6),
     ] {
-        check_knn(&f.map, &f.photons, at, 1, None);
-        check_knn(&f.map, &f.photons, at, 64, None);
-        check_radius(&f.map, &f.photons, at, 2.0);
+        for map in f.maps() {
+            check_knn(map, &f.photons, at, 1, None);
+            check_knn(map, &f.photons, at, 64, None);
+            check_radius(map, &f.photons, at, 2.0);
+        }
     }
     // k larger than the map returns every photon.
     let all = f
@@ -258,7 +281,9 @@ proptest! {
         k in 1usize..80, water in any::<bool>(), cap in proptest::option::of(0.05f32..5.0),
     ) {
         let f = fixture(if water { Distribution::Water } else { Distribution::Uniform });
-        check_knn(&f.map, &f.photons, Vec3::new(x, y, z), k, cap);
+        for map in f.maps() {
+            check_knn(map, &f.photons, Vec3::new(x, y, z), k, cap);
+        }
     }
 
     #[test]
@@ -267,7 +292,9 @@ proptest! {
         r in 0.0f32..4.0, water in any::<bool>(),
     ) {
         let f = fixture(if water { Distribution::Water } else { Distribution::Uniform });
-        check_radius(&f.map, &f.photons, Vec3::new(x, y, z), r);
+        for map in f.maps() {
+            check_radius(map, &f.photons, Vec3::new(x, y, z), r);
+        }
     }
 
     #[test]
@@ -310,22 +337,83 @@ fn layer_queries_match_brute_force() {
             -10.5 + 11.0 * rng.uniform_f32(),
         );
         for (layer, photons) in [(LAYER_VOLUME, &by_layer[0]), (LAYER_SURFACE, &by_layer[1])] {
-            let got = f
-                .map
-                .query_layer(
-                    at,
-                    layer,
-                    Search::Nearest {
-                        k: 20,
-                        max_radius: None,
-                    },
-                )
-                .unwrap();
-            let want = brute_sorted(photons, at);
-            assert_eq!(got.len(), 20);
-            for (g, w) in got.iter().zip(&want) {
-                assert!(close(g.distance_sq, *w), "layer {layer} at {at}");
+            for map in f.maps() {
+                let got = map
+                    .query_layer(
+                        at,
+                        layer,
+                        Search::Nearest {
+                            k: 20,
+                            max_radius: None,
+                        },
+                    )
+                    .unwrap();
+                let want = brute_sorted(photons, at);
+                assert_eq!(got.len(), 20);
+                for (g, w) in got.iter().zip(&want) {
+                    assert!(close(g.distance_sq, *w), "layer {layer} at {at}");
+                }
             }
         }
+    }
+}
+
+/// The tiled map and the in-memory map answer every query with the same
+/// photons: same distances, and the same photons once ties are ordered.
+#[test]
+fn in_memory_map_equals_the_tiled_map() {
+    use littoral::photon::{LAYER_SURFACE, LAYER_VOLUME};
+    let f = fixture(Distribution::Water);
+    assert_eq!(
+        f.memory.layer_photons(LAYER_VOLUME),
+        f.map.layer_photons(LAYER_VOLUME)
+    );
+    assert_eq!(
+        f.memory.layer_photons(LAYER_SURFACE),
+        f.map.layer_photons(LAYER_SURFACE)
+    );
+    assert_eq!(PhotonQuery::bounds(&f.memory), PhotonQuery::bounds(&f.map));
+    assert_eq!(f.memory.bands(), f.map.bands());
+    let key = |v: &[Neighbour]| {
+        let mut v: Vec<_> = v
+            .iter()
+            .map(|n| {
+                let p = n.photon;
+                (
+                    n.distance_sq.to_bits(),
+                    p.position.to_array().map(f32::to_bits),
+                    p.band,
+                    p.power.to_bits(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let mut rng = littoral::rng::Pcg32::new(21, 4);
+    for i in 0..300 {
+        let at = Vec3::new(
+            -5.0 + 110.0 * rng.uniform_f32(),
+            -5.0 + 110.0 * rng.uniform_f32(),
+            -11.0 + 12.0 * rng.uniform_f32(),
+        );
+        let layer = [None, Some(LAYER_VOLUME), Some(LAYER_SURFACE)][i % 3];
+        // Radius searches have no ties at a cut-off k: the sets are equal.
+        let search = Search::Radius {
+            radius: 0.3 + 2.0 * rng.uniform_f32(),
+        };
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        f.map.query_into(at, layer, search, &mut a).unwrap();
+        f.memory.query_into(at, layer, search, &mut b).unwrap();
+        assert_eq!(key(&a), key(&b), "radius query {i} at {at}");
+        // k nearest: the same distances in the same order.
+        let search = Search::Nearest {
+            k: 1 + i % 90,
+            max_radius: None,
+        };
+        f.map.query_into(at, layer, search, &mut a).unwrap();
+        f.memory.query_into(at, layer, search, &mut b).unwrap();
+        let d = |v: &[Neighbour]| v.iter().map(|n| n.distance_sq).collect::<Vec<_>>();
+        assert_eq!(d(&a), d(&b), "k-nearest query {i} at {at}");
     }
 }

@@ -4,13 +4,13 @@
 
 use crate::common::*;
 use glam::Vec3;
+use littoral::bounds::Aabb;
+use littoral::estimate::estimator::{Estimator, Scratch};
 use littoral::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
-use littoral::progress::Silent;
-use littoral::query::PhotonMap;
-use littoral::render::estimator::{Estimator, Scratch};
 use littoral::rng::Pcg32;
 use littoral::scene::{Overrides, Scene};
-use littoral::store::{build_map, Aabb, BuildOptions, MapFile, PhotonSource, StagedPhoton};
+use littoral::store::InMemoryMap;
+use littoral::store::{PhotonSource, StagedPhoton};
 use std::ops::Range;
 use std::path::Path;
 
@@ -57,14 +57,12 @@ impl PhotonSource for UniformBox {
 
 /// A map of 1.3 M photons uniform in the 2 x 2 x 1 m box of `BOX_SCENE`,
 /// and the radiance they represent with an isotropic phase function.
-fn uniform_box_map(dir: &Path) -> (PhotonMap, f64) {
+fn uniform_box_map() -> (InMemoryMap, f64) {
     let src = UniformBox {
         n: 1_300_000,
         size: Vec3::new(2.0, 2.0, 1.0),
     };
-    let path = dir.join("box.map");
-    build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
-    let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
+    let map = InMemoryMap::from_source(&src).unwrap();
     let density = src.n as f64 / 4.0;
     (map, density / (4.0 * std::f64::consts::PI))
 }
@@ -100,8 +98,7 @@ spectral = "naive"
 /// standard errors even at a corner (1/8 of the photons).
 #[test]
 fn boundary_compensation_recovers_uniform_density() {
-    let dir = tempdir();
-    let (map, truth) = uniform_box_map(dir.path());
+    let (map, truth) = uniform_box_map();
     let e = 1e-4f32;
     let sites = [
         ("interior", Vec3::new(1.0, 1.0, -0.5), 1.0),
@@ -201,11 +198,8 @@ impl PhotonSource for FloorPhotons {
 /// standard error), so 3.5 % is over three standard errors.
 #[test]
 fn surface_estimate_clips_the_disc_where_the_floor_ends() {
-    let dir = tempdir();
     let src = FloorPhotons { n: 800_000 };
-    let path = dir.path().join("floor.map");
-    build_map(&path, &src, &BuildOptions::with_budget(256 * MIB), &Silent).unwrap();
-    let map = PhotonMap::new(MapFile::open(&path).unwrap(), 1024 * MIB).unwrap();
+    let map = InMemoryMap::from_source(&src).unwrap();
     let floor_photons = (0..src.n).filter(|i| i % 8 != 7).count() as f64;
     let irradiance = floor_photons / (4.0 - 0.5 * 0.6);
     let text = format!(
@@ -261,8 +255,7 @@ fn surface_estimate_clips_the_disc_where_the_floor_ends() {
 /// read half without the periodic images).
 #[test]
 fn periodic_edges_are_searched_across() {
-    let dir = tempdir();
-    let (map, truth) = uniform_box_map(dir.path());
+    let (map, truth) = uniform_box_map();
     let text = BOX_SCENE.replace("edges = \"open\"", "edges = \"periodic\"");
     let scene = Scene::parse(&text, Path::new("box.toml"), &Overrides::default()).unwrap();
     let est = Estimator::new(&scene, &map).unwrap();
@@ -439,7 +432,7 @@ fn check_against_tally(
 /// camera equals the radiometer just below the surface carried through it
 /// (Fresnel, n^2). The 3 % allowed beyond three standard errors covers the
 /// tally's cone average and the forward-peak delta of the estimate
-/// (`render::peak`, measured there within +4 %).
+/// (`estimate::peak`, measured there within +4 %).
 #[test]
 fn radiometers_match_the_lu_tally_and_decay_with_kd() {
     let dir = tempdir();
@@ -485,7 +478,7 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
 /// Looking up in the same water with the sun at 60 degrees (its aureole far
 /// from the zenith): radiometers read the downwelling radiance the tallies
 /// count within 10 degrees of straight down. Measured 2-4 % low with the
-/// default 10-degree forward-peak delta for rays looking up (`render::peak`: looking up, the
+/// default 10-degree forward-peak delta for rays looking up (`estimate::peak`: looking up, the
 /// light field brightens toward the sun inside the peak), hence the 5 %
 /// allowed beyond three standard errors.
 #[test]

@@ -1,4 +1,68 @@
 use super::*;
+
+/// A mode and its two band accumulators, reused from site to site: the
+/// spectral combination alone, as the estimator applies it, for tests that
+/// feed it photons directly.
+#[derive(Clone, Debug)]
+pub struct SpectralEstimator {
+    mode: SpectralMode,
+    local: BandSums,
+    expanded: BandSums,
+}
+
+impl SpectralEstimator {
+    /// An estimator over `bands` bands.
+    pub fn new(mode: SpectralMode, bands: usize) -> Self {
+        SpectralEstimator {
+            mode,
+            local: BandSums::new(bands),
+            expanded: BandSums::new(bands),
+        }
+    }
+
+    /// Per-band radiance at one site into `out` (length = bands).
+    ///
+    /// `local` and `expanded` are the two searches' photons and `v_local`,
+    /// `v_expanded` their volumes (or areas); `weight` gives each photon's
+    /// weight (phase function, BRDF, filter kernel). When the local search is
+    /// the nearest part of the expanded one, pass `&all[..k]` and `&all`. In
+    /// `Naive` mode the expanded search is ignored (pass `&[]`).
+    pub fn estimate(
+        &mut self,
+        local: &[Neighbour],
+        v_local: f64,
+        expanded: &[Neighbour],
+        v_expanded: f64,
+        mut weight: impl FnMut(&Neighbour) -> f64,
+        out: &mut [f64],
+    ) {
+        self.local.clear();
+        self.local.add_neighbours(local, &mut weight);
+        self.expanded.clear();
+        if self.mode.needs_expanded() {
+            self.expanded.add_neighbours(expanded, &mut weight);
+        }
+        combine(
+            self.mode,
+            &self.local,
+            v_local,
+            &self.expanded,
+            v_expanded,
+            out,
+        );
+    }
+
+    /// The expanded sums of the last estimate (empty in `Naive` mode).
+    pub fn expanded(&self) -> &BandSums {
+        &self.expanded
+    }
+
+    /// Contributions dropped (bad band or weight) in the last estimate.
+    pub fn dropped(&self) -> u64 {
+        self.local.dropped() + self.expanded.dropped()
+    }
+}
+
 use crate::rng::Pcg32;
 use glam::Vec3;
 use std::f64::consts::{PI, TAU};

@@ -190,12 +190,12 @@ pub(super) fn render_settings(
     let forward_peak_deg = peak(
         "forward_peak_deg",
         e.forward_peak_deg,
-        crate::render::peak::DEFAULT_FORWARD_PEAK_DEG,
+        crate::estimate::peak::DEFAULT_FORWARD_PEAK_DEG,
     )?;
     let forward_peak_down_deg = peak(
         "forward_peak_down_deg",
         e.forward_peak_down_deg,
-        crate::render::peak::DEFAULT_FORWARD_PEAK_DOWN_DEG,
+        crate::estimate::peak::DEFAULT_FORWARD_PEAK_DOWN_DEG,
     )?;
     if let Some(h) = e.boundary_grid_m {
         if !finite_in(h, 0.01, 100.0) {

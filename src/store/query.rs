@@ -7,11 +7,18 @@
 //! the order of photons at exactly equal distance). Each query pins one
 //! tile at a time, which is what lets the cache stay inside its budget.
 //!
-//! Not for: radiance estimation (the renderer builds that on these queries).
+//! [`PhotonQuery`] is the interface the estimator sees; [`PhotonMap`] (a
+//! map file with its tile cache) and [`super::memory::InMemoryMap`] (a
+//! plain vector with one k-d tree per layer) implement it, and the oracle
+//! tests check that they give the same answers.
+//!
+//! Not for: radiance estimation (`estimate` builds that on these queries).
 
-use crate::cache::{CacheStats, TileCache};
+use crate::bounds::Aabb;
 use crate::error::Result;
 use crate::photon::{PackedPhoton, Photon};
+use crate::spectral::BandGrid;
+use crate::store::cache::{CacheStats, TileCache};
 use crate::store::codec::morton3;
 use crate::store::MapFile;
 use glam::Vec3;
@@ -34,6 +41,62 @@ pub enum Search {
     Nearest { k: usize, max_radius: Option<f32> },
     /// Every photon within `radius` (m).
     Radius { radius: f32 },
+}
+
+/// Exact photon queries: what an estimate needs from a photon map.
+///
+/// `layer` is `None` for every layer or `Some(photon::LAYER_*)`. Results are
+/// those of one exact search over every photon of the map, up to the order
+/// of photons at exactly equal distance.
+pub trait PhotonQuery: Sync {
+    /// Photons matching `search` around `at`, nearest first, into `out`.
+    fn query_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()>;
+
+    /// The same photons as [`PhotonQuery::query_into`] in no particular (but
+    /// deterministic) order: cheaper when the caller only sums over them.
+    fn query_any_order_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        self.query_into(at, layer, search, out)
+    }
+
+    /// Bounds of the scene the photons were traced in.
+    fn bounds(&self) -> Aabb;
+
+    /// The band grid the photons index.
+    fn bands(&self) -> &BandGrid;
+
+    /// Photons stored in `layer`.
+    fn layer_photons(&self, layer: u16) -> u64;
+
+    /// Tile-cache counters, for maps that page tiles.
+    fn cache_stats(&self) -> CacheStats {
+        CacheStats::default()
+    }
+
+    /// Photons of every layer matching `search` around `at`, nearest first.
+    fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
+        let mut out = Vec::new();
+        self.query_into(at, None, search, &mut out)?;
+        Ok(out)
+    }
+
+    /// Photons of `layer` matching `search` around `at`, nearest first.
+    fn query_layer(&self, at: Vec3, layer: u16, search: Search) -> Result<Vec<Neighbour>> {
+        let mut out = Vec::new();
+        self.query_into(at, Some(layer), search, &mut out)?;
+        Ok(out)
+    }
 }
 
 /// Per-thread query scratch: candidate tiles, and results with directions
@@ -66,51 +129,9 @@ impl PhotonMap {
         &self.file
     }
 
-    /// Cache counters so far.
-    pub fn cache_stats(&self) -> CacheStats {
-        self.cache.stats()
-    }
-
     /// The tile cache.
     pub fn cache(&self) -> &TileCache {
         &self.cache
-    }
-
-    /// Photons of every layer matching `search` around `at`, nearest first.
-    pub fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
-        let mut out = Vec::new();
-        self.query_into(at, None, search, &mut out)?;
-        Ok(out)
-    }
-
-    /// Photons of `layer` (`photon::LAYER_*`) matching `search` around `at`.
-    pub fn query_layer(&self, at: Vec3, layer: u16, search: Search) -> Result<Vec<Neighbour>> {
-        let mut out = Vec::new();
-        self.query_into(at, Some(layer), search, &mut out)?;
-        Ok(out)
-    }
-
-    /// As [`PhotonMap::query`] restricted to `layer` if given, reusing `out`.
-    pub fn query_into(
-        &self,
-        at: Vec3,
-        layer: Option<u16>,
-        search: Search,
-        out: &mut Vec<Neighbour>,
-    ) -> Result<()> {
-        self.query_ordered_into(at, layer, search, true, out)
-    }
-
-    /// The same photons as [`PhotonMap::query_into`] in no particular (but
-    /// deterministic) order: cheaper when the caller only sums over them.
-    pub fn query_any_order_into(
-        &self,
-        at: Vec3,
-        layer: Option<u16>,
-        search: Search,
-        out: &mut Vec<Neighbour>,
-    ) -> Result<()> {
-        self.query_ordered_into(at, layer, search, false, out)
     }
 
     fn query_ordered_into(
@@ -259,7 +280,7 @@ impl PhotonMap {
             .map(|chunk| {
                 chunk
                     .iter()
-                    .map(|&(_, i)| Ok((i, self.query(points[i as usize], search)?)))
+                    .map(|&(_, i)| Ok((i, PhotonQuery::query(self, points[i as usize], search)?)))
                     .collect::<Result<Vec<_>>>()
             })
             .collect::<Result<Vec<_>>>()?
@@ -270,5 +291,43 @@ impl PhotonMap {
             results[i as usize] = r;
         }
         Ok(results)
+    }
+}
+
+impl PhotonQuery for PhotonMap {
+    fn query_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        self.query_ordered_into(at, layer, search, true, out)
+    }
+
+    fn query_any_order_into(
+        &self,
+        at: Vec3,
+        layer: Option<u16>,
+        search: Search,
+        out: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        self.query_ordered_into(at, layer, search, false, out)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.file.header().bounds
+    }
+
+    fn bands(&self) -> &BandGrid {
+        &self.file.header().bands
+    }
+
+    fn layer_photons(&self, layer: u16) -> u64 {
+        self.file.layer_photons(layer)
+    }
+
+    fn cache_stats(&self) -> CacheStats {
+        self.cache.stats()
     }
 }

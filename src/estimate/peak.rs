@@ -30,7 +30,7 @@
 //! down (band means with 2 % standard error at 0 and 1 m and 6 % at 6 m for
 //! Lu; 0.5 % for Ld). Nadir view, sun at 20 degrees, k = 800 with the
 //! expanded search of 800 (no photons counted at the expanded scale) or
-//! 6400 (`k_expanded`; see `render::estimator`):
+//! 6400 (`k_expanded`; see `estimate::estimator`):
 //!
 //! | theta_t | k_expanded | 0.01 m | 1 m | 6 m | spread over bands |
 //! |---|---|---|---|---|---|

@@ -3,7 +3,7 @@
 //! photon-map in-scatter estimate, and the floor and targets.
 //!
 //! Photon estimates use phase functions whose forward peak is a delta, so
-//! the march attenuates with c - f b (`render::peak`); next-event single
+//! the march attenuates with c - f b (`estimate::peak`); next-event single
 //! scattering of the sun uses the exact phase function and the full
 //! extinction toward the sun.
 //!
@@ -17,8 +17,8 @@
 //! reflection of upwelling light there is not followed).
 
 use super::camera::CameraRay;
-use super::estimator::{Estimator, Scratch};
 use crate::error::Result;
+use crate::estimate::estimator::{Estimator, Scratch};
 use crate::optics::iop::Iop;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
@@ -30,8 +30,9 @@ const MAX_MARCH_M: f32 = 500.0;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
 
-/// Precomputed light sources and the estimator.
-pub struct Light<'a> {
+/// The photon-map integrator along one ray: precomputed light sources, the
+/// estimator, and the march through surface, water, floor and targets.
+pub struct RayMarcher<'a> {
     pub scene: &'a Scene,
     pub est: Estimator<'a>,
     /// Refracted sun direction in the water (travel, pointing down).
@@ -42,7 +43,7 @@ pub struct Light<'a> {
     pub sky_l: Vec<f64>,
 }
 
-impl<'a> Light<'a> {
+impl<'a> RayMarcher<'a> {
     pub fn new(scene: &'a Scene, est: Estimator<'a>) -> Self {
         let n = scene.surface.n_water;
         let d = scene.sun.direction.as_dvec3();
@@ -64,7 +65,7 @@ impl<'a> Light<'a> {
             .iter()
             .map(|e| e / std::f64::consts::PI)
             .collect();
-        Light {
+        RayMarcher {
             scene,
             est,
             sun_w: sun_w.as_vec3(),

@@ -6,7 +6,7 @@
 //! where photons were stored at real scattering events, so the density
 //! already carries the scattering coefficient (Jensen 2001); p is the local
 //! mixture phase function (b_w p_w + b_p p_p) / b, with its forward peak
-//! taken out as a delta (`render::peak`). Surface radiance leaving a
+//! taken out as a delta (`estimate::peak`). Surface radiance leaving a
 //! Lambertian floor or target: L_i = sum f_r Phi_p / A with f_r = R_i / pi,
 //! over photons near the tangent plane that arrived from the water side.
 //! The search is k nearest within a maximum radius (or a fixed radius);
@@ -28,8 +28,8 @@ use crate::estimate::spectral::{combine, combine_with_coarse, BandSums, Spectral
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
 use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
-use crate::query::{Neighbour, PhotonMap, Search};
 use crate::scene::Scene;
+use crate::store::query::{Neighbour, PhotonQuery, Search};
 use glam::Vec3;
 use std::cell::RefCell;
 
@@ -69,7 +69,7 @@ impl Scratch {
 /// Radiance estimates over one photon map for one scene.
 pub struct Estimator<'a> {
     pub scene: &'a Scene,
-    pub map: &'a PhotonMap,
+    pub map: &'a dyn PhotonQuery,
     pub boundary: BoundaryMode,
     pub spectral: SpectralMode,
     /// Phase functions with the forward peak truncated, for photon weights
@@ -86,7 +86,7 @@ pub struct Estimator<'a> {
 const GRID_MAX_DISTANCE_M: f64 = 30.0;
 
 impl<'a> Estimator<'a> {
-    pub fn new(scene: &'a Scene, map: &'a PhotonMap) -> Result<Self> {
+    pub fn new(scene: &'a Scene, map: &'a dyn PhotonQuery) -> Result<Self> {
         let boundary = scene
             .estimate
             .boundary
