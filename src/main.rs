@@ -3,15 +3,16 @@
 
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use littoral::job::{EmitJob, MemoryBudget, RenderJob};
 use littoral::progress::Progress;
-use littoral::scene::{Overrides, Scene};
-use littoral::store::{build_map, BuildOptions, MapFile};
-use littoral::store::{PhotonMap, PhotonQuery, Search};
+use littoral::scene::{BoundaryMode, Overrides, Scene, SpectralMode};
+use littoral::store::{build_map, MapFile, PhotonMap, PhotonQuery, Search};
 use littoral::synth::{Distribution, SynthSource};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Mutex;
+use std::time::Instant;
 
 #[derive(Parser)]
 #[command(
@@ -46,25 +47,32 @@ struct RenderArgs {
     /// Output directory.
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Keep the photon map here, or reuse it when it was made from the same scene.
+    /// Keep the photon map here, and reuse it when its recorded provenance
+    /// matches the scene's emission inputs.
     #[arg(long)]
     map: Option<PathBuf>,
+    /// Photons to trace (overrides the scene).
     #[arg(long)]
     photons: Option<u64>,
+    /// Bands evenly spaced over 400-700 nm (overrides the scene's grid).
     #[arg(long)]
     bands: Option<usize>,
+    /// Worker threads (0 = one per core); outputs are identical for any number.
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Random seed (overrides the scene).
     #[arg(long)]
     seed: Option<u64>,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
     #[arg(long, default_value = "512MiB")]
     mem_budget: String,
-    /// Boundary-bias compensation: none, ellipsoid or clipped-sphere.
-    #[arg(long)]
-    boundary: Option<String>,
-    /// Spectral-bias compensation: naive or compensated.
-    #[arg(long)]
-    spectral: Option<String>,
+    /// Boundary-bias compensation (overrides the scene).
+    #[arg(long, value_enum)]
+    boundary: Option<BoundaryMode>,
+    /// Spectral-bias compensation (overrides the scene).
+    #[arg(long, value_enum)]
+    spectral: Option<SpectralMode>,
+    /// No progress on stderr.
     #[arg(long)]
     quiet: bool,
 }
@@ -267,172 +275,60 @@ fn run(cli: Cli) -> AnyResult<()> {
 }
 
 fn run_render(a: RenderArgs) -> AnyResult<()> {
-    use littoral::emit::report::EmissionReport;
-    let start = std::time::Instant::now();
+    let start = Instant::now();
     let budget = run_budget(&a.mem_budget, a.photons)?;
     let overrides = Overrides {
         photons: a.photons,
         bands: a.bands,
         seed: a.seed,
-        boundary: a.boundary.as_deref(),
-        spectral: a.spectral.as_deref(),
+        boundary: a.boundary,
+        spectral: a.spectral,
     };
     let scene = match &a.scene {
         Some(path) => Scene::load(path, &overrides)?,
         None => Scene::coastal(&overrides)?,
     };
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| littoral::Error::io(&a.out, "create directory", e))?;
-    if !a.out.is_dir() {
-        return Err(littoral::Error::io(
-            &a.out,
-            "create directory",
-            std::io::Error::other("not a directory"),
-        )
-        .into());
-    }
-    // Rendering: the tile cache gets the budget less a fixed reserve for
-    // tile buffers, scratch and the quicklook image, and less the boundary
-    // grid if the scene asks for one.
-    let reserve = (32u64 << 20).min(budget / 4);
-    let grid = littoral::estimate::estimator::Estimator::grid_bytes(&scene)?;
-    if grid >= budget - reserve {
-        return Err(littoral::Error::Budget {
-            budget,
-            what: format!(
-                "the boundary grid ([estimate] boundary_grid_m) needs {grid} bytes, and {} are left for it and the tile cache",
-                budget - reserve
-            ),
-        }
-        .into());
-    }
-    let t_scene = start.elapsed().as_secs_f64();
-    let bars = Bars::new(a.quiet);
-
-    // The photon map: reused when its sidecar report carries this scene's
-    // fingerprint, else emitted (to --map, or to a scratch file).
-    let scratch_map = tempfile::Builder::new()
-        .prefix(".littoral-map.")
-        .tempfile_in(&a.out)
-        .map_err(|e| littoral::Error::io(&a.out, "create", e))?;
-    let map_path = a
-        .map
-        .clone()
-        .unwrap_or_else(|| scratch_map.path().to_path_buf());
-    let sidecar = PathBuf::from(format!("{}.emission.json", map_path.display()));
-    let reusable = a.map.is_some()
-        && map_path.is_file()
-        && std::fs::read(&sidecar)
-            .ok()
-            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-            .is_some_and(|v| v["scene_fingerprint"] == scene.fingerprint);
-    let emission: serde_json::Value = if reusable {
-        serde_json::from_slice(
-            &std::fs::read(&sidecar).map_err(|e| littoral::Error::io(&sidecar, "read", e))?,
-        )?
-    } else {
-        let options = BuildOptions {
-            threads: a.threads,
-            ..BuildOptions::with_budget(budget)
-        };
-        let em = littoral::emit::emit(&scene, &map_path, &options, &bars)?;
-        let report = EmissionReport::new(&scene, &em.totals, &em.photon_power);
-        let mut v = serde_json::to_value(&report)?;
-        v["scene_fingerprint"] = serde_json::json!(scene.fingerprint);
-        v["map"] = map_json(&em.map);
-        if a.map.is_some() {
-            littoral::output::write_atomic(&sidecar, &serde_json::to_vec_pretty(&v)?)?;
-        }
-        v
+    let job = RenderJob {
+        scene: &scene,
+        out_dir: a.out.clone(),
+        map: a.map.clone(),
+        threads: a.threads,
+        budget,
+        scene_seconds: start.elapsed().as_secs_f64(),
     };
-    let t_emit = start.elapsed().as_secs_f64();
-    littoral::mem::release_free_memory();
-
-    let map =
-        littoral::store::query::PhotonMap::new(MapFile::open(&map_path)?, budget - reserve - grid)?;
-    let rendered = littoral::render::render(&scene, &map, &a.out, a.threads, &bars)?;
-    let t_render = start.elapsed().as_secs_f64();
-    drop(map);
-    drop(scratch_map);
-
-    let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
-    let mut report = emission;
-    report["reused_map"] = serde_json::json!(reusable);
-    report["radiometers"] = serde_json::to_value(&rendered.radiometers)?;
-    report["Ed_above_surface"] = report["above_surface"]["Ed"].clone();
-    report["estimate"] = serde_json::json!({
-        "k": scene.estimate.k,
-        "k_expanded": scene.estimate.k_expanded,
-        "radius_m": scene.estimate.radius_m,
-        "max_radius_m": scene.estimate.max_radius_m,
-        "boundary": scene.estimate.boundary,
-        "spectral": scene.estimate.spectral,
-        "step_m": scene.estimate.step_m,
-        "forward_peak_deg": scene.estimate.forward_peak_deg,
-        "forward_peak_down_deg": scene.estimate.forward_peak_down_deg,
-        "boundary_grid_m": scene.estimate.boundary_grid_m,
-    });
-    report["sensor"] = serde_json::json!({
-        "pixels": scene.sensor.pixels,
-        "samples_per_pixel": scene.sensor.samples_per_pixel,
-    });
-    report["cache"] = serde_json::to_value(rendered.cache)?;
-    report["outputs"] = serde_json::json!({
-        "hdr": rendered.hdr.display().to_string(),
-        "bsq": rendered.bsq.display().to_string(),
-        "png": rendered.png.display().to_string(),
-        "exr": rendered.exr.display().to_string(),
-    });
-    report["timings_s"] = serde_json::json!({
-        "scene": t_scene,
-        "emit": t_emit - t_scene,
-        "render": t_render - t_emit,
-        "total": t_render,
-    });
-    report["peak_rss_bytes"] = serde_json::json!(peak);
-    let json_path = a.out.join(format!("{}.json", scene.name));
-    littoral::output::write_atomic(
-        &json_path,
-        (serde_json::to_string_pretty(&report)? + "\n").as_bytes(),
-    )?;
+    let r = job.run(&Bars::new(a.quiet))?;
     if !a.quiet {
         eprintln!(
-            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s (emit {:.1} s, render {:.1} s); peak memory {:.1} MiB",
+            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({} {:.1} s, render {:.1} s); peak memory {:.1} MiB",
             scene.name,
-            scene.sensor.pixels[0],
-            scene.sensor.pixels[1],
+            r.sensor.pixels[0],
+            r.sensor.pixels[1],
             scene.bands.len(),
             a.out.display(),
-            t_render,
-            t_emit - t_scene,
-            t_render - t_emit,
-            peak as f64 / (1 << 20) as f64
+            r.timings_s.total,
+            if r.reused_map { "reused map" } else { "emit" },
+            r.timings_s.emit,
+            r.timings_s.render,
+            mib(r.peak_rss_bytes)
         );
     }
     Ok(())
 }
 
-/// What a report says about the photon map a run wrote.
-fn map_json(map: &littoral::store::WriteSummary) -> serde_json::Value {
-    serde_json::json!({
-        "photons": map.photons,
-        "tiles": map.tiles,
-        "file_bytes": map.file_bytes,
-        "bytes_per_photon": map.file_bytes as f64 / map.photons.max(1) as f64,
-        "spilled_bytes": map.spilled_bytes,
-    })
-}
-
 /// The memory budget of a run, after checking a `--photons` override.
-fn run_budget(mem_budget: &str, photons: Option<u64>) -> AnyResult<u64> {
+fn run_budget(mem_budget: &str, photons: Option<u64>) -> AnyResult<MemoryBudget> {
     if photons == Some(0) {
         return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
     }
-    Ok(littoral::size::parse_size("--mem-budget", mem_budget)?)
+    Ok(MemoryBudget::parse("--mem-budget", mem_budget)?)
+}
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
 }
 
 fn run_emit(a: EmitArgs) -> AnyResult<()> {
-    let start = std::time::Instant::now();
+    let start = Instant::now();
     let budget = run_budget(&a.mem_budget, a.photons)?;
     let overrides = Overrides {
         photons: a.photons,
@@ -440,27 +336,15 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &overrides)?;
-    let parsed = start.elapsed().as_secs_f64();
-    let bars = Bars::new(a.quiet);
-    let options = BuildOptions {
+    let job = EmitJob {
+        scene: &scene,
+        map: a.map.clone(),
         threads: a.threads,
-        ..BuildOptions::with_budget(budget)
+        budget,
+        scene_seconds: start.elapsed().as_secs_f64(),
     };
-    let emission = littoral::emit::emit(&scene, &a.map, &options, &bars)?;
-    let total = start.elapsed().as_secs_f64();
-    let physics = littoral::emit::report::EmissionReport::new(
-        &scene,
-        &emission.totals,
-        &emission.photon_power,
-    );
-    let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
-    let mut report = serde_json::to_value(&physics)?;
-    report["map"] = map_json(&emission.map);
-    report["map"]["path"] = serde_json::json!(a.map.display().to_string());
-    report["timings_s"] =
-        serde_json::json!({ "scene": parsed, "emit_and_store": total - parsed, "total": total });
-    report["peak_rss_bytes"] = serde_json::json!(peak);
-    let text = serde_json::to_string_pretty(&report)? + "\n";
+    let r = job.run(&Bars::new(a.quiet))?;
+    let text = serde_json::to_string_pretty(&r)? + "\n";
     match &a.report {
         Some(path) => littoral::output::write_atomic(path, text.as_bytes())?,
         None => print!("{text}"),
@@ -468,15 +352,15 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
     if !a.quiet {
         eprintln!(
             "emitted {} photons: {} volume + {} surface photons stored in {} ({} tiles, {:.2} bytes/photon); energy closure {:.2} sigma; {:.1} s, peak memory {:.1} MiB",
-            physics.photons.traced,
-            physics.photons.stored_volume,
-            physics.photons.stored_surface,
+            r.emission.photons.traced,
+            r.emission.photons.stored_volume,
+            r.emission.photons.stored_surface,
             a.map.display(),
-            emission.map.tiles,
-            emission.map.file_bytes as f64 / emission.map.photons.max(1) as f64,
-            physics.energy.closure_sigma,
-            total,
-            peak as f64 / (1 << 20) as f64
+            r.map.tiles,
+            r.map.bytes_per_photon,
+            r.emission.energy.closure_sigma,
+            r.timings_s.total,
+            mib(r.peak_rss_bytes)
         );
     }
     Ok(())
@@ -485,17 +369,10 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
 fn run_map(cmd: MapCommand) -> AnyResult<()> {
     match cmd {
         MapCommand::Synth(a) => {
-            let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
-            if a.photons == 0 {
-                return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
-            }
+            let budget = run_budget(&a.mem_budget, Some(a.photons))?;
             let source = SynthSource::new(a.photons, a.bands, a.seed, a.distribution)?;
             let bars = Bars::new(a.quiet);
-            let options = BuildOptions {
-                threads: a.threads,
-                ..BuildOptions::with_budget(budget)
-            };
-            let summary = build_map(&a.out, &source, &options, &bars)?;
+            let summary = build_map(&a.out, &source, &budget.emission(a.threads), &bars)?;
             if !a.quiet {
                 let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
                 eprintln!(

@@ -148,4 +148,29 @@ impl PhotonSource for SynthSource {
     fn bounds(&self) -> Aabb {
         self.domain
     }
+
+    fn provenance(&self) -> crate::provenance::Provenance {
+        let mut b = crate::provenance::ProvenanceBuilder::new();
+        b.value("source", "synthetic")
+            .value("photons", self.photons)
+            .value("bands", self.bands.len())
+            .value("seed", self.seed)
+            .value("distribution", format!("{:?}", self.distribution))
+            .part("band_grid", format!("{:?}", self.bands).as_bytes())
+            .part("domain", format!("{:?}", self.domain).as_bytes());
+        b.finish()
+    }
+
+    /// A description of the synthetic source, as JSON.
+    fn metadata(&self) -> Vec<u8> {
+        serde_json::json!({
+            "source": "synthetic",
+            "distribution": format!("{:?}", self.distribution).to_lowercase(),
+            "photons": self.photons,
+            "bands": self.bands.len(),
+            "seed": self.seed,
+        })
+        .to_string()
+        .into_bytes()
+    }
 }

@@ -19,6 +19,7 @@ pub mod trace;
 use crate::bounds::Aabb;
 use crate::error::Result;
 use crate::progress::Progress;
+use crate::provenance::Provenance;
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectral::BandGrid;
@@ -38,6 +39,7 @@ pub struct Emitter<'s> {
     /// Power per photon of each band (W nm^-1).
     photon_power: Vec<f64>,
     totals: Mutex<Totals>,
+    provenance: Provenance,
 }
 
 impl<'s> Emitter<'s> {
@@ -70,6 +72,7 @@ impl<'s> Emitter<'s> {
             cdf,
             photon_power,
             totals: Mutex::new(Totals::new(nb, scene.tally_depths.len())),
+            provenance: emission_provenance(scene)?,
         })
     }
 
@@ -139,10 +142,7 @@ impl<'s> Emitter<'s> {
     /// Trace every photon without storing any (validation runs and tallies).
     pub fn trace_all(&self, threads: usize) -> Result<Totals> {
         use rayon::prelude::*;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| crate::Error::invalid("threads", e.to_string()))?;
+        let pool = crate::parallel::pool(threads)?;
         let n = self.scene.photons;
         let batch = crate::store::build::BATCH_INDICES;
         pool.install(|| {
@@ -175,6 +175,16 @@ impl PhotonSource for Emitter<'_> {
         self.scene.bands.clone()
     }
 
+    fn provenance(&self) -> Provenance {
+        self.provenance.clone()
+    }
+
+    /// The emission report, as JSON.
+    fn metadata(&self) -> Vec<u8> {
+        let report = report::EmissionReport::new(self.scene, &self.totals(), &self.photon_power);
+        serde_json::to_vec(&report).expect("the report serialises")
+    }
+
     fn bounds(&self) -> Aabb {
         let d = &self.scene.domain;
         let g = self.scene.geometry.bounds();
@@ -188,6 +198,14 @@ impl PhotonSource for Emitter<'_> {
             max: Vec3::new(d.size_m[0] as f32, d.size_m[1] as f32, 0.0),
         }
     }
+}
+
+/// The provenance of the photon maps of `scene`: its emission inputs
+/// (`Scene::emission_inputs`) and the map format version.
+pub fn emission_provenance(scene: &Scene) -> Result<Provenance> {
+    let mut b = scene.emission_inputs()?;
+    b.value("format_version", crate::store::format::FORMAT_VERSION);
+    Ok(b.finish())
 }
 
 /// What `emit` produced.

@@ -3,10 +3,10 @@
 
 use super::tally::{lu_cone_projected_solid_angle, Totals, ED, EOD, EOU, EU, LD, LU};
 use crate::scene::Scene;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Irradiances at one tally depth (W m^-2 nm^-1 per band).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct DepthTally {
     pub depth_m: f64,
@@ -33,7 +33,7 @@ pub struct DepthTally {
 }
 
 /// Just above the surface (Eu includes light reflected by the surface).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct AboveSurface {
     pub Ed: Vec<f64>,
@@ -43,7 +43,7 @@ pub struct AboveSurface {
 }
 
 /// Diffuse attenuation of Ed between two tally depths (1/m).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct KdLayer {
     pub from_m: f64,
@@ -52,9 +52,9 @@ pub struct KdLayer {
 }
 
 /// Where the emitted power went, per band (W nm^-1).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Energy {
-    pub units: &'static str,
+    pub units: String,
     pub emitted: Vec<f64>,
     pub escaped: Vec<f64>,
     pub absorbed_water: Vec<f64>,
@@ -68,7 +68,7 @@ pub struct Energy {
     pub closure_sigma: f64,
 }
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhotonCounts {
     pub traced: u64,
     pub stored_volume: u64,
@@ -78,7 +78,7 @@ pub struct PhotonCounts {
 }
 
 /// The physics part of the emission report.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EmissionReport {
     pub scene: String,
     pub bands_nm: Vec<f32>,
@@ -214,7 +214,7 @@ impl EmissionReport {
             },
             kd,
             energy: Energy {
-                units: "W nm^-1",
+                units: "W nm^-1".into(),
                 emitted,
                 escaped,
                 absorbed_water,

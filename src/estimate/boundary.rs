@@ -45,11 +45,10 @@
 //! with [`crate::geometry::Geometry::spawn_origin`]). This module does not
 //! search photons or form radiance.
 
-use crate::error::{Error, Result};
+pub use crate::scene::settings::BoundaryMode;
 use crate::scene::{Scene, FLOOR};
 use glam::Vec3;
 use std::f64::consts::PI;
-use std::str::FromStr;
 use std::sync::OnceLock;
 
 /// Axial boundary distances (m), each in [0, R]: [+x, -x, +y, -y, +z, -z].
@@ -127,34 +126,7 @@ const DIRECTIONS: [Vec3; 6] = [
     Vec3::NEG_Z,
 ];
 
-/// How the density estimate treats boundaries inside the search sphere.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoundaryMode {
-    /// Jensen's plain estimate: the full sphere.
-    None,
-    /// The adaptive (ellipsoid) distance and the octant-ellipsoid volume.
-    Ellipsoid,
-    /// Euclidean search, the sphere's volume clipped by the axial planes.
-    ClippedSphere,
-}
-
 impl BoundaryMode {
-    /// Every mode, for ablation loops.
-    pub const ALL: [BoundaryMode; 3] = [
-        BoundaryMode::None,
-        BoundaryMode::Ellipsoid,
-        BoundaryMode::ClippedSphere,
-    ];
-
-    /// The name used in scene files and on the command line.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            BoundaryMode::None => "none",
-            BoundaryMode::Ellipsoid => "ellipsoid",
-            BoundaryMode::ClippedSphere => "clipped-sphere",
-        }
-    }
-
     /// The volume (m^3) to divide by for a search of radius `r` at a site
     /// with axial distances `b`.
     pub fn volume(self, r: f32, b: &AxialDistances) -> f64 {
@@ -215,28 +187,6 @@ impl BoundaryMode {
             BoundaryMode::None | BoundaryMode::ClippedSphere => offset.length_squared() <= r * r,
             BoundaryMode::Ellipsoid => ellipsoid_distance(offset, r, b) <= r,
         }
-    }
-}
-
-impl std::fmt::Display for BoundaryMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl FromStr for BoundaryMode {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        BoundaryMode::ALL
-            .into_iter()
-            .find(|m| m.as_str() == s)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "boundary mode",
-                    format!("'{s}': use \"none\", \"ellipsoid\" or \"clipped-sphere\""),
-                )
-            })
     }
 }
 

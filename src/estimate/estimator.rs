@@ -87,16 +87,7 @@ const GRID_MAX_DISTANCE_M: f64 = 30.0;
 
 impl<'a> Estimator<'a> {
     pub fn new(scene: &'a Scene, map: &'a dyn PhotonQuery) -> Result<Self> {
-        let boundary = scene
-            .estimate
-            .boundary
-            .parse::<BoundaryMode>()
-            .map_err(|e| crate::Error::invalid("estimate.boundary", e.to_string()))?;
-        let spectral = scene
-            .estimate
-            .spectral
-            .parse::<SpectralMode>()
-            .map_err(|e| crate::Error::invalid("estimate.spectral", e.to_string()))?;
+        let (boundary, spectral) = (scene.estimate.boundary, scene.estimate.spectral);
         let grid = match (boundary, scene.estimate.boundary_grid_m) {
             (BoundaryMode::None, _) | (_, None) => None,
             (_, Some(h)) => Some(BoundaryGrid::build(
@@ -132,11 +123,10 @@ impl<'a> Estimator<'a> {
     /// (0 without one), for the memory budget.
     pub fn grid_bytes(scene: &Scene) -> Result<u64> {
         match scene.estimate.boundary_grid_m {
-            Some(h) if scene.estimate.boundary != "none" => Ok(BoundaryGrid::planned_bytes(
-                scene,
-                h as f32,
-                Self::grid_max_distance(scene),
-            )? as u64),
+            Some(h) if scene.estimate.boundary != BoundaryMode::None => Ok(
+                BoundaryGrid::planned_bytes(scene, h as f32, Self::grid_max_distance(scene))?
+                    as u64,
+            ),
             _ => Ok(0),
         }
     }

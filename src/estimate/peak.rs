@@ -20,8 +20,9 @@
 //! photon map.
 //!
 //! theta_t is `[estimate] forward_peak_deg` along rays looking up or
-//! sideways (default [`DEFAULT_FORWARD_PEAK_DEG`]) and `forward_peak_down_deg`
-//! along rays looking down (default [`DEFAULT_FORWARD_PEAK_DOWN_DEG`]);
+//! sideways (default [`crate::scene::settings::DEFAULT_FORWARD_PEAK_DEG`]) and `forward_peak_down_deg`
+//! along rays looking down (default
+//! [`crate::scene::settings::DEFAULT_FORWARD_PEAK_DOWN_DEG`]);
 //! 0 = the exact phase function, f = 0.
 //!
 //! Measured in deep water (a = 0.3, b = 0.6, Fournier–Forand bb = 0.02, 10 M
@@ -63,11 +64,6 @@
 
 use crate::optics::phase::PhaseFunction;
 
-/// Default half-angle of the truncated forward peak (degrees) along rays
-/// looking up or sideways, into the downwelling light and the sun's aureole.
-pub const DEFAULT_FORWARD_PEAK_DEG: f64 = 10.0;
-/// Default along rays looking down, into the smooth upwelling light.
-pub const DEFAULT_FORWARD_PEAK_DOWN_DEG: f64 = 20.0;
 /// Table entries over cos(theta) in [-1, 1].
 const TABLE: usize = 8192;
 
@@ -139,6 +135,7 @@ impl TruncatedPhase {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::settings::DEFAULT_FORWARD_PEAK_DEG;
     use std::f64::consts::{PI, TAU};
 
     /// Integral of p* over the sphere by the midpoint rule in mu.

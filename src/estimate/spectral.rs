@@ -53,62 +53,15 @@
 //! compensation (the caller passes the volumes), or the weights themselves
 //! (`crate::optics`).
 
-use crate::error::Error;
 use crate::photon::Photon;
+pub use crate::scene::settings::SpectralMode;
 use crate::store::query::Neighbour;
-use std::fmt;
-use std::str::FromStr;
-
-/// How per-band radiance is formed from band-tagged photons.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum SpectralMode {
-    /// Jensen's per-band estimate from the local search alone.
-    Naive,
-    /// The poster's compensation: level from the local search, spectral shape
-    /// from the expanded one.
-    #[default]
-    Compensated,
-}
 
 impl SpectralMode {
-    /// Every mode, in the order help text lists them.
-    pub const ALL: [SpectralMode; 2] = [SpectralMode::Naive, SpectralMode::Compensated];
-
-    /// The name used in scene files and on the command line.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            SpectralMode::Naive => "naive",
-            SpectralMode::Compensated => "compensated",
-        }
-    }
-
     /// Whether [`combine`] reads the expanded search; callers can skip that
     /// search (the costlier of the two) when it does not.
     pub fn needs_expanded(self) -> bool {
         self == SpectralMode::Compensated
-    }
-}
-
-impl fmt::Display for SpectralMode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl FromStr for SpectralMode {
-    type Err = Error;
-
-    /// Parses `naive` or `compensated`, ignoring ASCII case.
-    fn from_str(s: &str) -> Result<Self, Error> {
-        SpectralMode::ALL
-            .into_iter()
-            .find(|m| s.eq_ignore_ascii_case(m.as_str()))
-            .ok_or_else(|| {
-                Error::invalid(
-                    "spectral mode",
-                    format!("unknown mode {s:?}; expected \"naive\" or \"compensated\""),
-                )
-            })
     }
 }
 

@@ -233,6 +233,39 @@ impl Geometry {
     }
 
     /// Number of triangles in the BVH.
+    /// Feed everything that determines ray hits (triangles with their
+    /// surfaces and floor flags, domain, epsilon) to `sink`, for the
+    /// provenance of photon maps traced through this geometry.
+    pub fn digest_into(&self, sink: &mut dyn FnMut(&[u8])) {
+        for (i, t) in self.tris.iter().enumerate() {
+            for v in t {
+                for c in v.to_array() {
+                    sink(&c.to_le_bytes());
+                }
+            }
+            sink(&self.surfaces[i].to_le_bytes());
+            sink(&[self.is_floor[i] as u8]);
+        }
+        for c in self.domain_size_m {
+            sink(&c.to_le_bytes());
+        }
+        sink(&self.epsilon_m.to_le_bytes());
+    }
+
+    /// Heap bytes held by the geometry (BVH and triangle tables), for the
+    /// memory budget of the stages that hold it.
+    pub fn heap_bytes(&self) -> u64 {
+        fn bytes<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * std::mem::size_of::<T>()) as u64
+        }
+        bytes(&self.bvh.nodes)
+            + bytes(&self.bvh.primitive_indices)
+            + bytes(&self.tris)
+            + bytes(&self.surfaces)
+            + bytes(&self.source_index)
+            + bytes(&self.is_floor)
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
     }

@@ -15,7 +15,7 @@ pub mod march;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::estimate::estimator::{with_scratch, Estimator};
 use crate::progress::Progress;
 use crate::rng::{mix64, Pcg32};
@@ -35,7 +35,7 @@ const PIXEL_STREAM: u64 = 0x7069_7865_6c73;
 const RADIOMETER_STREAM: u64 = 0x7261_6469_6f6d;
 
 /// A radiometer reading.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[allow(non_snake_case)]
 pub struct RadiometerReading {
     pub depth_m: f64,
@@ -71,10 +71,7 @@ pub fn render(
     threads: usize,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::invalid("threads", e.to_string()))?;
+    let pool = crate::parallel::pool(threads)?;
     let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
     let nb = scene.bands.len();
     let [w, h] = scene.sensor.pixels;

@@ -25,6 +25,8 @@ struct Ctx<'t> {
     dir: PathBuf,
     bands: BandGrid,
     policy: RangePolicy,
+    /// Every file the scene names, in the order it was read.
+    inputs: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 impl Ctx<'_> {
@@ -50,13 +52,17 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// The path of a file the scene names (relative to the scene's
+    /// directory), recorded as an input of the scene.
     fn path(&self, name: &str) -> PathBuf {
         let p = Path::new(name);
-        if p.is_absolute() {
+        let path = if p.is_absolute() {
             p.to_path_buf()
         } else {
             self.dir.join(p)
-        }
+        };
+        self.inputs.borrow_mut().push(path.clone());
+        path
     }
 
     /// A reflectance per band: constant, bottom-table name or CSV path.
@@ -166,6 +172,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         dir,
         bands,
         policy,
+        inputs: Default::default(),
     };
     let nb = ctx.bands.len();
 
@@ -390,10 +397,9 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     }
     let geometry = geo.build();
     let (sensor, radiometers, estimate) = render_settings(&ctx, &f, &domain, ov)?;
-    let mut fp = crc32fast::Hasher::new();
-    fp.update(text.as_bytes());
-    fp.update(format!("{:?}|{:?}|{:?}", ov.photons, ov.bands, ov.seed).as_bytes());
-    let fingerprint = fp.finalize();
+    let mut inputs = ctx.inputs.take();
+    inputs.sort();
+    inputs.dedup();
 
     if f.photons.count == 0 {
         return Err(ctx.err(&[K("photons"), K("count")], "must be at least 1"));
@@ -436,7 +442,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         sensor,
         radiometers,
         estimate,
-        fingerprint,
+        inputs,
     })
 }
 

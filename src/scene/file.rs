@@ -2,6 +2,7 @@
 //! closed to unknown keys. `scene::Scene::parse` turns it into a validated
 //! scene; this module only describes the syntax.
 
+use crate::estimate::{BoundaryMode, SpectralMode};
 use serde::Deserialize;
 
 #[derive(Debug, Deserialize)]
@@ -70,8 +71,8 @@ pub struct EstimateFile {
     pub radius_m: Option<f64>,
     pub max_radius_m: Option<f64>,
     pub k_expanded: Option<usize>,
-    pub boundary: Option<String>,
-    pub spectral: Option<String>,
+    pub boundary: Option<BoundaryMode>,
+    pub spectral: Option<SpectralMode>,
     pub step_m: Option<f64>,
     pub forward_peak_deg: Option<f64>,
     pub forward_peak_down_deg: Option<f64>,

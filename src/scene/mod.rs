@@ -15,6 +15,10 @@
 mod build;
 pub mod file;
 pub mod locate;
+mod provenance;
+pub mod settings;
+
+pub use settings::{BoundaryMode, EstimateSettings, SpectralMode};
 
 use crate::error::Result;
 use crate::geometry::{Geometry, SurfaceId};
@@ -23,7 +27,7 @@ use crate::optics::phase::PhaseFunction;
 use crate::optics::surface::SeaSurface;
 use crate::spectral::BandGrid;
 use glam::Vec3;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The built-in coastal scene (TOML).
 pub const COASTAL_TOML: &str = include_str!("coastal.toml");
@@ -119,44 +123,6 @@ pub struct Radiometer {
     pub position_m: [f64; 2],
 }
 
-/// Radiance-estimate settings.
-#[derive(Clone, Debug, PartialEq)]
-pub struct EstimateSettings {
-    /// Photons in the local search.
-    pub k: usize,
-    /// Fixed search radius instead of k nearest (m).
-    pub radius_m: Option<f64>,
-    /// Largest radius of a k-nearest search (m).
-    pub max_radius_m: f64,
-    /// Photons in the expanded search of the spectral compensation.
-    pub k_expanded: usize,
-    /// "none", "ellipsoid" or "clipped-sphere".
-    pub boundary: String,
-    /// "naive" or "compensated".
-    pub spectral: String,
-    /// Ray-marching step in water (m).
-    pub step_m: f64,
-    /// Half-angle (degrees) of the forward peak of the phase functions that
-    /// is treated as a delta in photon estimates along rays looking up or
-    /// sideways (0 = exact; see `estimate::peak`).
-    pub forward_peak_deg: f64,
-    /// The same along rays looking down (into upwelling light).
-    pub forward_peak_down_deg: f64,
-    /// Node spacing (m) of a precomputed boundary-distance grid for volume
-    /// estimates, or None to trace six rays per estimate.
-    pub boundary_grid_m: Option<f64>,
-}
-
-impl EstimateSettings {
-    /// The largest radius a volume search can have (m).
-    pub fn largest_radius_m(&self) -> f64 {
-        match self.radius_m {
-            Some(r) => r * (self.k_expanded.max(self.k) as f64 / self.k as f64).cbrt(),
-            None => self.max_radius_m,
-        }
-    }
-}
-
 /// A validated scene.
 #[derive(Debug)]
 pub struct Scene {
@@ -183,19 +149,19 @@ pub struct Scene {
     pub sensor: Sensor,
     pub radiometers: Vec<Radiometer>,
     pub estimate: EstimateSettings,
-    /// Fingerprint of the scene text and overrides: a photon map made from
-    /// a scene with the same fingerprint can be reused.
-    pub fingerprint: u32,
+    /// Every file the scene names (spectra, meshes, height fields, grids,
+    /// phase tables), sorted: inputs of the emission's provenance.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Values the command line may override before validation.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Overrides<'a> {
+pub struct Overrides {
     pub photons: Option<u64>,
     pub bands: Option<usize>,
     pub seed: Option<u64>,
-    pub boundary: Option<&'a str>,
-    pub spectral: Option<&'a str>,
+    pub boundary: Option<BoundaryMode>,
+    pub spectral: Option<SpectralMode>,
 }
 
 impl Scene {

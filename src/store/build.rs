@@ -11,8 +11,9 @@ use super::codec::StagedPhoton;
 use super::partition::Partition;
 use super::writer::{MapWriter, WriteSummary, WriterPlan};
 use crate::bounds::Aabb;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::progress::Progress;
+use crate::provenance::Provenance;
 use crate::spectral::BandGrid;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -45,6 +46,15 @@ pub trait PhotonSource: Sync {
     fn bands(&self) -> BandGrid;
     /// Bounds of the scene.
     fn bounds(&self) -> Aabb;
+    /// What the photons are made from, recorded in the map's header.
+    fn provenance(&self) -> Provenance {
+        Provenance::unrecorded()
+    }
+    /// Bytes recorded in the map after every photon was generated (an
+    /// emitter's report); called once, after the last `generate`.
+    fn metadata(&self) -> Vec<u8> {
+        Vec::new()
+    }
 }
 
 /// How to build a map.
@@ -93,10 +103,7 @@ pub fn build_map(
     // Trace the pilot in parallel: for an emitter it is real transport work.
     let pilot: Vec<Vec3> = {
         use rayon::prelude::*;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(options.threads)
-            .build()
-            .map_err(|e| Error::invalid("threads", e.to_string()))?;
+        let pool = crate::parallel::pool(options.threads)?;
         pool.install(|| {
             (0..pilot_n)
                 .into_par_iter()
@@ -123,12 +130,16 @@ pub fn build_map(
     }
     let partition = Partition::from_pilot(&mut pilot, plan.cells_for(expected));
     drop(pilot);
-    let mut writer = MapWriter::create(path, plan, partition, source.bands(), source.bounds())?;
+    let mut writer = MapWriter::create(
+        path,
+        plan,
+        partition,
+        source.bands(),
+        source.bounds(),
+        source.provenance(),
+    )?;
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads)
-        .build()
-        .map_err(|e| Error::invalid("threads", e.to_string()))?;
+    let pool = crate::parallel::pool(options.threads)?;
     let (tx, rx) = crossbeam_channel::bounded::<Vec<StagedPhoton>>(CHANNEL_BATCHES);
     progress.stage("trace photons", n);
     let (write_result, _) = std::thread::scope(|scope| {
@@ -156,5 +167,5 @@ pub fn build_map(
     });
     progress.finish();
     let writer = write_result?;
-    writer.finish(progress)
+    writer.finish(&source.metadata(), progress)
 }

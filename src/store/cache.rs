@@ -42,7 +42,7 @@ pub fn tile_bytes(count: u32) -> u64 {
 }
 
 /// Cache counters, summed over all threads.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct CacheStats {
     pub hits: u64,
     pub misses: u64,

@@ -1,10 +1,14 @@
-//! The map file layout, version 1.
+//! The map file layout, version 2.
 //!
 //! ```text
 //! offset 0   header   magic "LTRLMAP\0", version u32, header length u32,
-//!                     body (photons, tiles, band grid, bounds, partition),
-//!                     crc32 of everything before it
+//!                     body (photons, tiles, band grid, bounds, partition,
+//!                     provenance digest [32], provenance record length u32
+//!                     and UTF-8 JSON, metadata offset u64, length u64,
+//!                     crc32), crc32 of everything before it
 //!            blobs    one zstd frame per tile (see `codec`)
+//!            metadata UTF-8 JSON the producer reported at the end (for an
+//!                     emitted map, the emission report)
 //!            index    one 72-byte entry per tile (offset, length, count,
 //!                     quantisation box, photon bounds, crc32 of the blob,
 //!                     layer: 0 volume photons, 1 surface photons)
@@ -13,12 +17,16 @@
 //! ```
 //! All integers and floats are little-endian. Every byte of the file is
 //! covered by a checksum: the header and footer by their own, the index by the
-//! footer's, each blob by its index entry's. A reader checks the length, both
-//! magics, the version, the footer, the index and the header before it
-//! touches any blob.
+//! footer's, each blob by its index entry's, the metadata by the header's.
+//! A reader checks the length, both magics, the version, the footer, the
+//! index, the header and the metadata before it touches any blob.
+//!
+//! Version 1 (no provenance, no metadata) is refused with a message to emit
+//! the map again: without provenance a map cannot be safely reused.
 
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
+use crate::provenance::Provenance;
 use crate::spectral::BandGrid;
 use glam::Vec3;
 use std::path::Path;
@@ -28,13 +36,13 @@ pub const HEADER_MAGIC: [u8; 8] = *b"LTRLMAP\0";
 /// Magic at the end of a map file.
 pub const FOOTER_MAGIC: [u8; 8] = *b"LTRLEND\0";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Size of the footer in bytes.
 pub const FOOTER_LEN: usize = 40;
 /// Size of one index entry in bytes.
 pub const INDEX_ENTRY_LEN: usize = 72;
 /// Smallest possible header (magic, version, length, fixed body, crc).
-pub const MIN_HEADER_LEN: usize = 16 + 8 + 4 + 4 + 8 + 24 + 4 + 4;
+pub const MIN_HEADER_LEN: usize = 16 + 8 + 4 + 4 + 8 + 24 + 4 + 32 + 4 + 20 + 4;
 
 /// One node of the pilot k-d partition, stored in preorder.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,6 +64,18 @@ pub struct Header {
     pub bounds: Aabb,
     /// The pilot partition (tiles are its cells, some split further).
     pub partition: Vec<PartitionNode>,
+    /// What the photons were made from.
+    pub provenance: Provenance,
+    /// Where the metadata section lies.
+    pub metadata: Section,
+}
+
+/// A checksummed byte range of the file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Section {
+    pub offset: u64,
+    pub length: u64,
+    pub crc: u32,
 }
 
 /// The index entry of one tile.
@@ -200,6 +220,12 @@ impl Header {
                 }
             }
         }
+        body.0.extend_from_slice(&self.provenance.digest);
+        body.u32(self.provenance.record.len() as u32);
+        body.0.extend_from_slice(self.provenance.record.as_bytes());
+        body.u64(self.metadata.offset);
+        body.u64(self.metadata.length);
+        body.u32(self.metadata.crc);
         let mut out = ByteWriter::default();
         out.0.extend_from_slice(&HEADER_MAGIC);
         out.u32(FORMAT_VERSION);
@@ -246,6 +272,14 @@ impl Header {
         if version == 0 {
             return Err(Error::format(path, "format version 0 is not valid"));
         }
+        if version < FORMAT_VERSION {
+            return Err(Error::format(
+                path,
+                format!(
+                    "format version {version} records no provenance; this build reads version {FORMAT_VERSION}: emit the map again"
+                ),
+            ));
+        }
         let mut r = ByteReader::new(&bytes[16..total - 4], path, "header");
         let photons = r.u64()?;
         let tiles = r.u32()?;
@@ -269,7 +303,7 @@ impl Header {
             return Err(Error::format(path, "header bounds are not a valid box"));
         }
         let nodes = r.u32()? as usize;
-        if nodes.saturating_mul(5) != r.remaining() {
+        if nodes.saturating_mul(5) > r.remaining() {
             return Err(Error::format(
                 path,
                 format!("header partition of {nodes} nodes does not match its length"),
@@ -285,6 +319,22 @@ impl Header {
                 _ => return Err(Error::format(path, format!("header partition axis {axis}"))),
             });
         }
+        let digest: [u8; 32] = r.bytes(32)?.try_into().expect("32 bytes");
+        let record_len = r.u32()? as usize;
+        let record = std::str::from_utf8(r.bytes(record_len)?)
+            .map_err(|_| Error::format(path, "header provenance record is not UTF-8"))?
+            .to_string();
+        let metadata = Section {
+            offset: r.u64()?,
+            length: r.u64()?,
+            crc: r.u32()?,
+        };
+        if r.remaining() != 0 {
+            return Err(Error::format(
+                path,
+                format!("header has {} unexpected trailing bytes", r.remaining()),
+            ));
+        }
         Ok((
             Header {
                 photons,
@@ -292,6 +342,8 @@ impl Header {
                 bands,
                 bounds,
                 partition,
+                provenance: Provenance { digest, record },
+                metadata,
             },
             total,
         ))
@@ -391,11 +443,42 @@ mod tests {
                 PartitionNode::Leaf,
                 PartitionNode::Leaf,
             ],
+            provenance: Provenance {
+                digest: [7; 32],
+                record: r#"{"photons":10}"#.into(),
+            },
+            metadata: Section {
+                offset: 1 << 40,
+                length: 99,
+                crc: 0xfeed_f00d,
+            },
         };
         let bytes = h.encode();
         let (back, len) = Header::decode(&bytes, Path::new("t")).unwrap();
         assert_eq!(len, bytes.len());
         assert_eq!(back, h);
+    }
+
+    /// A version-1 header (no provenance) is refused with a message that
+    /// says what to do, not a checksum or length complaint.
+    #[test]
+    fn version_one_maps_are_refused_clearly() {
+        let mut out = ByteWriter::default();
+        out.0.extend_from_slice(&HEADER_MAGIC);
+        out.u32(1);
+        let body = [0u8; 40];
+        out.u32(body.len() as u32 + 4);
+        out.0.extend_from_slice(&body);
+        let crc = crc32fast::hash(&out.0);
+        out.u32(crc);
+        let e = Header::decode(&out.0, Path::new("old.map")).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("old.map")
+                && msg.contains("version 1")
+                && msg.contains("emit the map again"),
+            "{msg}"
+        );
     }
 
     #[test]

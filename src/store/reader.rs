@@ -127,14 +127,20 @@ impl MapFile {
             photons += e.count as u64;
             tiles.push(e);
         }
-        if expect != footer.index_offset {
+        let meta = header.metadata;
+        if expect != meta.offset
+            || meta.offset.checked_add(meta.length) != Some(footer.index_offset)
+        {
             return Err(Error::format(
                 path,
                 format!(
-                    "tile blobs end at {expect} but the index starts at {}",
-                    footer.index_offset
+                    "tile blobs end at {expect}, the metadata lies at {}+{} and the index starts at {}",
+                    meta.offset, meta.length, footer.index_offset
                 ),
             ));
+        }
+        if crc32fast::hash(&bytes[meta.offset as usize..footer.index_offset as usize]) != meta.crc {
+            return Err(Error::format(path, "metadata checksum mismatch"));
         }
         if photons != header.photons {
             return Err(Error::format(
@@ -173,6 +179,13 @@ impl MapFile {
     /// Size of the file in bytes.
     pub fn file_bytes(&self) -> u64 {
         self.mmap.len() as u64
+    }
+
+    /// What the producer recorded at the end of the build (for an emitted
+    /// map, the emission report as JSON); empty if nothing.
+    pub fn metadata(&self) -> &[u8] {
+        let m = self.header.metadata;
+        &self.mmap[m.offset as usize..(m.offset + m.length) as usize]
     }
 
     /// The compressed bytes of tile `t`.
@@ -224,6 +237,10 @@ pub struct MapInfo {
     pub partition_cells: usize,
     pub largest_tile_photons: u32,
     pub smallest_tile_photons: u32,
+    /// What the photons were made from (the digest and the inputs).
+    pub provenance: serde_json::Value,
+    /// Bytes of metadata the producer recorded (the emission report).
+    pub metadata_bytes: u64,
 }
 
 /// What `littoral map verify` found.
@@ -266,6 +283,8 @@ impl MapFile {
                 .count(),
             largest_tile_photons: self.tiles.iter().map(|t| t.count).max().unwrap_or(0),
             smallest_tile_photons: self.tiles.iter().map(|t| t.count).min().unwrap_or(0),
+            provenance: h.provenance.record_json(),
+            metadata_bytes: h.metadata.length,
         }
     }
 

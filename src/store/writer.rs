@@ -20,12 +20,13 @@
 //! Not for: reading maps (see `reader`), or choosing which photons to store.
 
 use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON, ZSTD_LEVEL};
-use super::format::{ByteWriter, Footer, Header, TileEntry, FORMAT_VERSION};
+use super::format::{ByteWriter, Footer, Header, Section, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::photon::LAYERS;
 use crate::progress::Progress;
+use crate::provenance::Provenance;
 use crate::rng::mix64;
 use crate::spectral::BandGrid;
 use bytemuck::Zeroable;
@@ -309,6 +310,7 @@ impl MapWriter {
         partition: Partition,
         bands: BandGrid,
         bounds: Aabb,
+        provenance: Provenance,
     ) -> Result<Self> {
         let dir = crate::output::parent_dir(path).to_path_buf();
         let tmp = crate::output::temp_beside(path)?;
@@ -325,6 +327,8 @@ impl MapWriter {
             bands,
             bounds,
             partition: partition.nodes().to_vec(),
+            provenance,
+            metadata: Section::default(),
         };
         let bytes = header.encode();
         let mut out = BufWriter::with_capacity(1 << 20, tmp);
@@ -397,9 +401,9 @@ impl MapWriter {
         Ok(())
     }
 
-    /// Encode every cell, write the index and footer, and publish the file
-    /// under its final name.
-    pub fn finish(mut self, progress: &dyn Progress) -> Result<WriteSummary> {
+    /// Encode every cell, write `metadata` (e.g. the emission report), the
+    /// index and footer, and publish the file under its final name.
+    pub fn finish(mut self, metadata: &[u8], progress: &dyn Progress) -> Result<WriteSummary> {
         progress.stage("encode tiles", self.summary.photons);
         let mut entries: Vec<TileEntry> = Vec::new();
         let mut encoder = TileEncoder::default();
@@ -455,6 +459,14 @@ impl MapWriter {
         progress.finish();
         drop(staged);
 
+        let io = |e| Error::io(&self.path, "write", e);
+        self.header.metadata = Section {
+            offset: self.offset,
+            length: metadata.len() as u64,
+            crc: crc32fast::hash(metadata),
+        };
+        self.out.write_all(metadata).map_err(io)?;
+        self.offset += metadata.len() as u64;
         let mut index = ByteWriter::default();
         for e in &entries {
             e.encode(&mut index);
@@ -466,7 +478,6 @@ impl MapWriter {
             index_crc: crc32fast::hash(&index.0),
             version: FORMAT_VERSION,
         };
-        let io = |e| Error::io(&self.path, "write", e);
         self.out.write_all(&index.0).map_err(io)?;
         self.out.write_all(&footer.encode()).map_err(io)?;
         let mut tmp = self.out.into_inner().map_err(|e| io(e.into_error()))?;

@@ -63,7 +63,13 @@ fn synth_info_verify_query_dump() {
         "a quarter on the floor: {surf}"
     );
     assert_eq!(info["bands"], 16);
-    assert_eq!(info["format_version"], 1);
+    assert_eq!(
+        info["format_version"],
+        littoral::store::format::FORMAT_VERSION
+    );
+    assert_eq!(info["provenance"]["source"], "synthetic");
+    assert_eq!(info["provenance"]["photons"], 50_000);
+    assert_eq!(info["provenance"]["digest"].as_str().unwrap().len(), 64);
     assert!(info["tiles"].as_u64().unwrap() >= 1);
     let bytes = std::fs::metadata(&map).unwrap().len();
     assert_eq!(info["file_bytes"], bytes);

@@ -1,4 +1,4 @@
-//! Corruption: every flipped byte of a map's header, index and footer, a
+//! Corruption: every flipped byte of a map's header, metadata, index and footer, a
 //! sample of flipped blob bytes, and truncation at every section boundary
 //! give a clean error naming the file (and the tile, for blobs) — never a
 //! panic, never silent success.
@@ -49,7 +49,12 @@ fn every_flipped_metadata_byte_is_caught_at_open() {
     let dir = tempdir();
     let l = small_map(dir.path());
     let path = dir.path().join("bad.map");
-    let metadata = (0..l.header_len).chain(l.index_offset..l.bytes.len());
+    let blobs_end = l.blobs.last().unwrap().1;
+    assert!(
+        l.index_offset > blobs_end,
+        "the synthetic map records metadata"
+    );
+    let metadata = (0..l.header_len).chain(blobs_end..l.bytes.len());
     let mut checked = 0;
     for i in metadata {
         for mask in [0x01u8, 0x80] {
@@ -141,15 +146,19 @@ fn newer_format_version_is_refused() {
     let dir = tempdir();
     let l = small_map(dir.path());
     let mut b = l.bytes.clone();
-    b[8..12].copy_from_slice(&2u32.to_le_bytes());
+    let newer = littoral::store::format::FORMAT_VERSION + 1;
+    b[8..12].copy_from_slice(&newer.to_le_bytes());
     let crc = crc32fast::hash(&b[..l.header_len - 4]);
     b[l.header_len - 4..l.header_len].copy_from_slice(&crc.to_le_bytes());
     let f = b.len() - FOOTER_LEN;
-    b[f + 24..f + 28].copy_from_slice(&2u32.to_le_bytes());
+    b[f + 24..f + 28].copy_from_slice(&newer.to_le_bytes());
     let crc = crc32fast::hash(&b[f..f + 28]);
     b[f + 28..f + 32].copy_from_slice(&crc.to_le_bytes());
-    let path = dir.path().join("v2.map");
+    let path = dir.path().join("newer.map");
     std::fs::write(&path, &b).unwrap();
     let e = open_err(&path);
-    assert!(e.contains("version 2") && e.contains("newer"), "{e}");
+    assert!(
+        e.contains(&format!("version {newer}")) && e.contains("newer"),
+        "{e}"
+    );
 }

@@ -62,12 +62,19 @@ fn overfull_tiles_are_split_deterministically() {
             .unwrap()
             .with_tile_photons(3_000);
         let path = dir.path().join(name);
-        let mut w =
-            MapWriter::create(&path, plan, Partition::single(), src.bands(), src.bounds()).unwrap();
+        let mut w = MapWriter::create(
+            &path,
+            plan,
+            Partition::single(),
+            src.bands(),
+            src.bounds(),
+            src.provenance(),
+        )
+        .unwrap();
         for batch in photons.chunks(5_000) {
             w.push(batch).unwrap();
         }
-        let summary = w.finish(&Silent).unwrap();
+        let summary = w.finish(b"{}", &Silent).unwrap();
         (path, summary)
     };
     let (a, sa) = write("a.map", 12 * MIB, &staged);

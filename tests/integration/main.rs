@@ -7,6 +7,7 @@ mod cli;
 mod corruption;
 mod cube_tool;
 mod determinism;
+mod job;
 mod memory;
 mod oracle;
 mod physics;

@@ -8,7 +8,7 @@ use littoral::bounds::Aabb;
 use littoral::estimate::estimator::{Estimator, Scratch};
 use littoral::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use littoral::rng::Pcg32;
-use littoral::scene::{Overrides, Scene};
+use littoral::scene::{BoundaryMode, Overrides, Scene};
 use littoral::store::InMemoryMap;
 use littoral::store::{PhotonSource, StagedPhoton};
 use std::ops::Range;
@@ -108,7 +108,7 @@ fn boundary_compensation_recovers_uniform_density() {
     ];
     // Axial distances traced per estimate, or from a 0.1 m grid.
     let gridded = format!("{BOX_SCENE}boundary_grid_m = 0.1\n");
-    for (mode, text) in ["none", "ellipsoid", "clipped-sphere"]
+    for (mode, text) in BoundaryMode::ALL
         .into_iter()
         .flat_map(|m| [(m, BOX_SCENE), (m, gridded.as_str())])
     {
@@ -124,8 +124,16 @@ fn boundary_compensation_recovers_uniform_density() {
         for (name, x, fraction) in sites {
             est.volume(x, Vec3::Z, &mut scratch, &mut out).unwrap();
             let ratio = out[0] / truth;
-            let want = if mode == "none" { fraction } else { 1.0 };
-            let tol = if mode == "none" { 0.06 * want } else { 0.03 };
+            let want = if mode == BoundaryMode::None {
+                fraction
+            } else {
+                1.0
+            };
+            let tol = if mode == BoundaryMode::None {
+                0.06 * want
+            } else {
+                0.03
+            };
             eprintln!("{mode:>14} {how:>6} {name:>8}: {ratio:.4} of truth");
             assert!(
                 (ratio - want).abs() < tol,
@@ -216,7 +224,7 @@ fn surface_estimate_clips_the_disc_where_the_floor_ends() {
     // the box's photons inside the search sphere bound a k-nearest search
     // without counting on the floor.
     let nearest = text.replace("radius_m = 0.25", "k = 16000\nmax_radius_m = 1.0");
-    for (mode, text) in ["none", "ellipsoid", "clipped-sphere"]
+    for (mode, text) in BoundaryMode::ALL
         .into_iter()
         .flat_map(|m| [(m, text.as_str()), (m, nearest.as_str())])
     {
@@ -235,7 +243,11 @@ fn surface_estimate_clips_the_disc_where_the_floor_ends() {
             est.surface(x, Vec3::Z, littoral::scene::FLOOR, &mut scratch, &mut out)
                 .unwrap();
             let ratio = out[0] / truth;
-            let want = if mode == "none" { fraction } else { 1.0 };
+            let want = if mode == BoundaryMode::None {
+                fraction
+            } else {
+                1.0
+            };
             let how = if scene.estimate.radius_m.is_some() {
                 "radius"
             } else {
@@ -578,7 +590,13 @@ fn render_outputs_and_errors() {
         "--boundary",
         "cube",
     ]);
-    assert_eq!(bad_mode.status.code(), Some(1));
+    // A usage error: clap names the flag and the allowed values.
+    assert_eq!(bad_mode.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad_mode.stderr);
+    assert!(
+        err.contains("--boundary") && err.contains("clipped-sphere"),
+        "{err}"
+    );
     // A boundary grid that cannot fit the memory budget is refused up front.
     let grid_scene = dir.path().join("grid.toml");
     std::fs::write(&grid_scene, deep_scene(2, "boundary_grid_m = 0.05\n")).unwrap();

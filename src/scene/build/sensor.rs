@@ -2,6 +2,10 @@
 //! `[estimate]`.
 
 use super::*;
+use crate::scene::settings::{
+    DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_K, DEFAULT_K_EXPANDED_PER_K,
+    DEFAULT_MAX_RADIUS_M, DEFAULT_STEP_M,
+};
 
 pub(super) fn render_settings(
     ctx: &Ctx,
@@ -133,11 +137,11 @@ pub(super) fn render_settings(
 
     let e = &f.estimate;
     let ek = |k| [K("estimate"), K(k)];
-    let k = e.k.unwrap_or(64);
+    let k = e.k.unwrap_or(DEFAULT_K);
     if k == 0 || k > 100_000 {
         return Err(ctx.err(&ek("k"), "must be between 1 and 100000"));
     }
-    let k_expanded = e.k_expanded.unwrap_or(8 * k);
+    let k_expanded = e.k_expanded.unwrap_or(DEFAULT_K_EXPANDED_PER_K * k);
     if k_expanded < k || k_expanded > 1_000_000 {
         return Err(ctx.err(&ek("k_expanded"), "must be at least k and at most 1000000"));
     }
@@ -146,36 +150,16 @@ pub(super) fn render_settings(
             return Err(ctx.err(&ek("radius_m"), "must be a positive radius (m)"));
         }
     }
-    let max_radius_m = e.max_radius_m.unwrap_or(2.0);
+    let max_radius_m = e.max_radius_m.unwrap_or(DEFAULT_MAX_RADIUS_M);
     if !finite_in(max_radius_m, 1e-6, 1e4) {
         return Err(ctx.err(&ek("max_radius_m"), "must be a positive radius (m)"));
     }
-    let step_m = e.step_m.unwrap_or(0.5);
+    let step_m = e.step_m.unwrap_or(DEFAULT_STEP_M);
     if !finite_in(step_m, 1e-3, 1e3) {
         return Err(ctx.err(&ek("step_m"), "must be a positive step (m)"));
     }
-    let boundary = ov
-        .boundary
-        .map(str::to_string)
-        .or_else(|| e.boundary.clone())
-        .unwrap_or_else(|| "clipped-sphere".into());
-    if !["none", "ellipsoid", "clipped-sphere"].contains(&boundary.as_str()) {
-        return Err(ctx.err(
-            &ek("boundary"),
-            format!("'{boundary}': use \"none\", \"ellipsoid\" or \"clipped-sphere\""),
-        ));
-    }
-    let spectral = ov
-        .spectral
-        .map(str::to_string)
-        .or_else(|| e.spectral.clone())
-        .unwrap_or_else(|| "compensated".into());
-    if !["naive", "compensated"].contains(&spectral.as_str()) {
-        return Err(ctx.err(
-            &ek("spectral"),
-            format!("'{spectral}': use \"naive\" or \"compensated\""),
-        ));
-    }
+    let boundary = ov.boundary.or(e.boundary).unwrap_or_default();
+    let spectral = ov.spectral.or(e.spectral).unwrap_or_default();
     let peak = |key: &'static str, value: Option<f64>, default: f64| -> Result<f64> {
         let v = value.unwrap_or(default);
         if finite_in(v, 0.0, 90.0) {
@@ -190,12 +174,12 @@ pub(super) fn render_settings(
     let forward_peak_deg = peak(
         "forward_peak_deg",
         e.forward_peak_deg,
-        crate::estimate::peak::DEFAULT_FORWARD_PEAK_DEG,
+        DEFAULT_FORWARD_PEAK_DEG,
     )?;
     let forward_peak_down_deg = peak(
         "forward_peak_down_deg",
         e.forward_peak_down_deg,
-        crate::estimate::peak::DEFAULT_FORWARD_PEAK_DOWN_DEG,
+        DEFAULT_FORWARD_PEAK_DOWN_DEG,
     )?;
     if let Some(h) = e.boundary_grid_m {
         if !finite_in(h, 0.01, 100.0) {

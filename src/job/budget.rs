@@ -1,0 +1,164 @@
+//! One memory budget (`--mem-budget`) split between the stages that hold
+//! memory: the sort writer while emitting; the renderer's own buffers (the
+//! reserve), the boundary-distance grid and the tile cache while rendering.
+//!
+//! **Emission.** The sort writer gets the whole budget; its fixed needs
+//! (zstd contexts, I/O buffers, channel, spill metadata) are inside it
+//! (`store::writer::WRITER_FIXED_BYTES`). The map's tile layout depends on
+//! this share, so it is the budget itself, as it always was.
+//!
+//! **Rendering.** The reserve is computed from what the renderer allocates
+//! besides the cache and the grid, not guessed:
+//! - the geometry (BVH and triangle tables), which lives through the run;
+//! - the image-sized buffers: the quicklook's RGB image and the RGB tiles
+//!   collected for it (2 x 12 bytes per pixel);
+//! - the spectral OpenEXR conversion: one 64 x 64 tile of every band, held
+//!   twice (the tile and the encoder's block);
+//! - per worker: one 16 x 16 image tile of every band (f32), the
+//!   estimator's neighbour lists (two of `k_expanded` neighbours of 36
+//!   bytes) and the query's packed candidates (28 bytes each), and three
+//!   band accumulators;
+//! - a fixed [`RUNTIME_RESERVE`] for what no buffer size shows: the
+//!   process baseline (binary, libc, allocator metadata) and the per-thread
+//!   allocator arenas and stacks. It was measured as the anonymous resident
+//!   memory of `littoral render` of a 16 x 16 pixel scene from a 1-photon
+//!   map with a 1 MiB cache, where every other term is negligible: 4-6 MiB
+//!   on two cores; 8 MiB leaves room for allocator fragmentation.
+//!
+//! The rest goes to the boundary grid (when the scene asks for one) and
+//! then the tile cache; a budget that leaves the cache nothing is refused
+//! before any photon is traced.
+
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::store::BuildOptions;
+
+const MIB: u64 = 1 << 20;
+
+/// Process baseline and per-thread allocator overhead (see the module notes).
+pub const RUNTIME_RESERVE: u64 = 8 * MIB;
+
+/// Side of the tiles the EXR conversion holds (pixels).
+const EXR_TILE_PX: u64 = 64;
+
+/// A run's memory budget in bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryBudget {
+    total: u64,
+}
+
+/// How a render's budget is shared out (bytes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct RenderShares {
+    /// The whole budget.
+    pub budget_bytes: u64,
+    /// The renderer's own buffers, the geometry and the runtime.
+    pub reserve_bytes: u64,
+    /// The boundary-distance grid (0 without one).
+    pub boundary_grid_bytes: u64,
+    /// The tile cache: everything left.
+    pub tile_cache_bytes: u64,
+}
+
+impl MemoryBudget {
+    /// A budget of `total` bytes.
+    pub fn new(total: u64) -> Self {
+        MemoryBudget { total }
+    }
+
+    /// Parse a size such as `512MiB` given for the flag or key `field`.
+    pub fn parse(field: &str, text: &str) -> Result<Self> {
+        Ok(Self::new(crate::size::parse_size(field, text)?))
+    }
+
+    /// The whole budget in bytes.
+    pub fn total(&self) -> u64 {
+        self.total
+    }
+
+    /// Build options of the sort writer: the whole budget.
+    pub fn emission(&self, threads: usize) -> BuildOptions {
+        BuildOptions {
+            threads,
+            ..BuildOptions::with_budget(self.total)
+        }
+    }
+
+    /// The renderer's own needs for `scene` with `threads` workers (0 = one
+    /// per core), in bytes.
+    pub fn render_reserve(scene: &Scene, threads: usize) -> u64 {
+        let nb = scene.bands.len() as u64;
+        let [w, h] = scene.sensor.pixels.map(|p| p as u64);
+        let image = 2 * 12 * w * h;
+        let exr = 2 * EXR_TILE_PX * EXR_TILE_PX * nb * 4;
+        let tile = (crate::render::TILE_PX * crate::render::TILE_PX) as u64 * nb * 4;
+        let k = scene.estimate.k_expanded.max(scene.estimate.k) as u64;
+        let neighbours = k * (2 * 36 + 28);
+        let sums = 3 * nb * 16;
+        let workers = crate::parallel::workers(threads) as u64;
+        RUNTIME_RESERVE
+            + scene.geometry.heap_bytes()
+            + image
+            + exr
+            + workers * (tile + neighbours + sums)
+    }
+
+    /// Shares of a render of `scene` with `threads` workers; an error if the
+    /// budget cannot hold the reserve and the grid with room for a cache.
+    pub fn render(&self, scene: &Scene, threads: usize) -> Result<RenderShares> {
+        let reserve = Self::render_reserve(scene, threads);
+        let grid = crate::estimate::Estimator::grid_bytes(scene)?;
+        let fixed = reserve.saturating_add(grid);
+        if fixed >= self.total {
+            return Err(Error::Budget {
+                budget: self.total,
+                what: if grid > 0 {
+                    format!(
+                        "the renderer needs {reserve} bytes and the boundary grid ([estimate] boundary_grid_m) {grid}, leaving nothing for the tile cache"
+                    )
+                } else {
+                    format!(
+                        "the renderer needs {reserve} bytes for its buffers, leaving nothing for the tile cache"
+                    )
+                },
+            });
+        }
+        Ok(RenderShares {
+            budget_bytes: self.total,
+            reserve_bytes: reserve,
+            boundary_grid_bytes: grid,
+            tile_cache_bytes: self.total - fixed,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Overrides;
+
+    #[test]
+    fn render_shares_add_up_and_grow_with_the_scene() {
+        let scene = Scene::coastal(&Overrides::default()).unwrap();
+        let b = MemoryBudget::new(512 * MIB);
+        let s = b.render(&scene, 2).unwrap();
+        assert_eq!(
+            s.reserve_bytes + s.boundary_grid_bytes + s.tile_cache_bytes,
+            512 * MIB
+        );
+        assert!(s.reserve_bytes > RUNTIME_RESERVE);
+        // 256 x 256 pixels: 1.5 MiB of image buffers; 128 bands: 4 MiB of EXR tile.
+        assert!(s.reserve_bytes >= RUNTIME_RESERVE + 1_572_864 + 4 * MIB);
+        assert!(s.reserve_bytes < 32 * MIB, "{s:?}");
+        let more = MemoryBudget::render_reserve(&scene, 8);
+        assert!(more > s.reserve_bytes);
+    }
+
+    #[test]
+    fn a_budget_without_room_for_a_cache_is_refused() {
+        let scene = Scene::coastal(&Overrides::default()).unwrap();
+        let e = MemoryBudget::new(4 * MIB).render(&scene, 1).unwrap_err();
+        assert!(matches!(e, Error::Budget { .. }), "{e}");
+        assert!(e.to_string().contains("tile cache"), "{e}");
+    }
+}

@@ -1,0 +1,200 @@
+//! The jobs, as a library: what `littoral emit` and `littoral render` do,
+//! callable from tests and tools without a process.
+//!
+//! - [`EmitJob`]: a scene's photons into a map file, with the emission
+//!   report ([`report::EmitReport`]).
+//! - [`RenderJob`]: scene → photon map (reused when its provenance matches,
+//!   else emitted) → render → outputs (ENVI cube, spectral EXR, quicklook,
+//!   JSON report), returning the typed [`report::RunReport`].
+//! - [`budget::MemoryBudget`]: one `--mem-budget` shared out between the
+//!   sort writer, the tile cache, the boundary grid and a reserve.
+//!
+//! **Map reuse.** A map records the SHA-256 of exactly the emission inputs
+//! of the scene it was traced from (`Scene::emission_inputs`, plus the map
+//! format version) and the emission report. `RenderJob` with a `map` path
+//! reuses the file there when, and only when, its digest equals the
+//! scene's; otherwise (no file, another scene, a corrupt or older map, a
+//! report that does not parse) it emits again and replaces the file. Edits
+//! to `[estimate]`, `[sensor]` or `[[radiometer]]` therefore never re-emit,
+//! and edits to any file the scene names always do.
+//!
+//! Not for: argument parsing, progress bars or exit codes (`main`).
+
+pub mod budget;
+pub mod report;
+
+use crate::emit::report::EmissionReport;
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::provenance::Provenance;
+use crate::scene::Scene;
+use crate::store::{MapFile, PhotonMap};
+pub use budget::{MemoryBudget, RenderShares};
+use report::{
+    EmitReport, EmitTimings, MapSummary, Outputs, RenderTimings, RunReport, SensorSummary,
+};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Trace a scene's photons into a map file.
+pub struct EmitJob<'a> {
+    pub scene: &'a Scene,
+    /// The map to write (under a temporary name until complete).
+    pub map: PathBuf,
+    /// Worker threads (0 = one per core); the map is identical for any number.
+    pub threads: usize,
+    pub budget: MemoryBudget,
+    /// Seconds spent loading the scene, for the report.
+    pub scene_seconds: f64,
+}
+
+impl EmitJob<'_> {
+    pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
+        let start = Instant::now();
+        let provenance = crate::emit::emission_provenance(self.scene)?;
+        let em = crate::emit::emit(
+            self.scene,
+            &self.map,
+            &self.budget.emission(self.threads),
+            progress,
+        )?;
+        let emit_s = start.elapsed().as_secs_f64();
+        Ok(EmitReport {
+            emission: EmissionReport::new(self.scene, &em.totals, &em.photon_power),
+            map: MapSummary::written(&em.map, provenance.digest_hex(), Some(&self.map)),
+            timings_s: EmitTimings {
+                scene: self.scene_seconds,
+                emit_and_store: emit_s,
+                total: self.scene_seconds + emit_s,
+            },
+            peak_rss_bytes: crate::mem::peak_rss_bytes().unwrap_or(0),
+        })
+    }
+}
+
+/// Render a scene: photon map (reused or emitted), cube, quicklook, EXR and
+/// the JSON report, all in `out_dir`.
+pub struct RenderJob<'a> {
+    pub scene: &'a Scene,
+    pub out_dir: PathBuf,
+    /// Keep the photon map here, and reuse the one there when its
+    /// provenance matches the scene; `None` traces into a scratch file in
+    /// `out_dir` that is removed at the end.
+    pub map: Option<PathBuf>,
+    /// Worker threads (0 = one per core); outputs are identical for any number.
+    pub threads: usize,
+    pub budget: MemoryBudget,
+    /// Seconds spent loading the scene, for the report.
+    pub scene_seconds: f64,
+}
+
+/// A map that can be reused for a scene, with the report it recorded.
+fn reusable(path: &Path, provenance: &Provenance) -> Option<(MapFile, EmissionReport)> {
+    let map = MapFile::open(path).ok()?;
+    if map.header().provenance.digest != provenance.digest {
+        return None;
+    }
+    let report = serde_json::from_slice(map.metadata()).ok()?;
+    Some((map, report))
+}
+
+impl RenderJob<'_> {
+    pub fn run(&self, progress: &dyn Progress) -> Result<RunReport> {
+        let start = Instant::now();
+        let scene = self.scene;
+        // Everything that can be refused is refused before any photon is traced.
+        let shares = self.budget.render(scene, self.threads)?;
+        create_dir(&self.out_dir)?;
+        let provenance = crate::emit::emission_provenance(scene)?;
+
+        let scratch = match &self.map {
+            Some(_) => None,
+            None => Some(
+                tempfile::Builder::new()
+                    .prefix(".littoral-map.")
+                    .tempfile_in(&self.out_dir)
+                    .map_err(|e| Error::io(&self.out_dir, "create", e))?,
+            ),
+        };
+        let (map_path, kept) = match (&self.map, &scratch) {
+            (Some(p), _) => (p.clone(), Some(p.as_path())),
+            (None, Some(s)) => (s.path().to_path_buf(), None),
+            (None, None) => unreachable!("a scratch map is made when no map is kept"),
+        };
+        let reused = self.map.as_deref().and_then(|p| reusable(p, &provenance));
+        let reused_map = reused.is_some();
+        let (file, emission, map_summary) = match reused {
+            Some((file, emission)) => {
+                let summary = MapSummary::existing(&file, kept);
+                (file, emission, summary)
+            }
+            None => {
+                let em = crate::emit::emit(
+                    scene,
+                    &map_path,
+                    &self.budget.emission(self.threads),
+                    progress,
+                )?;
+                let summary = MapSummary::written(&em.map, provenance.digest_hex(), kept);
+                let emission = EmissionReport::new(scene, &em.totals, &em.photon_power);
+                (MapFile::open(&map_path)?, emission, summary)
+            }
+        };
+        let t_emit = start.elapsed().as_secs_f64();
+        crate::mem::release_free_memory();
+
+        let map = PhotonMap::new(file, shares.tile_cache_bytes)?;
+        let rendered = crate::render::render(scene, &map, &self.out_dir, self.threads, progress)?;
+        let t_render = start.elapsed().as_secs_f64();
+        drop(map);
+        drop(scratch);
+
+        let json = self.out_dir.join(format!("{}.json", scene.name));
+        let report = RunReport {
+            Ed_above_surface: emission.above_surface.Ed.clone(),
+            emission,
+            map: map_summary,
+            reused_map,
+            radiometers: rendered.radiometers,
+            estimate: scene.estimate.clone(),
+            sensor: SensorSummary {
+                pixels: scene.sensor.pixels,
+                samples_per_pixel: scene.sensor.samples_per_pixel,
+            },
+            cache: rendered.cache,
+            memory: shares,
+            outputs: Outputs {
+                hdr: rendered.hdr.display().to_string(),
+                bsq: rendered.bsq.display().to_string(),
+                png: rendered.png.display().to_string(),
+                exr: rendered.exr.display().to_string(),
+                json: json.display().to_string(),
+            },
+            timings_s: RenderTimings {
+                scene: self.scene_seconds,
+                emit: t_emit,
+                render: t_render - t_emit,
+                total: self.scene_seconds + t_render,
+            },
+            peak_rss_bytes: crate::mem::peak_rss_bytes().unwrap_or(0),
+        };
+        let text = serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::invalid("report", e.to_string()))?
+            + "\n";
+        crate::output::write_atomic(&json, text.as_bytes())?;
+        Ok(report)
+    }
+}
+
+/// Create `dir` (and its parents) and check that it is a directory.
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "create directory", e))?;
+    if !dir.is_dir() {
+        return Err(Error::io(
+            dir,
+            "create directory",
+            std::io::Error::other("not a directory"),
+        ));
+    }
+    Ok(())
+}

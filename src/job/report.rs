@@ -1,0 +1,127 @@
+//! The typed run reports: what `littoral emit` and `littoral render` write
+//! as JSON. Every field is a named, typed value; the JSON keys are the
+//! field names (the emission report's keys at the top level).
+
+use super::budget::RenderShares;
+use crate::emit::report::EmissionReport;
+use crate::render::RadiometerReading;
+use crate::scene::EstimateSettings;
+use crate::store::cache::CacheStats;
+use crate::store::{MapFile, WriteSummary};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The photon map a run wrote or reused.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MapSummary {
+    /// Where the map is kept (absent for a render's scratch map).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    pub photons: u64,
+    pub tiles: u32,
+    pub file_bytes: u64,
+    pub bytes_per_photon: f64,
+    /// Compressed bytes the sort spilled to scratch space (0 for a reused map).
+    pub spilled_bytes: u64,
+    /// SHA-256 of the emission inputs (see `provenance`).
+    pub provenance: String,
+}
+
+impl MapSummary {
+    /// The summary of a map just written.
+    pub fn written(summary: &WriteSummary, provenance: String, path: Option<&Path>) -> Self {
+        MapSummary {
+            path: path.map(|p| p.display().to_string()),
+            photons: summary.photons,
+            tiles: summary.tiles,
+            file_bytes: summary.file_bytes,
+            bytes_per_photon: summary.file_bytes as f64 / summary.photons.max(1) as f64,
+            spilled_bytes: summary.spilled_bytes,
+            provenance,
+        }
+    }
+
+    /// The summary of an existing map.
+    pub fn existing(map: &MapFile, path: Option<&Path>) -> Self {
+        let h = map.header();
+        MapSummary {
+            path: path.map(|p| p.display().to_string()),
+            photons: h.photons,
+            tiles: h.tiles,
+            file_bytes: map.file_bytes(),
+            bytes_per_photon: map.file_bytes() as f64 / h.photons.max(1) as f64,
+            spilled_bytes: 0,
+            provenance: h.provenance.digest_hex(),
+        }
+    }
+}
+
+/// Seconds spent in each stage of `emit`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct EmitTimings {
+    pub scene: f64,
+    pub emit_and_store: f64,
+    pub total: f64,
+}
+
+/// The report of `littoral emit`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EmitReport {
+    #[serde(flatten)]
+    pub emission: EmissionReport,
+    pub map: MapSummary,
+    pub timings_s: EmitTimings,
+    /// Peak resident memory of the process (VmHWM, bytes).
+    pub peak_rss_bytes: u64,
+}
+
+/// The sensor a render imaged with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SensorSummary {
+    pub pixels: [usize; 2],
+    pub samples_per_pixel: u32,
+}
+
+/// The files a render wrote.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Outputs {
+    pub hdr: String,
+    pub bsq: String,
+    pub png: String,
+    pub exr: String,
+    pub json: String,
+}
+
+/// Seconds spent in each stage of `render`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RenderTimings {
+    pub scene: f64,
+    /// Emission, or opening a reused map.
+    pub emit: f64,
+    pub render: f64,
+    pub total: f64,
+}
+
+/// The report of `littoral render`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[allow(non_snake_case)]
+pub struct RunReport {
+    #[serde(flatten)]
+    pub emission: EmissionReport,
+    pub map: MapSummary,
+    /// True when the map was reused (its provenance matched the scene's).
+    pub reused_map: bool,
+    pub radiometers: Vec<RadiometerReading>,
+    /// Downwelling irradiance just above the surface per band (W m^-2
+    /// nm^-1), for Rrs = L / Ed.
+    pub Ed_above_surface: Vec<f64>,
+    pub estimate: EstimateSettings,
+    pub sensor: SensorSummary,
+    pub cache: CacheStats,
+    pub memory: RenderShares,
+    pub outputs: Outputs,
+    pub timings_s: RenderTimings,
+    /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
+    /// plus resident pages of the mapped photon map.
+    pub peak_rss_bytes: u64,
+}

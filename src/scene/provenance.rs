@@ -1,0 +1,64 @@
+//! The emission inputs of a scene, for the provenance of its photon maps.
+//!
+//! Hashed: every validated value emission reads, after defaults and
+//! overrides are applied (seed, photon count, band grid, sun, sky, surface,
+//! domain, water and its phase functions, floor and target reflectances,
+//! the geometry's triangles, tally depths, `store_direct`), and the bytes of
+//! every file the scene names. Not hashed: `[sensor]`, `[[radiometer]]`,
+//! `[estimate]` and the scene's name, which do not change a single photon.
+//!
+//! Values are hashed through their `Debug` form, which prints every float
+//! exactly (shortest round-trip digits): two scenes that differ only in how
+//! they spell a value (a default written out, `1.0` for `1`) hash alike.
+
+use super::Scene;
+use crate::error::{Error, Result};
+use crate::provenance::{sha256_hex, ProvenanceBuilder};
+
+impl Scene {
+    /// The digest parts and readable record of everything emission reads.
+    pub fn emission_inputs(&self) -> Result<ProvenanceBuilder> {
+        let mut b = ProvenanceBuilder::new();
+        b.note("scene", &self.name)
+            .value("photons", self.photons)
+            .value("bands", self.bands.len())
+            .value("seed", self.seed)
+            .value("store_direct", self.store_direct)
+            .value("tally_depths_m", &self.tally_depths);
+        let parts: [(&str, String); 11] = [
+            ("band_grid", format!("{:?}", self.bands)),
+            ("sun", format!("{:?}", self.sun)),
+            ("sky", format!("{:?}", self.sky)),
+            ("surface", format!("{:?}", self.surface)),
+            ("domain", format!("{:?}", self.domain)),
+            ("water", format!("{:?}", self.water)),
+            ("particle_phase", format!("{:?}", self.particle_phase)),
+            ("water_phase", format!("{:?}", self.water_phase)),
+            ("bottom", format!("{:?}", self.bottom)),
+            (
+                "target_reflectance",
+                format!("{:?}", self.target_reflectance),
+            ),
+            ("crate_version", env!("CARGO_PKG_VERSION").to_string()),
+        ];
+        for (name, text) in &parts {
+            b.part(name, text.as_bytes());
+        }
+        let mut geometry = Vec::new();
+        self.geometry
+            .digest_into(&mut |bytes| geometry.extend_from_slice(bytes));
+        b.part("geometry", &geometry);
+        let mut files = Vec::new();
+        for path in &self.inputs {
+            let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+            b.part(&format!("file {}", path.display()), &bytes);
+            files.push(serde_json::json!({
+                "path": path.display().to_string(),
+                "bytes": bytes.len(),
+                "sha256": sha256_hex(&bytes),
+            }));
+        }
+        b.note("files", files);
+        Ok(b)
+    }
+}

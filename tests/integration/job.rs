@@ -1,0 +1,237 @@
+//! The render and emit jobs through the library API: map reuse decided by
+//! the provenance recorded in the map (both directions), and the typed
+//! report, which is exactly what the JSON file holds.
+
+use crate::common::*;
+use littoral::job::report::RunReport;
+use littoral::job::{EmitJob, MemoryBudget, RenderJob};
+use littoral::progress::Silent;
+use littoral::scene::{Overrides, Scene};
+use littoral::store::MapFile;
+use std::path::{Path, PathBuf};
+
+/// A small shallow scene whose floor reflectance is a CSV file beside it.
+fn scene_text(estimate: &str, extra: &str) -> String {
+    format!(
+        r#"
+name = "reuse"
+[spectral]
+start_nm = 450.0
+end_nm = 550.0
+bands = 3
+[sun]
+zenith_deg = 30.0
+irradiance = 1.0
+[domain]
+size_m = [10.0, 10.0]
+[water]
+iop = {{ a = 0.2, b = 0.4 }}
+[bottom]
+depth_m = 3.0
+reflectance = "floor.csv"
+[photons]
+count = 20000
+[tally]
+depths_m = [0.0, 1.0]
+[sensor]
+pixels = [4, 4]
+gsd_m = 2.0
+[[radiometer]]
+depth_m = 1.0
+[estimate]
+{estimate}
+{extra}
+"#
+    )
+}
+
+const FLOOR_CSV: &str = "nm,reflectance\n400,0.2\n600,0.3\n";
+
+struct Setup {
+    dir: tempfile::TempDir,
+}
+
+impl Setup {
+    fn new() -> Setup {
+        let dir = tempdir();
+        std::fs::write(dir.path().join("floor.csv"), FLOOR_CSV).unwrap();
+        Setup { dir }
+    }
+
+    fn scene(&self, text: &str) -> Scene {
+        let path = self.dir.path().join("scene.toml");
+        std::fs::write(&path, text).unwrap();
+        Scene::load(&path, &Overrides::default()).unwrap()
+    }
+
+    fn map(&self) -> PathBuf {
+        self.dir.path().join("kept.map")
+    }
+
+    fn render(&self, scene: &Scene) -> RunReport {
+        RenderJob {
+            scene,
+            out_dir: self.dir.path().join("out"),
+            map: Some(self.map()),
+            threads: 2,
+            budget: MemoryBudget::new(64 * MIB),
+            scene_seconds: 0.0,
+        }
+        .run(&Silent)
+        .unwrap()
+    }
+}
+
+fn digest(path: &Path) -> [u8; 32] {
+    MapFile::open(path).unwrap().header().provenance.digest
+}
+
+/// Editing the estimate, the sensor or the radiometers reuses the map;
+/// spelling a default out reuses it too (provenance is taken after
+/// defaults are applied).
+#[test]
+fn render_settings_never_re_emit() {
+    let s = Setup::new();
+    let first = s.render(&s.scene(&scene_text("k = 50", "")));
+    assert!(!first.reused_map);
+    let bytes = std::fs::read(s.map()).unwrap();
+    let d = digest(&s.map());
+    assert_eq!(first.map.provenance.len(), 64);
+
+    let changes = [
+        scene_text("k = 80\nk_expanded = 400\nspectral = \"naive\"", ""),
+        scene_text("k = 50", "").replace("pixels = [4, 4]", "pixels = [2, 3]"),
+        scene_text("k = 50", "").replace(
+            "[[radiometer]]\ndepth_m = 1.0",
+            "[[radiometer]]\ndepth_m = 2.0\nview = \"zenith\"",
+        ),
+        scene_text(
+            "k = 50",
+            "[surface]\nrefractive_index = 1.34\nkind = \"flat\"",
+        ),
+    ];
+    for (i, text) in changes.iter().enumerate() {
+        let r = s.render(&s.scene(text));
+        assert!(r.reused_map, "change {i} re-emitted");
+        assert_eq!(std::fs::read(s.map()).unwrap(), bytes, "change {i}");
+        // The reused report carries the emission exactly as recorded.
+        assert_eq!(r.emission, first.emission, "change {i}");
+        assert_eq!(r.map.provenance, first.map.provenance);
+    }
+    assert_eq!(digest(&s.map()), d);
+}
+
+/// Editing a file the scene names, or an emission key, or overriding the
+/// photon count, always re-emits, and the new map records a new digest.
+#[test]
+fn emission_inputs_always_re_emit() {
+    let s = Setup::new();
+    let text = scene_text("k = 50", "");
+    let first = s.render(&s.scene(&text));
+    assert!(!first.reused_map);
+    let d0 = digest(&s.map());
+
+    // The floor CSV changes by one value.
+    std::fs::write(
+        s.dir.path().join("floor.csv"),
+        FLOOR_CSV.replace("0.3", "0.31"),
+    )
+    .unwrap();
+    let r = s.render(&s.scene(&text));
+    assert!(!r.reused_map, "an edited CSV was not noticed");
+    let d1 = digest(&s.map());
+    assert_ne!(d1, d0);
+    // A comment in the CSV changes its bytes but no value: still re-emitted.
+    std::fs::write(
+        s.dir.path().join("floor.csv"),
+        format!("# measured 2026\n{}", FLOOR_CSV.replace("0.3", "0.31")),
+    )
+    .unwrap();
+    let r = s.render(&s.scene(&text));
+    assert!(!r.reused_map);
+    let d2 = digest(&s.map());
+    assert_ne!(d2, d1);
+    // Unchanged now: reused.
+    assert!(s.render(&s.scene(&text)).reused_map);
+
+    // An emission key (the sun), and the seed.
+    let r = s.render(&s.scene(&text.replace("zenith_deg = 30.0", "zenith_deg = 31.0")));
+    assert!(!r.reused_map);
+    let r = s.render(&s.scene(&format!("seed = 5\n{text}")));
+    assert!(!r.reused_map);
+    // The photon count, through an override.
+    let path = s.dir.path().join("scene.toml");
+    let o = Overrides {
+        photons: Some(21_000),
+        ..Overrides::default()
+    };
+    let more = Scene::load(&path, &o).unwrap();
+    let r = s.render(&more);
+    assert!(!r.reused_map);
+    assert_eq!(r.emission.photons.traced, 21_000);
+    let info = MapFile::open(s.map()).unwrap().info();
+    assert_eq!(info.provenance["photons"], 21_000);
+    assert_eq!(info.provenance["digest"], r.map.provenance);
+}
+
+/// A map made by `EmitJob` is reused by a render of the same scene; its
+/// report equals the emit report's physics.
+#[test]
+fn emit_job_then_render_reuses() {
+    let s = Setup::new();
+    let scene = s.scene(&scene_text("k = 50", ""));
+    let emitted = EmitJob {
+        scene: &scene,
+        map: s.map(),
+        threads: 1,
+        budget: MemoryBudget::new(64 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&Silent)
+    .unwrap();
+    assert_eq!(emitted.map.path.as_deref(), s.map().to_str());
+    let r = s.render(&scene);
+    assert!(r.reused_map);
+    assert_eq!(r.emission, emitted.emission);
+    assert_eq!(r.map.provenance, emitted.map.provenance);
+    assert_eq!(r.map.photons, emitted.map.photons);
+}
+
+/// The JSON report is the typed report: it parses back into `RunReport`
+/// and equals what the job returned; its shares add up to the budget.
+#[test]
+fn typed_report_round_trips() {
+    let s = Setup::new();
+    let r = s.render(&s.scene(&scene_text("k = 50", "")));
+    let text = std::fs::read_to_string(&r.outputs.json).unwrap();
+    let back: RunReport = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, r);
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // The emission report's keys sit at the top level, as before.
+    for key in [
+        "tally",
+        "energy",
+        "photons",
+        "above_surface",
+        "radiometers",
+        "cache",
+    ] {
+        assert!(v.get(key).is_some(), "{key}");
+    }
+    assert_eq!(r.radiometers.len(), 1);
+    assert_eq!(r.Ed_above_surface, r.emission.above_surface.Ed);
+    let m = r.memory;
+    assert_eq!(
+        m.reserve_bytes + m.boundary_grid_bytes + m.tile_cache_bytes,
+        64 * MIB
+    );
+    assert!(r.cache.peak_resident_bytes <= m.tile_cache_bytes);
+    for f in [
+        &r.outputs.hdr,
+        &r.outputs.bsq,
+        &r.outputs.png,
+        &r.outputs.exr,
+    ] {
+        assert!(Path::new(f).is_file(), "{f}");
+    }
+}
