@@ -33,6 +33,7 @@ pub mod error;
 pub mod estimate;
 pub mod geometry;
 pub mod job;
+pub mod json;
 pub mod mem;
 pub mod optics;
 pub mod output;

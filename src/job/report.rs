@@ -114,6 +114,7 @@ pub struct RunReport {
     pub radiometers: Vec<RadiometerReading>,
     /// Downwelling irradiance just above the surface per band (W m^-2
     /// nm^-1), for Rrs = L / Ed.
+    #[serde(deserialize_with = "crate::json::f64s")]
     pub Ed_above_surface: Vec<f64>,
     pub estimate: EstimateSettings,
     pub sensor: SensorSummary,

@@ -42,11 +42,13 @@ pub struct RadiometerReading {
     pub view: String,
     pub position_m: [f64; 2],
     /// Radiance per band (W m^-2 sr^-1 nm^-1).
+    #[serde(deserialize_with = "crate::json::f64s")]
     pub L: Vec<f64>,
     /// Standard error per band of the mean over the jittered samples: the
     /// march's sampling error. Photon-map noise is correlated over the
     /// search radius, so it is not in this figure (in deep water at 8 M
     /// photons and k = 800 it was 3-7 % between distant positions).
+    #[serde(deserialize_with = "crate::json::f64s")]
     pub stderr: Vec<f64>,
 }
 
