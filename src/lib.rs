@@ -27,6 +27,7 @@
 //! [`output`] (files written whole or not at all).
 
 pub mod bounds;
+pub mod cli;
 pub mod cube;
 pub mod emit;
 pub mod error;
@@ -35,6 +36,7 @@ pub mod geometry;
 pub mod job;
 pub mod json;
 pub mod mem;
+pub mod morton;
 pub mod optics;
 pub mod output;
 pub mod parallel;

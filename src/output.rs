@@ -46,14 +46,72 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Sync a fully written temporary file from [`temp_beside`], make it
 /// readable like a normal output file, and rename it to `path`.
 pub fn publish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| Error::io(path, "write", e))?;
-    use std::os::unix::fs::PermissionsExt;
-    tmp.as_file()
-        .set_permissions(std::fs::Permissions::from_mode(0o644))
-        .map_err(|e| Error::io(path, "write", e))?;
+    finalize(&tmp, path)?;
     tmp.persist(path)
         .map_err(|e| Error::io(path, "rename into place", e.error))?;
     Ok(())
+}
+
+/// Sync a fully written temporary file that will become `path`, and make it
+/// readable like an ordinary output file (temporary files are created
+/// private, 0600 on Unix; elsewhere permissions are left as they are).
+pub fn finalize(tmp: &tempfile::NamedTempFile, path: &Path) -> Result<()> {
+    let file = tmp.as_file();
+    file.sync_all().map_err(|e| Error::io(path, "sync", e))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        file.set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| Error::io(path, "set permissions", e))?;
+    }
+    Ok(())
+}
+
+/// Write all of `buf` at byte `offset` of `file` without moving a shared
+/// cursor, so threads can write disjoint parts of one file at once.
+pub fn write_all_at(file: &std::fs::File, buf: &[u8], offset: u64) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::write_all_at(file, buf, offset)
+    }
+    #[cfg(windows)]
+    {
+        let (mut buf, mut offset) = (buf, offset);
+        while !buf.is_empty() {
+            match std::os::windows::fs::FileExt::seek_write(file, buf, offset) {
+                Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+                Ok(n) => {
+                    buf = &buf[n..];
+                    offset += n as u64;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Fill `buf` from byte `offset` of `file` without moving a shared cursor.
+pub fn read_exact_at(file: &std::fs::File, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::read_exact_at(file, buf, offset)
+    }
+    #[cfg(windows)]
+    {
+        let (mut buf, mut offset) = (buf, offset);
+        while !buf.is_empty() {
+            match std::os::windows::fs::FileExt::seek_read(file, buf, offset) {
+                Ok(0) => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+                Ok(n) => {
+                    buf = &mut buf[n..];
+                    offset += n as u64;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
 }

@@ -10,10 +10,10 @@
 //! Not for: editing cubes, or other formats.
 
 use clap::{Parser, Subcommand};
+use littoral::cli::{self, print, AnyResult};
 use littoral::cube::quicklook::{write_grey_png, write_png};
 use littoral::cube::{EnviCube, Quicklook};
 use littoral::Error;
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -106,17 +106,8 @@ enum Command {
 const SCAN_VALUES: usize = 1 << 20;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("littoral-cube: error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    cli::exit("littoral-cube", run(Cli::parse()))
 }
-
-type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
 
 fn run(cli: Cli) -> AnyResult<()> {
     match cli.command {
@@ -238,13 +229,4 @@ fn info(cube: &EnviCube) -> AnyResult<()> {
         "value": { "min": min, "max": max, "mean": mean, "non_finite": non_finite },
     });
     print(&format!("{summary:#}\n"))
-}
-
-/// Write to stdout, returning an error rather than panicking (as `println!`
-/// does) when the reader has gone, e.g. `| head`.
-fn print(text: &str) -> AnyResult<()> {
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(|e| Error::io("stdout", "write", e).into())
 }

@@ -45,7 +45,7 @@ pub fn coherent(points: &[Vec3]) -> Vec<Vec3> {
     let q = littoral::store::codec::BoxQuantizer::new(&b);
     let mut keyed: Vec<(u64, Vec3)> = points
         .iter()
-        .map(|p| (littoral::store::codec::morton3(q.encode(p.to_array())), *p))
+        .map(|p| (littoral::morton::morton3(q.encode(p.to_array())), *p))
         .collect();
     keyed.sort_by_key(|k| k.0);
     keyed.into_iter().map(|k| k.1).collect()

@@ -25,7 +25,6 @@
 //! Not for: other data types, interleaves (BIL, BIP) or big-endian cubes
 //! (refused, not converted), nor for editing a cube in place.
 
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -248,12 +247,14 @@ impl EnviWriter {
             let row_bytes = w * VALUE_BYTES as usize;
             let offset = |y: usize| ((b * lines + y) * samples + x0) as u64 * VALUE_BYTES;
             let result = if whole_lines {
-                file.write_all_at(bytes, offset(y0))
+                crate::output::write_all_at(file, bytes, offset(y0))
             } else {
                 bytes
                     .chunks_exact(row_bytes)
                     .enumerate()
-                    .try_for_each(|(dy, row)| file.write_all_at(row, offset(y0 + dy)))
+                    .try_for_each(|(dy, row)| {
+                        crate::output::write_all_at(file, row, offset(y0 + dy))
+                    })
             };
             result.map_err(|e| Error::io(&self.bsq_path, "write", e))?;
         }
@@ -265,7 +266,6 @@ impl EnviWriter {
     /// data file. Returns `(bsq, hdr)` paths. Existing files of the same
     /// names are replaced.
     pub fn finish(self) -> Result<(PathBuf, PathBuf)> {
-        use std::os::unix::fs::PermissionsExt;
         let EnviWriter {
             bsq,
             hdr,
@@ -274,11 +274,7 @@ impl EnviWriter {
             ..
         } = self;
         for (temp, path) in [(&bsq, &bsq_path), (&hdr, &hdr_path)] {
-            let file = temp.as_file();
-            file.sync_all().map_err(|e| Error::io(path, "sync", e))?;
-            // Temporary files are created private (0600); outputs are ordinary files.
-            file.set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(|e| Error::io(path, "set permissions", e))?;
+            crate::output::finalize(temp, path)?;
         }
         bsq.persist(&bsq_path)
             .map_err(|e| Error::io(&bsq_path, "rename into place", e.error))?;

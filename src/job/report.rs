@@ -126,3 +126,47 @@ pub struct RunReport {
     /// plus resident pages of the mapped photon map.
     pub peak_rss_bytes: u64,
 }
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}
+
+impl EmitReport {
+    /// The one-line summary `littoral emit` prints.
+    pub fn summary(&self) -> String {
+        format!(
+            "emitted {} photons: {} volume + {} surface photons stored in {} ({} tiles, {:.2} bytes/photon); energy closure {:.2} sigma; {:.1} s, peak memory {:.1} MiB",
+            self.emission.photons.traced,
+            self.emission.photons.stored_volume,
+            self.emission.photons.stored_surface,
+            self.map.path.as_deref().unwrap_or("a scratch map"),
+            self.map.tiles,
+            self.map.bytes_per_photon,
+            self.emission.energy.closure_sigma,
+            self.timings_s.total,
+            mib(self.peak_rss_bytes)
+        )
+    }
+}
+
+impl RunReport {
+    /// The one-line summary `littoral render` prints.
+    pub fn summary(&self) -> String {
+        let dir = Path::new(&self.outputs.json)
+            .parent()
+            .map_or_else(String::new, |d| d.display().to_string());
+        format!(
+            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({} {:.1} s, render {:.1} s); peak memory {:.1} MiB",
+            self.emission.scene,
+            self.sensor.pixels[0],
+            self.sensor.pixels[1],
+            self.emission.bands_nm.len(),
+            dir,
+            self.timings_s.total,
+            if self.reused_map { "reused map" } else { "emit" },
+            self.timings_s.emit,
+            self.timings_s.render,
+            mib(self.peak_rss_bytes)
+        )
+    }
+}

@@ -17,6 +17,7 @@ use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
 use crate::error::Result;
 use crate::estimate::estimator::{with_scratch, Estimator};
+use crate::morton::morton3;
 use crate::progress::Progress;
 use crate::rng::{mix64, Pcg32};
 use crate::scene::{Radiometer, Scene};
@@ -88,7 +89,7 @@ pub fn render(
     let quicklook = Quicklook::new(&scene.bands);
     let (tx, ty) = (w.div_ceil(TILE_PX), h.div_ceil(TILE_PX));
     let mut tiles: Vec<(u64, usize, usize)> = (0..ty)
-        .flat_map(|j| (0..tx).map(move |i| (morton2(i as u32, j as u32), i, j)))
+        .flat_map(|j| (0..tx).map(move |i| (morton3([i as u16, j as u16, 0]), i, j)))
         .collect();
     tiles.sort_unstable();
     progress.stage("render tiles", tiles.len() as u64);
@@ -232,17 +233,4 @@ fn read_radiometer(light: &RayMarcher, index: u64, r: &Radiometer) -> Result<Rad
         L: l,
         stderr: se,
     })
-}
-
-/// 2-D Morton code for the tile order.
-fn morton2(x: u32, y: u32) -> u64 {
-    fn spread(v: u32) -> u64 {
-        let mut x = v as u64;
-        x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
-        x = (x | (x << 8)) & 0x00ff_00ff_00ff_00ff;
-        x = (x | (x << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
-        x = (x | (x << 2)) & 0x3333_3333_3333_3333;
-        (x | (x << 1)) & 0x5555_5555_5555_5555
-    }
-    spread(x) | (spread(y) << 1)
 }

@@ -186,6 +186,21 @@ impl Scene {
         )
     }
 
+    /// One line for `littoral scene check`: bands, photons, triangles, tallies.
+    pub fn summary(&self) -> String {
+        let c = self.bands.centers_nm();
+        format!(
+            "scene '{}' is valid: {} bands {:.1}-{:.1} nm, {} photons, {} triangles, {} tally depths",
+            self.name,
+            c.len(),
+            c[0],
+            c[c.len() - 1],
+            self.photons,
+            self.geometry.triangle_count(),
+            self.tally_depths.len()
+        )
+    }
+
     /// Lambertian reflectance of `surface` at `p` in `band`.
     pub fn reflectance(&self, surface: SurfaceId, p: Vec3, band: usize) -> f64 {
         if surface == FLOOR {

@@ -19,6 +19,7 @@
 
 use super::format::TileEntry;
 use crate::bounds::Aabb;
+use crate::morton::{demorton3, morton3};
 use crate::photon::{AxisQuantizer, PackedPhoton, Photon};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -61,42 +62,6 @@ impl StagedPhoton {
 /// key, raw record, compressed output bound), used for budgeting merges.
 pub const ENCODE_BYTES_PER_PHOTON: usize = 32 + 24 + RECORD_BYTES + RECORD_BYTES + 8;
 
-/// Spread the bits of `v` to every third bit (21-bit to 63-bit Morton spread).
-#[inline]
-fn part1by2(v: u16) -> u64 {
-    let mut x = v as u64;
-    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
-    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
-    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
-    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
-    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
-    x
-}
-
-/// Inverse of [`part1by2`].
-#[inline]
-fn compact1by2(mut x: u64) -> u16 {
-    x &= 0x1249_2492_4924_9249;
-    x = (x ^ (x >> 2)) & 0x10c3_0c30_c30c_30c3;
-    x = (x ^ (x >> 4)) & 0x100f_00f0_0f00_f00f;
-    x = (x ^ (x >> 8)) & 0x001f_0000_ff00_00ff;
-    x = (x ^ (x >> 16)) & 0x001f_0000_0000_ffff;
-    x = (x ^ (x >> 32)) & 0x001f_ffff;
-    x as u16
-}
-
-/// 48-bit Morton code of a quantised position (x in the lowest bit).
-#[inline]
-pub fn morton3(q: [u16; 3]) -> u64 {
-    part1by2(q[0]) | (part1by2(q[1]) << 1) | (part1by2(q[2]) << 2)
-}
-
-/// Inverse of [`morton3`].
-#[inline]
-pub fn demorton3(m: u64) -> [u16; 3] {
-    [compact1by2(m), compact1by2(m >> 1), compact1by2(m >> 2)]
-}
-
 const MORTON_MASK: u64 = (1 << 48) - 1;
 
 /// The quantisers of a tile box, one per axis.
@@ -138,6 +103,21 @@ pub struct EncodedTile {
     pub quant: Aabb,
     pub bounds: Aabb,
     pub crc: u32,
+}
+
+impl EncodedTile {
+    /// The index entry of this tile with its blob at `offset` in the file.
+    pub fn entry(&self, offset: u64) -> TileEntry {
+        TileEntry {
+            offset,
+            length: self.blob.len() as u32,
+            count: self.count,
+            quant: self.quant,
+            bounds: self.bounds,
+            crc: self.crc,
+            layer: self.layer as u32,
+        }
+    }
 }
 
 /// Reusable scratch for [`encode_tile`] (keeps allocations out of the loop).
@@ -323,131 +303,4 @@ impl TileDecoder {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rng::Pcg32;
-
-    #[test]
-    fn morton_round_trips() {
-        let mut rng = Pcg32::new(1, 2);
-        for _ in 0..10_000 {
-            let q = [
-                rng.next_u32() as u16,
-                rng.next_u32() as u16,
-                rng.next_u32() as u16,
-            ];
-            assert_eq!(demorton3(morton3(q)), q);
-        }
-        assert_eq!(morton3([1, 0, 0]), 1);
-        assert_eq!(morton3([0, 1, 0]), 2);
-        assert_eq!(morton3([0, 0, 1]), 4);
-        assert_eq!(morton3([0xffff; 3]), (1u64 << 48) - 1);
-    }
-
-    fn staged(n: usize, seed: u64) -> Vec<StagedPhoton> {
-        (0..n)
-            .map(|i| {
-                let mut r = Pcg32::new(seed, i as u64);
-                let p = Photon {
-                    position: Vec3::new(
-                        r.uniform_f32() * 10.0,
-                        r.uniform_f32() * 10.0,
-                        -r.uniform_f32() * 3.0,
-                    ),
-                    direction: Vec3::new(r.uniform_f32() - 0.5, 0.3, -1.0).normalize(),
-                    band: r.below(128) as u16,
-                    power: 0.25,
-                };
-                StagedPhoton::new(&p, 0, i as u64)
-            })
-            .collect()
-    }
-
-    fn entry(t: &EncodedTile) -> TileEntry {
-        TileEntry {
-            offset: 0,
-            length: t.blob.len() as u32,
-            count: t.count,
-            quant: t.quant,
-            bounds: t.bounds,
-            crc: t.crc,
-            layer: t.layer as u32,
-        }
-    }
-
-    #[test]
-    fn tile_round_trips_within_quantisation_error() {
-        let photons = staged(5000, 3);
-        let t = TileEncoder::default().encode(&photons).unwrap();
-        let mut out = Vec::new();
-        TileDecoder::default()
-            .decode(&t.blob, &entry(&t), &mut out)
-            .unwrap();
-        assert_eq!(out.len(), photons.len());
-        let step = (t.quant.max - t.quant.min) / 65535.0;
-        // Match decoded photons to inputs by band, power and nearest position.
-        let mut used = vec![false; photons.len()];
-        for d in out.iter().map(|p| p.unpack()) {
-            assert!(t.bounds.distance_sq(d.position) == 0.0);
-            let j = (0..photons.len())
-                .filter(|&j| !used[j] && photons[j].photon.band == d.band)
-                .min_by(|&a, &b| {
-                    let da = photons[a].pos().distance_squared(d.position);
-                    let db = photons[b].pos().distance_squared(d.position);
-                    da.total_cmp(&db)
-                })
-                .unwrap();
-            used[j] = true;
-            let err = (photons[j].pos() - d.position).abs();
-            assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
-            assert_eq!(photons[j].photon.unpack().direction, d.direction);
-            assert_eq!(d.power, photons[j].photon.power);
-        }
-    }
-
-    #[test]
-    fn blob_is_independent_of_input_order() {
-        let mut photons = staged(3000, 4);
-        let a = TileEncoder::default().encode(&photons).unwrap();
-        photons.reverse();
-        let b = TileEncoder::default().encode(&photons).unwrap();
-        assert_eq!(a.blob, b.blob);
-        assert_eq!(a.crc, b.crc);
-    }
-
-    #[test]
-    fn corrupt_blobs_are_rejected() {
-        let photons = staged(2000, 5);
-        let t = TileEncoder::default().encode(&photons).unwrap();
-        let mut dec = TileDecoder::default();
-        let mut out = Vec::new();
-        let mut bad = t.blob.clone();
-        bad[t.blob.len() / 2] ^= 0x40;
-        assert!(matches!(
-            dec.decode(&bad, &entry(&t), &mut out),
-            Err(DecodeError::Checksum { .. })
-        ));
-        // A valid frame with the wrong count is caught by its length.
-        let e = entry(&t);
-        let fewer = TileEntry {
-            count: t.count - 1,
-            ..e
-        };
-        assert!(dec.decode(&t.blob, &fewer, &mut out).is_err());
-        let more = TileEntry {
-            count: t.count + 1,
-            ..e
-        };
-        assert!(matches!(
-            dec.decode(&t.blob, &more, &mut out),
-            Err(DecodeError::Length { .. })
-        ));
-        // A truncated frame (with a matching checksum) is caught by zstd.
-        let short = &t.blob[..t.blob.len() - 3];
-        let short_entry = TileEntry {
-            crc: crc32fast::hash(short),
-            ..e
-        };
-        assert!(dec.decode(short, &short_entry, &mut out).is_err());
-    }
-}
+mod tests;

@@ -17,8 +17,7 @@ use crate::error::{Error, Result};
 use crate::photon::{PackedPhoton, Photon, LAYERS};
 use crate::spectral::BandGrid;
 use glam::Vec3;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use std::num::NonZeroUsize;
+use kiddo::ImmutableKdTree;
 
 /// One layer's photons and their k-d tree (items index `photons`).
 struct Layer {
@@ -44,25 +43,7 @@ impl Layer {
     /// (squared distance, photon).
     fn search(&self, at: Vec3, k: usize, limit_sq: f32, out: &mut Vec<(f32, PackedPhoton)>) {
         let Some(tree) = &self.tree else { return };
-        let q = at.to_array();
-        let found = if k == usize::MAX {
-            tree.query(&q)
-                .within::<SquaredEuclidean<f32>>(limit_sq)
-                .unsorted()
-                .execute()
-        } else {
-            let want = NonZeroUsize::new(k).expect("k > 0");
-            if limit_sq.is_finite() {
-                tree.query(&q)
-                    .nearest_n::<SquaredEuclidean<f32>>(want)
-                    .within(limit_sq)
-                    .execute()
-            } else {
-                tree.query(&q)
-                    .nearest_n::<SquaredEuclidean<f32>>(want)
-                    .execute()
-            }
-        };
+        let found = super::query::search_tree(tree, &at.to_array(), k, limit_sq, true);
         out.extend(
             found
                 .into_iter()

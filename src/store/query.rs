@@ -16,13 +16,13 @@
 
 use crate::bounds::Aabb;
 use crate::error::Result;
+use crate::morton::morton3;
 use crate::photon::{PackedPhoton, Photon};
 use crate::spectral::BandGrid;
 use crate::store::cache::{CacheStats, TileCache};
-use crate::store::codec::morton3;
 use crate::store::MapFile;
 use glam::Vec3;
-use kiddo::SquaredEuclidean;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::num::NonZeroUsize;
 
@@ -32,6 +32,34 @@ pub struct Neighbour {
     pub photon: Photon,
     /// Squared distance from the query point (m^2).
     pub distance_sq: f32,
+}
+
+/// As `littoral map query` prints it: position, direction, band, power and
+/// distance (m).
+impl serde::Serialize for Neighbour {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let p = &self.photon;
+        let mut m = s.serialize_struct("Neighbour", 9)?;
+        for (k, v) in [
+            ("x", p.position.x),
+            ("y", p.position.y),
+            ("z", p.position.z),
+        ] {
+            m.serialize_field(k, &v)?;
+        }
+        for (k, v) in [
+            ("dx", p.direction.x),
+            ("dy", p.direction.y),
+            ("dz", p.direction.z),
+        ] {
+            m.serialize_field(k, &v)?;
+        }
+        m.serialize_field("band", &p.band)?;
+        m.serialize_field("power", &p.power)?;
+        m.serialize_field("distance", &self.distance_sq.sqrt())?;
+        m.end()
+    }
 }
 
 /// What to search for around a point.
@@ -96,6 +124,32 @@ pub trait PhotonQuery: Sync {
         let mut out = Vec::new();
         self.query_into(at, Some(layer), search, &mut out)?;
         Ok(out)
+    }
+}
+
+/// One k-d tree's photons within `bound_sq` of `q` (all of them for
+/// `k == usize::MAX`, else the `k` nearest), nearest first when `sorted`;
+/// items index the tree's points.
+pub(super) fn search_tree(
+    tree: &ImmutableKdTree<f32, 3>,
+    q: &[f32; 3],
+    k: usize,
+    bound_sq: f32,
+    sorted: bool,
+) -> Vec<kiddo::QueryResultItem<(), u32, f32>> {
+    if k == usize::MAX {
+        return tree
+            .query(q)
+            .within::<SquaredEuclidean<f32>>(bound_sq)
+            .unsorted()
+            .execute();
+    }
+    let want = NonZeroUsize::new(k).expect("k > 0");
+    let nearest = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(want);
+    match (bound_sq.is_finite(), sorted) {
+        (true, false) => nearest.within(bound_sq).unsorted().execute(),
+        (true, true) => nearest.within(bound_sq).execute(),
+        (false, _) => nearest.execute(),
     }
 }
 
@@ -205,34 +259,7 @@ impl PhotonMap {
             }
             let tile = self.cache.get(&self.file, t)?;
             let before = out.len();
-            let found = if k == usize::MAX {
-                tile.tree
-                    .query(&q)
-                    .within::<SquaredEuclidean<f32>>(bound_sq)
-                    .unsorted()
-                    .execute()
-            } else {
-                let want = NonZeroUsize::new(k).expect("k > 0");
-                if bound_sq.is_finite() && !sorted {
-                    tile.tree
-                        .query(&q)
-                        .nearest_n::<SquaredEuclidean<f32>>(want)
-                        .within(bound_sq)
-                        .unsorted()
-                        .execute()
-                } else if bound_sq.is_finite() {
-                    tile.tree
-                        .query(&q)
-                        .nearest_n::<SquaredEuclidean<f32>>(want)
-                        .within(bound_sq)
-                        .execute()
-                } else {
-                    tile.tree
-                        .query(&q)
-                        .nearest_n::<SquaredEuclidean<f32>>(want)
-                        .execute()
-                }
-            };
+            let found = search_tree(&tile.tree, &q, k, bound_sq, sorted);
             out.extend(
                 found
                     .into_iter()

@@ -32,7 +32,6 @@ use crate::spectral::BandGrid;
 use bytemuck::Zeroable;
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 const MIB: u64 = 1 << 20;
@@ -223,8 +222,7 @@ impl Scratch {
                 .compress_to_buffer(bytemuck::cast_slice(&chunk), &mut self.payload)
                 .map_err(|e| self.err("compress spill", e))?;
             self.frame.extend_from_slice(&self.payload);
-            self.file
-                .write_all_at(&self.frame, self.len)
+            crate::output::write_all_at(&self.file, &self.frame, self.len)
                 .map_err(|e| self.err("write", e))?;
             cell.last_frame = Some(Frame {
                 offset: self.len,
@@ -244,8 +242,7 @@ impl Scratch {
             |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string());
         self.frame.clear();
         self.frame.resize(f.len as usize, 0);
-        self.file
-            .read_exact_at(&mut self.frame, f.offset)
+        crate::output::read_exact_at(&self.file, &mut self.frame, f.offset)
             .map_err(|e| self.err("read", e))?;
         if self.frame.len() < FRAME_LINK {
             return Err(self.err("read", bad("spill frame too short")));
@@ -439,15 +436,7 @@ impl MapWriter {
                 self.out
                     .write_all(&tile.blob)
                     .map_err(|e| Error::io(&self.path, "write", e))?;
-                entries.push(TileEntry {
-                    offset: self.offset,
-                    length: tile.blob.len() as u32,
-                    count: tile.count,
-                    quant: tile.quant,
-                    bounds: tile.bounds,
-                    crc: tile.crc,
-                    layer: tile.layer as u32,
-                });
+                entries.push(tile.entry(self.offset));
                 self.offset += tile.blob.len() as u64;
                 progress.advance(tile.count as u64);
                 // Free the largest encode buffers between tiles.
@@ -487,15 +476,8 @@ impl MapWriter {
         debug_assert_eq!(header.len() as u64, self.header_len);
         tmp.seek(SeekFrom::Start(0)).map_err(io)?;
         tmp.write_all(&header).map_err(io)?;
-        // Published maps are read-only data for everyone (tempfile makes 0600).
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(io)?;
-        tmp.as_file().sync_all().map_err(io)?;
         let file_bytes = self.offset + index.0.len() as u64 + super::format::FOOTER_LEN as u64;
-        tmp.persist(&self.path)
-            .map_err(|e| Error::io(&self.path, "rename into place", e.error))?;
+        crate::output::publish(tmp, &self.path)?;
         self.summary.tiles = entries.len() as u32;
         self.summary.file_bytes = file_bytes;
         self.summary.spilled_frames = self.scratch.frames_written;

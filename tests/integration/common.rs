@@ -89,3 +89,21 @@ pub fn assert_clean_failure(out: &std::process::Output, needle: &str) {
     assert!(err.contains(needle), "'{needle}' not in: {err}");
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// The smallest valid scene: four bands, a constant sun, 10 m of explicit
+/// IOPs and no floor. Tests add tables or replace lines.
+pub const MINIMAL_SCENE: &str = r#"
+[spectral]
+start_nm = 400.0
+end_nm = 700.0
+bands = 4
+[sun]
+zenith_deg = 30.0
+irradiance = 1.0
+[domain]
+size_m = [10.0, 10.0]
+[water]
+iop = { a = 0.1, b = 0.2 }
+[photons]
+count = 1000
+"#;

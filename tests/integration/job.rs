@@ -12,25 +12,18 @@ use std::path::{Path, PathBuf};
 
 /// A small shallow scene whose floor reflectance is a CSV file beside it.
 fn scene_text(estimate: &str, extra: &str) -> String {
+    let base = MINIMAL_SCENE
+        .replace("start_nm = 400.0", "start_nm = 450.0")
+        .replace("end_nm = 700.0", "end_nm = 550.0")
+        .replace("bands = 4", "bands = 3")
+        .replace("count = 1000", "count = 20000")
+        .replace("a = 0.1, b = 0.2", "a = 0.2, b = 0.4");
     format!(
-        r#"
-name = "reuse"
-[spectral]
-start_nm = 450.0
-end_nm = 550.0
-bands = 3
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = 0.2, b = 0.4 }}
+        r#"name = "reuse"
+{base}
 [bottom]
 depth_m = 3.0
 reflectance = "floor.csv"
-[photons]
-count = 20000
 [tally]
 depths_m = [0.0, 1.0]
 [sensor]

@@ -14,7 +14,6 @@
 //! metadata) are inside the budget (`WRITER_FIXED_BYTES`).
 
 use crate::common::*;
-use std::process::Command;
 
 const OVERHEAD: u64 = 16 * MIB;
 
@@ -23,22 +22,20 @@ fn synth_20m_photons_within_64mib() {
     let dir = tempdir();
     let out = dir.path().join("big.map");
     let budget = 64 * MIB;
-    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .args([
-            "map",
-            "synth",
-            "--photons",
-            "20000000",
-            "--bands",
-            "64",
-            "--distribution",
-            "water",
-        ])
-        .args(["--mem-budget", "64MiB", "--out"])
-        .arg(&out)
-        .env("NO_COLOR", "1")
-        .output()
-        .unwrap();
+    let run = littoral(&[
+        "map",
+        "synth",
+        "--photons",
+        "20000000",
+        "--bands",
+        "64",
+        "--distribution",
+        "water",
+        "--mem-budget",
+        "64MiB",
+        "--out",
+        p(&out),
+    ]);
     assert!(run.status.success());
     let stderr = String::from_utf8_lossy(&run.stderr);
     let line = stderr
@@ -68,16 +65,20 @@ fn emit_builtin_scene_within_64mib() {
     let scene = dir.path().join("coastal.toml");
     std::fs::write(&scene, littoral::scene::COASTAL_TOML).unwrap();
     let report = dir.path().join("r.json");
-    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .arg("emit")
-        .arg(&scene)
-        .arg("--map")
-        .arg(dir.path().join("c.map"))
-        .arg("--report")
-        .arg(&report)
-        .args(["--photons", "1000000", "--mem-budget", "64MiB", "--quiet"])
-        .output()
-        .unwrap();
+    let map = dir.path().join("c.map");
+    let run = littoral(&[
+        "emit",
+        p(&scene),
+        "--map",
+        p(&map),
+        "--report",
+        p(&report),
+        "--photons",
+        "1000000",
+        "--mem-budget",
+        "64MiB",
+        "--quiet",
+    ]);
     assert!(
         run.status.success(),
         "{}",
@@ -101,14 +102,17 @@ fn render_builtin_scene_within_64mib() {
         .replace("gsd_m = 0.75", "gsd_m = 3.0");
     std::fs::write(&scene, text).unwrap();
     let out = dir.path().join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_littoral"))
-        .arg("render")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .args(["--photons", "300000", "--mem-budget", "64MiB", "--quiet"])
-        .output()
-        .unwrap();
+    let run = littoral(&[
+        "render",
+        p(&scene),
+        "--out",
+        p(&out),
+        "--photons",
+        "300000",
+        "--mem-budget",
+        "64MiB",
+        "--quiet",
+    ]);
     assert!(
         run.status.success(),
         "{}",

@@ -6,7 +6,6 @@ use glam::Vec3;
 use littoral::photon::{oct_encode, OCT_MAX_ANGLE_ERROR_RAD};
 use littoral::store::MapFile;
 use littoral::synth::Distribution;
-use std::process::Command;
 
 #[test]
 fn dump_returns_every_photon_within_quantisation_error() {
@@ -18,11 +17,7 @@ fn dump_returns_every_photon_within_quantisation_error() {
         let n = 20_000u64;
         let src = source(n, 64, 5, d);
         let (path, _) = synth_map(dir.path(), name, &src, Some(1500), 2, 64 * MIB);
-        let out = Command::new(env!("CARGO_BIN_EXE_littoral"))
-            .args(["map", "dump"])
-            .arg(&path)
-            .output()
-            .unwrap();
+        let out = littoral(&["map", "dump", p(&path)]);
         assert!(out.status.success());
         let text = String::from_utf8(out.stdout).unwrap();
         let mut lines = text.lines();

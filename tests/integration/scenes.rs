@@ -11,22 +11,6 @@ fn parse_err(text: &str) -> String {
     }
 }
 
-const MINIMAL: &str = r#"
-[spectral]
-start_nm = 400.0
-end_nm = 700.0
-bands = 4
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = { a = 0.1, b = 0.2 }
-[photons]
-count = 1000
-"#;
-
 #[test]
 fn the_builtin_scene_is_valid_and_as_described() {
     let s = Scene::coastal(&Overrides::default()).unwrap();
@@ -57,24 +41,24 @@ fn the_builtin_scene_is_valid_and_as_described() {
 #[test]
 fn bad_scenes_name_the_key_and_line() {
     let cases: Vec<(String, &str)> = vec![
-        (MINIMAL.replace("count = 1000", "count = 1000\ncolour = 3"), "unknown field"),
-        (MINIMAL.replace("zenith_deg = 30.0", "zenith_deg = \"high\""), "invalid type"),
-        (MINIMAL.replace("count = 1000", "count = 0"), "photons.count"),
-        (MINIMAL.replace("zenith_deg = 30.0", "zenith_deg = 95.0"), "sun.zenith_deg"),
-        (MINIMAL.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = -0.1, b = 0.2 }"), "water.iop.a"),
-        (MINIMAL.replace("iop = { a = 0.1, b = 0.2 }", "chl = -1.0"), "water.chl"),
-        (MINIMAL.replace("size_m = [10.0, 10.0]", "size_m = [10.0, 0.0]"), "domain.size_m"),
-        (format!("{MINIMAL}\n[bottom]\ndepth_m = -3.0\n"), "bottom.depth_m"),
-        (format!("{MINIMAL}\n[bottom]\ndepth_m = 3.0\nreflectance = \"marble\"\n"), "bottom.reflectance"),
-        (format!("{MINIMAL}\n[[target]]\nkind = \"box\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 0.5\n"), "target[0].size_m"),
-        (format!("{MINIMAL}\n[[target]]\nkind = \"panel\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 1.5\n"), "target[0].reflectance"),
-        (MINIMAL.replace("end_nm = 700.0", "end_nm = 1200.0").replace("iop = { a = 0.1, b = 0.2 }", "chl = 1.0"), "out_of_range"),
-        (MINIMAL.replace("[photons]", "[tally]\ndepths_m = [1.0, -2.0]\n[photons]"), "tally.depths_m[1]"),
-        (MINIMAL.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = 0.1, b = 0.2 }\nphase = { kind = \"fournier-forand\", bb_ratio = 0.5 }"), "water.phase.bb_ratio"),
-        (format!("{MINIMAL}\n[estimate]\nboundary_grid_m = 0.0\n"), "estimate.boundary_grid_m"),
-        (format!("{MINIMAL}\n[estimate]\nforward_peak_deg = 95.0\n"), "estimate.forward_peak_deg"),
-        (format!("{MINIMAL}\n[estimate]\nforward_peak_down_deg = -1.0\n"), "estimate.forward_peak_down_deg"),
-        (format!("{MINIMAL}\n[estimate]\nk = 10\nk_expanded = 5\n"), "estimate.k_expanded"),
+        (MINIMAL_SCENE.replace("count = 1000", "count = 1000\ncolour = 3"), "unknown field"),
+        (MINIMAL_SCENE.replace("zenith_deg = 30.0", "zenith_deg = \"high\""), "invalid type"),
+        (MINIMAL_SCENE.replace("count = 1000", "count = 0"), "photons.count"),
+        (MINIMAL_SCENE.replace("zenith_deg = 30.0", "zenith_deg = 95.0"), "sun.zenith_deg"),
+        (MINIMAL_SCENE.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = -0.1, b = 0.2 }"), "water.iop.a"),
+        (MINIMAL_SCENE.replace("iop = { a = 0.1, b = 0.2 }", "chl = -1.0"), "water.chl"),
+        (MINIMAL_SCENE.replace("size_m = [10.0, 10.0]", "size_m = [10.0, 0.0]"), "domain.size_m"),
+        (format!("{MINIMAL_SCENE}\n[bottom]\ndepth_m = -3.0\n"), "bottom.depth_m"),
+        (format!("{MINIMAL_SCENE}\n[bottom]\ndepth_m = 3.0\nreflectance = \"marble\"\n"), "bottom.reflectance"),
+        (format!("{MINIMAL_SCENE}\n[[target]]\nkind = \"box\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 0.5\n"), "target[0].size_m"),
+        (format!("{MINIMAL_SCENE}\n[[target]]\nkind = \"panel\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 1.5\n"), "target[0].reflectance"),
+        (MINIMAL_SCENE.replace("end_nm = 700.0", "end_nm = 1200.0").replace("iop = { a = 0.1, b = 0.2 }", "chl = 1.0"), "out_of_range"),
+        (MINIMAL_SCENE.replace("[photons]", "[tally]\ndepths_m = [1.0, -2.0]\n[photons]"), "tally.depths_m[1]"),
+        (MINIMAL_SCENE.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = 0.1, b = 0.2 }\nphase = { kind = \"fournier-forand\", bb_ratio = 0.5 }"), "water.phase.bb_ratio"),
+        (format!("{MINIMAL_SCENE}\n[estimate]\nboundary_grid_m = 0.0\n"), "estimate.boundary_grid_m"),
+        (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_deg = 95.0\n"), "estimate.forward_peak_deg"),
+        (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_down_deg = -1.0\n"), "estimate.forward_peak_down_deg"),
+        (format!("{MINIMAL_SCENE}\n[estimate]\nk = 10\nk_expanded = 5\n"), "estimate.k_expanded"),
     ];
     for (text, needle) in cases {
         let e = parse_err(&text);
@@ -84,7 +68,7 @@ fn bad_scenes_name_the_key_and_line() {
         assert!(line >= 1 && line <= text.lines().count() + 1, "{e}");
     }
     // The line points at the offending key.
-    let text = MINIMAL.replace("zenith_deg = 30.0", "zenith_deg = 95.0");
+    let text = MINIMAL_SCENE.replace("zenith_deg = 30.0", "zenith_deg = 95.0");
     let want = text.lines().position(|l| l.contains("zenith_deg")).unwrap() + 1;
     assert!(parse_err(&text).starts_with(&format!("bad.toml:{want}:")));
 }
@@ -96,7 +80,7 @@ fn scene_commands() {
     assert_eq!(String::from_utf8(out.stdout).unwrap(), COASTAL_TOML);
     let dir = tempdir();
     let good = dir.path().join("good.toml");
-    std::fs::write(&good, MINIMAL).unwrap();
+    std::fs::write(&good, MINIMAL_SCENE).unwrap();
     let out = littoral(&["scene", "check", good.to_str().unwrap()]);
     assert!(
         out.status.success(),
@@ -104,7 +88,7 @@ fn scene_commands() {
         String::from_utf8_lossy(&out.stderr)
     );
     let bad = dir.path().join("bad.toml");
-    std::fs::write(&bad, MINIMAL.replace("count = 1000", "count = -5")).unwrap();
+    std::fs::write(&bad, MINIMAL_SCENE.replace("count = 1000", "count = -5")).unwrap();
     let out = littoral(&["scene", "check", bad.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);

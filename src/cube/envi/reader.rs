@@ -5,7 +5,6 @@
 
 use std::fs::File;
 use std::io::Read;
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 use super::VALUE_BYTES;
@@ -292,8 +291,7 @@ impl EnviCube {
 
     fn read_values(&self, element: u64, out: &mut [f32]) -> Result<()> {
         let offset = self.header_offset + element * VALUE_BYTES;
-        self.file
-            .read_exact_at(bytemuck::cast_slice_mut(out), offset)
+        crate::output::read_exact_at(&self.file, bytemuck::cast_slice_mut(out), offset)
             .map_err(|e| Error::io(&self.data_path, "read", e))?;
         for v in out.iter_mut() {
             *v = f32::from_bits(u32::from_le(v.to_bits()));

@@ -1,0 +1,180 @@
+//! The command line of `littoral`: subcommands and flags, with their help.
+
+use clap::{Args, Parser, Subcommand};
+use littoral::scene::{BoundaryMode, SpectralMode};
+use littoral::synth::Distribution;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "littoral",
+    version,
+    about = "Spectral photon mapping for coastal waters"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene (default: the built-in coastal scene) into a radiance
+    /// cube, a quicklook and a report.
+    Render(RenderArgs),
+    /// Trace a scene's photons into a photon map, with irradiance tallies.
+    Emit(EmitArgs),
+    /// Scene files: print the built-in scene, validate a file.
+    #[command(subcommand)]
+    Scene(SceneCommand),
+    /// Photon map files: build synthetic maps, inspect, verify, query, dump.
+    #[command(subcommand)]
+    Map(MapCommand),
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML); the built-in coastal scene when absent.
+    pub scene: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// Keep the photon map here, and reuse it when its recorded provenance
+    /// matches the scene's emission inputs.
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// Photons to trace (overrides the scene).
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Bands evenly spaced over 400-700 nm (overrides the scene's grid).
+    #[arg(long)]
+    pub bands: Option<usize>,
+    /// Worker threads (0 = one per core); outputs are identical for any number.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Random seed (overrides the scene).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
+    #[arg(long, default_value = "512MiB")]
+    pub mem_budget: String,
+    /// Boundary-bias compensation (overrides the scene).
+    #[arg(long, value_enum)]
+    pub boundary: Option<BoundaryMode>,
+    /// Spectral-bias compensation (overrides the scene).
+    #[arg(long, value_enum)]
+    pub spectral: Option<SpectralMode>,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Subcommand)]
+pub enum SceneCommand {
+    /// Print the built-in coastal scene (TOML).
+    Default,
+    /// Validate a scene file; prints a summary on success.
+    Check { file: PathBuf },
+}
+
+#[derive(Args)]
+pub struct EmitArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Photon map to write.
+    #[arg(long)]
+    pub map: PathBuf,
+    /// Write the emission report (JSON) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Photons to trace (overrides the scene).
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Worker threads (default: all cores); the map is identical for any number.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Random seed (overrides the scene).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
+    #[arg(long, default_value = "256MiB")]
+    pub mem_budget: String,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Subcommand)]
+pub enum MapCommand {
+    /// Write a synthetic photon map (for tests, benchmarks and low-memory runs).
+    Synth(SynthArgs),
+    /// Print a JSON summary of a map.
+    Info { file: PathBuf },
+    /// Decode every tile and check every checksum.
+    Verify {
+        file: PathBuf,
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Print the photons near a point as JSON, nearest first.
+    Query(QueryArgs),
+    /// Print every photon as CSV: x,y,z,dx,dy,dz,band,power.
+    Dump { file: PathBuf },
+}
+
+#[derive(Args)]
+pub struct SynthArgs {
+    /// Number of photons.
+    #[arg(long)]
+    pub photons: u64,
+    /// Number of spectral bands (evenly spaced over 400-700 nm).
+    #[arg(long, default_value_t = 16)]
+    pub bands: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, value_enum, default_value_t = Distribution::Water)]
+    pub distribution: Distribution,
+    /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
+    #[arg(long, default_value = "256MiB")]
+    pub mem_budget: String,
+    /// Producer threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    #[arg(long)]
+    pub out: PathBuf,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+#[command(group(clap::ArgGroup::new("search").required(true).args(["k", "radius"])))]
+pub struct QueryArgs {
+    pub file: PathBuf,
+    /// Query point X,Y,Z in metres.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: String,
+    /// Number of nearest photons.
+    #[arg(long)]
+    pub k: Option<usize>,
+    /// With --k: ignore photons farther than this (m).
+    #[arg(long, requires = "k", allow_hyphen_values = true)]
+    pub max_radius: Option<f32>,
+    /// All photons within this radius (m).
+    #[arg(long, allow_hyphen_values = true)]
+    pub radius: Option<f32>,
+    /// Only photons of this layer (default: both).
+    #[arg(long, value_enum)]
+    pub layer: Option<Layer>,
+    /// Tile cache budget.
+    #[arg(long, default_value = "256MiB")]
+    pub mem_budget: String,
+}
+
+/// Photon map layers.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum Layer {
+    /// Photons stored at scattering events in the water.
+    Volume,
+    /// Photons stored on the floor and targets.
+    Surface,
+}

@@ -1,0 +1,160 @@
+//! The `littoral` command line. Thin: parsing, progress bars and exit codes;
+//! the library does the work.
+
+mod args;
+
+use args::*;
+use clap::Parser;
+use littoral::cli::{self, print_json, AnyResult, Bars};
+use littoral::job::{EmitJob, MemoryBudget, RenderJob};
+use littoral::scene::{Overrides, Scene};
+use littoral::store::{build_map, MapFile, PhotonMap, PhotonQuery, Search};
+use littoral::synth::SynthSource;
+use std::process::ExitCode;
+use std::time::Instant;
+
+fn main() -> ExitCode {
+    cli::exit("littoral", run(Cli::parse()))
+}
+
+fn run(cli: Cli) -> AnyResult<()> {
+    match cli.command {
+        Command::Map(cmd) => run_map(cmd),
+        Command::Scene(SceneCommand::Default) => cli::print(littoral::scene::COASTAL_TOML),
+        Command::Scene(SceneCommand::Check { file }) => {
+            let scene = Scene::load(&file, &Overrides::default())?;
+            cli::print(&format!("{}: {}\n", file.display(), scene.summary()))
+        }
+        Command::Emit(a) => run_emit(a),
+        Command::Render(a) => run_render(a),
+    }
+}
+
+fn run_render(a: RenderArgs) -> AnyResult<()> {
+    let start = Instant::now();
+    let budget = run_budget(&a.mem_budget, a.photons)?;
+    let overrides = Overrides {
+        photons: a.photons,
+        bands: a.bands,
+        seed: a.seed,
+        boundary: a.boundary,
+        spectral: a.spectral,
+    };
+    let scene = match &a.scene {
+        Some(path) => Scene::load(path, &overrides)?,
+        None => Scene::coastal(&overrides)?,
+    };
+    let job = RenderJob {
+        scene: &scene,
+        out_dir: a.out.clone(),
+        map: a.map.clone(),
+        threads: a.threads,
+        budget,
+        scene_seconds: start.elapsed().as_secs_f64(),
+    };
+    let r = job.run(&Bars::new(a.quiet))?;
+    if !a.quiet {
+        eprintln!("{}", r.summary());
+    }
+    Ok(())
+}
+
+/// The memory budget of a run, after checking a `--photons` override.
+fn run_budget(mem_budget: &str, photons: Option<u64>) -> AnyResult<MemoryBudget> {
+    if photons == Some(0) {
+        return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
+    }
+    Ok(MemoryBudget::parse("--mem-budget", mem_budget)?)
+}
+
+fn run_emit(a: EmitArgs) -> AnyResult<()> {
+    let start = Instant::now();
+    let budget = run_budget(&a.mem_budget, a.photons)?;
+    let overrides = Overrides {
+        photons: a.photons,
+        seed: a.seed,
+        ..Overrides::default()
+    };
+    let scene = Scene::load(&a.scene, &overrides)?;
+    let job = EmitJob {
+        scene: &scene,
+        map: a.map.clone(),
+        threads: a.threads,
+        budget,
+        scene_seconds: start.elapsed().as_secs_f64(),
+    };
+    let r = job.run(&Bars::new(a.quiet))?;
+    let text = serde_json::to_string_pretty(&r)? + "\n";
+    match &a.report {
+        Some(path) => littoral::output::write_atomic(path, text.as_bytes())?,
+        None => print!("{text}"),
+    }
+    if !a.quiet {
+        eprintln!("{}", r.summary());
+    }
+    Ok(())
+}
+
+fn run_map(cmd: MapCommand) -> AnyResult<()> {
+    match cmd {
+        MapCommand::Synth(a) => {
+            let budget = run_budget(&a.mem_budget, Some(a.photons))?;
+            let source = SynthSource::new(a.photons, a.bands, a.seed, a.distribution)?;
+            let bars = Bars::new(a.quiet);
+            let summary = build_map(&a.out, &source, &budget.emission(a.threads), &bars)?;
+            if !a.quiet {
+                let peak = littoral::mem::peak_rss_bytes().unwrap_or(0);
+                eprintln!(
+                    "wrote {}: {} photons in {} tiles, {} bytes ({:.2} bytes/photon); peak memory {:.1} MiB ({peak} bytes)",
+                    a.out.display(),
+                    summary.photons,
+                    summary.tiles,
+                    summary.file_bytes,
+                    summary.file_bytes as f64 / summary.photons.max(1) as f64,
+                    peak as f64 / (1 << 20) as f64,
+                );
+            }
+            Ok(())
+        }
+        MapCommand::Info { file } => {
+            let map = MapFile::open(&file)?;
+            print_json(&map.info())
+        }
+        MapCommand::Verify { file, quiet } => {
+            let map = MapFile::open(&file)?;
+            let report = map.verify(&Bars::new(quiet))?;
+            print_json(&report)
+        }
+        MapCommand::Query(a) => {
+            let at = cli::parse_point("--at", &a.at)?;
+            let budget = littoral::size::parse_size("--mem-budget", &a.mem_budget)?;
+            let search = match (a.k, a.radius) {
+                (Some(k), None) => Search::Nearest {
+                    k,
+                    max_radius: a.max_radius,
+                },
+                (None, Some(radius)) => Search::Radius { radius },
+                _ => unreachable!("clap enforces exactly one of --k and --radius"),
+            };
+            for (name, v) in [("--radius", a.radius), ("--max-radius", a.max_radius)] {
+                if v.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
+                    return Err(
+                        littoral::Error::invalid(name, "must be a finite radius >= 0").into(),
+                    );
+                }
+            }
+            let map = PhotonMap::new(MapFile::open(&a.file)?, budget)?;
+            let layer = a.layer.map(|l| match l {
+                Layer::Volume => littoral::photon::LAYER_VOLUME,
+                Layer::Surface => littoral::photon::LAYER_SURFACE,
+            });
+            let mut found = Vec::new();
+            map.query_into(at, layer, search, &mut found)?;
+            print_json(&found)
+        }
+        MapCommand::Dump { file } => {
+            let map = MapFile::open(&file)?;
+            cli::print_with(|out| map.dump_csv(out))
+        }
+    }
+}

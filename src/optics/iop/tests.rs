@@ -1,0 +1,124 @@
+use super::*;
+
+fn spectra() -> BandSpectra {
+    BandSpectra {
+        a_w: vec![0.01, 0.4],
+        b_w: vec![0.004, 0.001],
+        a_phi_a: vec![0.04, 0.01],
+        a_phi_e: vec![0.7, 0.9],
+        cdom_shape: vec![1.0, 0.1],
+        nap_shape: vec![1.0, 0.2],
+        bp_shape: vec![1.2, 0.8],
+    }
+}
+
+/// All bands at once equal the per-band IOPs (to rounding of exp/ln
+/// against powf).
+#[test]
+fn all_bands_at_once_match_one_band_at_a_time() {
+    let field = ConstituentField::Gradient {
+        axis: 0,
+        size_m: 10.0,
+        from: Constituents {
+            chl: 0.3,
+            cdom_440: 0.05,
+            nap_440: 0.2,
+        },
+        to: Constituents {
+            chl: 8.0,
+            cdom_440: 0.5,
+            nap_440: 0.0,
+        },
+    };
+    for bp_550 in [None, Some(0.4)] {
+        let w = WaterModel::Constituents {
+            spectra: Box::new(spectra()),
+            field: field.clone(),
+            bp_550,
+        };
+        let n = spectra().a_w.len();
+        let mut all = vec![Iop::default(); n];
+        for p in [Vec3::new(1.0, 2.0, -0.5), Vec3::new(7.0, 1.0, -3.0)] {
+            w.iops(p, &mut all);
+            for (b, got) in all.iter().enumerate() {
+                let want = w.iop(p, b);
+                for (g, e) in [(got.a, want.a), (got.b_w, want.b_w), (got.b_p, want.b_p)] {
+                    assert!((g - e).abs() <= 1e-12 * e.abs().max(1.0), "{g} vs {e}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn majorant_bounds_every_point_of_a_gradient() {
+    let m = WaterModel::Constituents {
+        spectra: Box::new(spectra()),
+        field: ConstituentField::Gradient {
+            axis: 0,
+            size_m: 100.0,
+            from: Constituents {
+                chl: 0.5,
+                cdom_440: 0.02,
+                nap_440: 0.0,
+            },
+            to: Constituents {
+                chl: 5.0,
+                cdom_440: 0.3,
+                nap_440: 0.05,
+            },
+        },
+        bp_550: None,
+    };
+    for band in 0..2 {
+        let maj = m.majorant(band);
+        for i in 0..=100 {
+            let c = m.iop(Vec3::new(i as f32, 3.0, -2.0), band).c();
+            assert!(c <= maj * (1.0 + 1e-12), "band {band} x {i}");
+        }
+        assert!((m.iop(Vec3::new(100.0, 0.0, -1.0), band).c() - maj).abs() < 1e-12);
+    }
+    // The model: a at chl 5, band 0.
+    let iop = m.iop(Vec3::new(100.0, 0.0, -1.0), 0);
+    let want_a = 0.01 + 0.04 * 5f64.powf(0.7) + 0.3 + 0.05;
+    assert!((iop.a - want_a).abs() < 1e-12);
+    assert!((iop.b_p - 0.30 * 5f64.powf(0.62) * 1.2).abs() < 1e-12);
+}
+
+#[test]
+fn grid_interpolates_trilinearly_and_clamps() {
+    let c = |v: f64| Constituents {
+        chl: v,
+        cdom_440: 0.0,
+        nap_440: 0.0,
+    };
+    let g = ConstituentGrid {
+        xs: vec![0.0, 10.0],
+        ys: vec![0.0, 10.0],
+        depths: vec![0.0, 10.0],
+        values: (0..8).map(|i| c(i as f64)).collect(),
+    };
+    let f = ConstituentField::Grid(g);
+    // Trilinear of v = x + 2 y + 4 z in unit-cube coordinates.
+    let at = f.at(Vec3::new(5.0, 2.5, -7.5)).chl;
+    assert!((at - (0.5 + 2.0 * 0.25 + 4.0 * 0.75)).abs() < 1e-6);
+    assert_eq!(f.at(Vec3::new(-5.0, -5.0, 5.0)).chl, 0.0);
+    assert_eq!(f.at(Vec3::new(50.0, 50.0, -50.0)).chl, 7.0);
+    assert_eq!(f.max().chl, 7.0);
+}
+
+#[test]
+fn layers_override_the_base() {
+    let c = |v: f64| Constituents {
+        chl: v,
+        cdom_440: 0.0,
+        nap_440: 0.0,
+    };
+    let f = ConstituentField::Layers {
+        base: c(1.0),
+        layers: vec![(2.0, 4.0, c(3.0))],
+    };
+    assert_eq!(f.at(Vec3::new(0.0, 0.0, -1.0)).chl, 1.0);
+    assert_eq!(f.at(Vec3::new(0.0, 0.0, -3.0)).chl, 3.0);
+    assert_eq!(f.max().chl, 3.0);
+}

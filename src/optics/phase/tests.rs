@@ -1,0 +1,427 @@
+use super::*;
+use crate::rng::Pcg32;
+use std::sync::OnceLock;
+
+/// Samples per Monte Carlo check.
+const SAMPLES: usize = 200_000;
+/// Quadrature grid in x = 1 - mu: nodes 2^(j/40 - 50), j = 0..=2040, so
+/// x = 1 (mu = 0) is node 2000 and the forward peaks are resolved down to
+/// x = 2^-50.
+const GRID_PER_OCTAVE: usize = 40;
+const GRID_OCTAVES_BELOW_ONE: usize = 50;
+const GRID_INTERVALS: usize = GRID_PER_OCTAVE * (GRID_OCTAVES_BELOW_ONE + 1);
+const GRID_MU_ZERO: usize = GRID_PER_OCTAVE * GRID_OCTAVES_BELOW_ONE;
+
+fn cases() -> Vec<(&'static str, PhaseFunction)> {
+    let hg = |g| PhaseFunction::henyey_greenstein(g).unwrap();
+    let ff = |b| PhaseFunction::fournier_forand(b).unwrap();
+    vec![
+        ("isotropic", PhaseFunction::isotropic()),
+        ("HG g=0", hg(0.0)),
+        ("HG g=1e-4", hg(1e-4)),
+        ("HG g=0.5", hg(0.5)),
+        ("HG g=0.9", hg(0.9)),
+        ("HG g=-0.3", hg(-0.3)),
+        ("HG g=-0.8", hg(-0.8)),
+        (
+            "Rayleigh q=0.835",
+            PhaseFunction::rayleigh(RAYLEIGH_Q_WATER).unwrap(),
+        ),
+        ("FF B=0.0183", ff(0.0183)),
+        ("FF B=0.01", ff(0.01)),
+        ("FF B=0.1", ff(0.1)),
+        ("FF B=0.001", ff(0.001)),
+        ("FF B=1e-4", ff(1e-4)),
+        ("Petzold", PhaseFunction::petzold()),
+        (
+            "user table",
+            PhaseFunction::tabulated(
+                &[0.0, 30.0, 90.0, 150.0, 180.0],
+                &[10.0, 4.0, 1.0, 0.5, 0.8],
+                "t",
+            )
+            .unwrap(),
+        ),
+        (
+            "user table, partial range",
+            PhaseFunction::tabulated(&[10.0, 45.0, 170.0], &[5.0, 1.0, 2.0], "t").unwrap(),
+        ),
+    ]
+}
+
+/// Adaptive Simpson on [a, b] to absolute tolerance `tol`.
+fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        f: &dyn Fn(f64) -> f64,
+        a: f64,
+        b: f64,
+        fa: f64,
+        fm: f64,
+        fb: f64,
+        whole: f64,
+        tol: f64,
+        depth: u32,
+    ) -> f64 {
+        let m = 0.5 * (a + b);
+        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
+        let (flm, frm) = (f(lm), f(rm));
+        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
+        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+        let delta = left + right - whole;
+        if depth == 0 || delta.abs() <= 15.0 * tol {
+            left + right + delta / 15.0
+        } else {
+            step(f, a, m, fa, flm, fm, left, 0.5 * tol, depth - 1)
+                + step(f, m, b, fm, frm, fb, right, 0.5 * tol, depth - 1)
+        }
+    }
+    let (fa, fm, fb) = (f(a), f(0.5 * (a + b)), f(b));
+    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
+    step(f, a, b, fa, fm, fb, whole, tol, 40)
+}
+
+/// The density integrated independently of the samplers: over the grid
+/// intervals in w = ln(1 - mu) (where forward peaks are smooth), plus
+/// the cap x < 2^-50 as the power law p ~ x^s fitted to p at 2^-50 and 2^-49.
+struct Profile {
+    /// x = 1 - mu at the grid nodes, increasing from 2^-50 to 2.
+    x: Vec<f64>,
+    /// 2 pi int p dmu over each interval.
+    mass: Vec<f64>,
+    /// 2 pi int mu p dmu over each interval.
+    moment: Vec<f64>,
+    /// Mass of the cap x < 2^-50.
+    cap: f64,
+}
+
+impl Profile {
+    fn new(pf: &PhaseFunction) -> Self {
+        let x: Vec<f64> = (0..=GRID_INTERVALS)
+            .map(|j| 2f64.powf(j as f64 / GRID_PER_OCTAVE as f64 - GRID_OCTAVES_BELOW_ONE as f64))
+            .collect();
+        let integrate = |weight: &dyn Fn(f64) -> f64| -> Vec<f64> {
+            // dmu = -x dw. p is evaluated at x itself: a cosine near 1 would
+            // round to a staircase in x that biases the sum by ~1e-8.
+            let f = |w: f64| {
+                let x = w.exp();
+                TWO_PI * pf.eval_one_minus_cos(x) * weight(1.0 - x) * x
+            };
+            x.windows(2)
+                .map(|pair| simpson(&f, pair[0].ln(), pair[1].ln(), 1e-16))
+                .collect()
+        };
+        let mass = integrate(&|_| 1.0);
+        let moment = integrate(&|mu| mu);
+        let x0 = x[0];
+        let (p0, p1) = (pf.eval_one_minus_cos(x0), pf.eval_one_minus_cos(2.0 * x0));
+        let s = (p1 / p0).log2();
+        let cap = TWO_PI * p0 * x0 / (s + 1.0);
+        Profile {
+            x,
+            mass,
+            moment,
+            cap,
+        }
+    }
+
+    fn total(&self) -> f64 {
+        self.mass.iter().sum::<f64>() + self.cap
+    }
+
+    fn mean_cos(&self) -> f64 {
+        // In the cap mu = 1 to within 2^-50.
+        self.moment.iter().sum::<f64>() + self.cap
+    }
+
+    fn backscatter(&self) -> f64 {
+        self.mass[GRID_MU_ZERO..].iter().sum()
+    }
+}
+
+fn profiles() -> &'static [(&'static str, PhaseFunction, Profile)] {
+    static PROFILES: OnceLock<Vec<(&'static str, PhaseFunction, Profile)>> = OnceLock::new();
+    PROFILES.get_or_init(|| {
+        cases()
+            .into_iter()
+            .map(|(name, pf)| {
+                let profile = Profile::new(&pf);
+                (name, pf, profile)
+            })
+            .collect()
+    })
+}
+
+/// Upper-tail chi-square quantile at p = 0.001 (Wilson–Hilferty).
+fn chi_square_critical(dof: usize) -> f64 {
+    const Z_999: f64 = 3.090_232_306_167_813;
+    let k = dof as f64;
+    let c = 2.0 / (9.0 * k);
+    k * (1.0 - c + Z_999 * c.sqrt()).powi(3)
+}
+
+/// Pearson chi-square of SAMPLES draws of `sample_cos` against the density.
+/// Bins hold about 1/100 of the probability each: grid intervals are
+/// gathered from the back (x = 2) forward until each bin reaches 1/100;
+/// the last bin takes the rest and the cap (every draw that rounds to
+/// mu = 1). Bins expecting fewer than 5 draws are merged. Returns
+/// (chi2, degrees of freedom).
+fn chi_square(pf: &PhaseFunction, profile: &Profile, seed: u64) -> (f64, usize) {
+    const TARGET: f64 = 0.01;
+    let total = profile.total();
+    // Bin b holds x in [edges[b+1], edges[b]); edges decrease from 2 to 0.
+    let mut edges = vec![2.0];
+    let mut probs = Vec::new();
+    let mut acc = 0.0;
+    for j in (0..GRID_INTERVALS).rev() {
+        acc += profile.mass[j] / total;
+        if acc >= TARGET {
+            edges.push(profile.x[j]);
+            probs.push(acc);
+            acc = 0.0;
+        }
+    }
+    probs.push(acc + profile.cap / total);
+    edges.push(0.0);
+    // Merge bins expecting fewer than 5 draws into their backward neighbour.
+    let min_prob = 5.0 / SAMPLES as f64;
+    let mut b = probs.len();
+    while b > 1 {
+        b -= 1;
+        if probs[b] < min_prob {
+            probs[b - 1] += probs[b];
+            probs.remove(b);
+            edges.remove(b);
+        }
+    }
+    let mut counts = vec![0u64; probs.len()];
+    let mut rng = Pcg32::new(seed, 0);
+    for _ in 0..SAMPLES {
+        let x = 1.0 - pf.sample_cos(rng.uniform_f64());
+        let bin = edges[1..].partition_point(|&e| e > x).min(probs.len() - 1);
+        counts[bin] += 1;
+    }
+    let chi2 = counts
+        .iter()
+        .zip(&probs)
+        .map(|(&c, &p)| {
+            let e = p * SAMPLES as f64;
+            (c as f64 - e).powi(2) / e
+        })
+        .sum();
+    (chi2, probs.len() - 1)
+}
+
+/// Physical fact: every phase function integrates to 1 over the sphere.
+/// The quadrature is independent of the closed forms used for sampling
+/// and good to about 1e-14 on the grid; the power-law fit of the cap below
+/// 2^-50 adds up to 8e-10 (FF at B = 1e-4, whose cap holds 37 % of the
+/// probability), hence the tolerance of 2e-9.
+#[test]
+fn every_phase_function_integrates_to_one() {
+    for (name, _, profile) in profiles() {
+        let total = profile.total();
+        eprintln!("{name}: integral {total:.15}");
+        assert!((total - 1.0).abs() < 2e-9, "{name}: integral {total}");
+    }
+}
+
+/// Chi-square goodness of fit of `sample_cos` against the density, at the
+/// p = 0.001 critical value: a correct sampler fails one case in 1000.
+#[test]
+fn samplers_pass_chi_square() {
+    let mut failures = Vec::new();
+    for (i, (name, pf, profile)) in profiles().iter().enumerate() {
+        let (chi2, dof) = chi_square(pf, profile, 1000 + i as u64);
+        let critical = chi_square_critical(dof);
+        eprintln!("{name}: chi2 {chi2:.1} dof {dof} critical {critical:.1}");
+        if chi2 >= critical {
+            failures.push(format!("{name}: chi2 {chi2} >= {critical} (dof {dof})"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The sample mean of sample_cos agrees with mean_cosine() within 4
+/// standard errors (sample standard deviation / sqrt(N)), and
+/// mean_cosine() agrees with the independent quadrature.
+#[test]
+fn sample_mean_cosine_within_four_standard_errors() {
+    for (i, (name, pf, profile)) in profiles().iter().enumerate() {
+        let g = pf.mean_cosine();
+        let quadrature = profile.mean_cos();
+        assert!(
+            (g - quadrature).abs() < 1e-9,
+            "{name}: mean_cosine {g} vs quadrature {quadrature}"
+        );
+        let mut rng = Pcg32::new(77, i as u64);
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        for _ in 0..SAMPLES {
+            let mu = pf.sample_cos(rng.uniform_f64());
+            sum += mu;
+            sum_sq += mu * mu;
+        }
+        let n = SAMPLES as f64;
+        let mean = sum / n;
+        let se = ((sum_sq / n - mean * mean) / (n - 1.0)).sqrt();
+        eprintln!(
+            "{name}: g {g:.9}, sample mean {mean:.6}, {:.2} se",
+            (mean - g) / se
+        );
+        assert!(
+            (mean - g).abs() < 4.0 * se,
+            "{name}: {mean} vs {g}, se {se}"
+        );
+    }
+}
+
+/// backscatter_fraction() agrees with the independent quadrature over mu < 0.
+#[test]
+fn backscatter_fraction_matches_quadrature() {
+    for (name, pf, profile) in profiles() {
+        let (b, quadrature) = (pf.backscatter_fraction(), profile.backscatter());
+        assert!(
+            (b - quadrature).abs() < 1e-10,
+            "{name}: {b} vs quadrature {quadrature}"
+        );
+    }
+}
+
+/// sample_cos is non-decreasing in u and stays in [-1, 1], from u = 0 to
+/// the largest u below 1 that uniform_f64 produces.
+#[test]
+fn samplers_are_monotone_and_in_range() {
+    let mut us: Vec<f64> = (0..=4000).map(|i| i as f64 / 4001.0).collect();
+    us.extend([1.0 - 1e-9, 1.0 - 1e-12, 1.0 - f64::EPSILON / 2.0]);
+    for (name, pf) in cases() {
+        let mut prev = -1.0;
+        for &u in &us {
+            let mu = pf.sample_cos(u);
+            assert!((-1.0..=1.0).contains(&mu), "{name}: u {u} gave {mu}");
+            assert!(mu >= prev - 1e-12, "{name}: not monotone at u {u}");
+            prev = mu;
+        }
+    }
+}
+
+/// The two exact HG inversions agree where they meet.
+#[test]
+fn hg_inversions_agree() {
+    for g in [0.2, 0.5, 0.7, -0.5] {
+        for i in 0..=100 {
+            let u = i as f64 / 100.0;
+            let (a, b) = (hg_sample_cos_expanded(g, u), hg_sample_cos_classic(g, u));
+            assert!((a - b).abs() < 1e-13, "g {g} u {u}: {a} vs {b}");
+        }
+    }
+}
+
+/// Pure water (OPTICS.md): q = 0.835 gives p(90°) = 0.06225 sr^-1.
+#[test]
+fn rayleigh_water_value() {
+    let p = PhaseFunction::rayleigh(RAYLEIGH_Q_WATER).unwrap().eval(0.0);
+    assert!((p - 0.06225).abs() < 5e-6, "{p}");
+}
+
+/// eval and eval_one_minus_cos agree wherever the cosine is exact.
+#[test]
+fn eval_forms_agree() {
+    for (name, pf) in cases() {
+        for i in 0..=200 {
+            let mu = -1.0 + i as f64 / 100.0;
+            let (a, b) = (pf.eval(mu), pf.eval_one_minus_cos(1.0 - mu));
+            assert!((a / b - 1.0).abs() < 1e-12, "{name} mu {mu}: {a} vs {b}");
+        }
+    }
+}
+
+/// `scatter` returns unit vectors at the requested cosine to w, for w
+/// anywhere including the poles the basis construction must survive.
+#[test]
+fn scatter_returns_unit_vector_at_requested_cosine() {
+    let mut rng = Pcg32::new(5, 0);
+    let mut ws = vec![
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        Vec3::new(1e-7, 0.0, -1.0).normalize(),
+    ];
+    for _ in 0..1000 {
+        let z = 2.0 * rng.uniform_f32() - 1.0;
+        let phi = std::f32::consts::TAU * rng.uniform_f32();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        ws.push(Vec3::new(r * phi.cos(), r * phi.sin(), z));
+    }
+    for w in ws {
+        for _ in 0..20 {
+            let cos = 2.0 * rng.uniform_f32() - 1.0;
+            let phi = std::f32::consts::TAU * rng.uniform_f32();
+            let d = scatter(w, cos, phi);
+            assert!(
+                (d.length() - 1.0).abs() < 1e-5,
+                "{w} {cos}: |d| {}",
+                d.length()
+            );
+            assert!((d.dot(w) - cos).abs() < 1e-5, "{w} {cos}: {}", d.dot(w));
+        }
+        for cos in [1.0, -1.0] {
+            let d = scatter(w, cos, 0.3);
+            assert!((d.dot(w) - cos).abs() < 1e-6);
+        }
+    }
+    // sample_direction keeps the sampled cosine.
+    let pf = PhaseFunction::henyey_greenstein(0.8).unwrap();
+    for i in 0..100 {
+        let u = [i as f64 / 100.0, 0.37];
+        let d = pf.sample_direction(Vec3::Y, u);
+        assert!((d.dot(Vec3::Y) as f64 - pf.sample_cos(u[0])).abs() < 1e-5);
+    }
+}
+
+fn field_of(result: Result<PhaseFunction>) -> String {
+    match result {
+        Err(Error::Invalid { field, .. }) => field,
+        other => panic!("expected an invalid-field error, got {other:?}"),
+    }
+}
+
+/// Bad parameters are errors naming the field, not panics.
+#[test]
+fn bad_parameters_name_the_field() {
+    for g in [1.0, -1.0, 1.5, f64::NAN, f64::INFINITY] {
+        assert_eq!(field_of(PhaseFunction::henyey_greenstein(g)), "g");
+    }
+    for q in [-0.1, 1.5, f64::NAN] {
+        assert_eq!(field_of(PhaseFunction::rayleigh(q)), "q");
+    }
+    for bb in [0.0, 5e-5, 0.2, -0.01, f64::NAN] {
+        assert_eq!(field_of(PhaseFunction::fournier_forand(bb)), "bb_ratio");
+    }
+    let ff = |n, mu| FournierForand::new(n, mu).map(PhaseFunction::FournierForand);
+    assert_eq!(field_of(ff(1.0, 3.5)), "n");
+    assert_eq!(field_of(ff(f64::NAN, 3.5)), "n");
+    assert_eq!(field_of(ff(1.1, 3.0)), "mu");
+    assert_eq!(field_of(ff(1.1, 5.5)), "mu");
+    let table = |a: &[f64], v: &[f64]| PhaseFunction::tabulated(a, v, "water.phase_table");
+    let bad: [(&[f64], &[f64]); 10] = [
+        (&[0.0, 180.0], &[1.0]),
+        (&[90.0], &[1.0]),
+        (&[], &[]),
+        (&[0.0, 90.0, 45.0], &[1.0, 1.0, 1.0]),
+        (&[0.0, 90.0, 90.0], &[1.0, 1.0, 1.0]),
+        (&[0.0, 181.0], &[1.0, 1.0]),
+        (&[-1.0, 180.0], &[1.0, 1.0]),
+        (&[0.0, f64::NAN], &[1.0, 1.0]),
+        (&[0.0, 180.0], &[1.0, -0.5]),
+        (&[0.0, 180.0], &[0.0, 0.0]),
+    ];
+    for (angles, values) in bad {
+        assert_eq!(field_of(table(angles, values)), "water.phase_table");
+    }
+    assert_eq!(
+        field_of(table(&[0.0, 180.0], &[1.0, f64::NAN])),
+        "water.phase_table"
+    );
+    let message = table(&[0.0, 181.0], &[1.0, 1.0]).unwrap_err().to_string();
+    assert!(message.starts_with("water.phase_table: "), "{message}");
+}

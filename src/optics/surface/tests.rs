@@ -1,0 +1,81 @@
+use super::*;
+
+#[test]
+fn fresnel_check_values() {
+    // OPTICS.md: n = 1.34, R(0) = 0.0211; from air at 60 deg R = 0.0610,
+    // refracted angle 40.26 deg; critical angle from water 48.27 deg.
+    assert!((fresnel_reflectance(1.0, 1.0, 1.34) - 0.0211).abs() < 5e-5);
+    let cos60 = 60f64.to_radians().cos();
+    assert!((fresnel_reflectance(cos60, 1.0, 1.34) - 0.0610).abs() < 5e-4);
+    let d = DVec3::new(60f64.to_radians().sin(), 0.0, -cos60);
+    let t = refract(d, DVec3::Z, 1.0, 1.34).unwrap();
+    assert!(((-t.z).acos().to_degrees() - 40.26).abs() < 0.01);
+    let crit = (1.0f64 / 1.34).asin();
+    assert!((crit.to_degrees() - 48.27).abs() < 0.01);
+    assert_eq!(fresnel_reflectance((crit + 1e-6).cos(), 1.34, 1.0), 1.0);
+    assert!(fresnel_reflectance((crit - 1e-3).cos(), 1.34, 1.0) < 1.0);
+    // Reciprocity: the same reflectance from either side at matching angles.
+    let ti = 30f64.to_radians();
+    let tt = (ti.sin() / 1.34).asin();
+    let a = fresnel_reflectance(ti.cos(), 1.0, 1.34);
+    let b = fresnel_reflectance(tt.cos(), 1.34, 1.0);
+    assert!((a - b).abs() < 1e-12);
+}
+
+/// Transmitted fraction through a flat surface is 1 - R: at 0 and 60 deg
+/// the Monte Carlo fraction agrees within 4 binomial standard errors.
+#[test]
+fn flat_surface_transmits_fresnel_fraction() {
+    let s = SeaSurface::flat(1.34);
+    for theta in [0.0f64, 60.0] {
+        let t = theta.to_radians();
+        let d = Vec3::new(t.sin() as f32, 0.0, -t.cos() as f32);
+        let n = 400_000;
+        let mut rng = Pcg32::new(5, theta as u64);
+        let mut through = 0;
+        for _ in 0..n {
+            let e = s.interact(d, &mut rng);
+            if e.transmitted {
+                through += 1;
+                assert!(e.direction.z < 0.0);
+            } else {
+                assert!(e.direction.z > 0.0);
+            }
+        }
+        let want = 1.0 - fresnel_reflectance(t.cos(), 1.0, 1.34);
+        let got = through as f64 / n as f64;
+        let se = (want * (1.0 - want) / n as f64).sqrt();
+        assert!(
+            (got - want).abs() < 4.0 * se,
+            "theta {theta}: {got} vs {want}"
+        );
+    }
+}
+
+/// Rough surface: every ray leaves into the right half-space, and the
+/// transmittance of normally incident light stays close to the flat value
+/// (facets tilt by a few degrees at 5 m/s).
+#[test]
+fn rough_surface_sends_rays_the_right_way() {
+    let s = SeaSurface::cox_munk(1.34, 5.0);
+    let mut rng = Pcg32::new(6, 0);
+    let n = 200_000;
+    let mut through = 0;
+    for i in 0..n {
+        let d = if i % 2 == 0 {
+            Vec3::new(0.3, 0.1, -1.0).normalize()
+        } else {
+            Vec3::new(0.2, -0.4, 1.0).normalize()
+        };
+        let e = s.interact(d, &mut rng);
+        assert!((e.direction.length() - 1.0).abs() < 1e-5);
+        let below_after = e.direction.z < 0.0;
+        let from_above = d.z < 0.0;
+        assert_eq!(e.transmitted, from_above == below_after);
+        if from_above && e.transmitted {
+            through += 1;
+        }
+    }
+    let frac = through as f64 / (n / 2) as f64;
+    assert!(frac > 0.95 && frac < 0.99, "{frac}");
+}

@@ -1,0 +1,97 @@
+use super::*;
+use crate::rng::Pcg32;
+
+fn staged(n: usize, seed: u64) -> Vec<StagedPhoton> {
+    (0..n)
+        .map(|i| {
+            let mut r = Pcg32::new(seed, i as u64);
+            let p = Photon {
+                position: Vec3::new(
+                    r.uniform_f32() * 10.0,
+                    r.uniform_f32() * 10.0,
+                    -r.uniform_f32() * 3.0,
+                ),
+                direction: Vec3::new(r.uniform_f32() - 0.5, 0.3, -1.0).normalize(),
+                band: r.below(128) as u16,
+                power: 0.25,
+            };
+            StagedPhoton::new(&p, 0, i as u64)
+        })
+        .collect()
+}
+
+#[test]
+fn tile_round_trips_within_quantisation_error() {
+    let photons = staged(5000, 3);
+    let t = TileEncoder::default().encode(&photons).unwrap();
+    let mut out = Vec::new();
+    TileDecoder::default()
+        .decode(&t.blob, &t.entry(0), &mut out)
+        .unwrap();
+    assert_eq!(out.len(), photons.len());
+    let step = (t.quant.max - t.quant.min) / 65535.0;
+    // Match decoded photons to inputs by band, power and nearest position.
+    let mut used = vec![false; photons.len()];
+    for d in out.iter().map(|p| p.unpack()) {
+        assert!(t.bounds.distance_sq(d.position) == 0.0);
+        let j = (0..photons.len())
+            .filter(|&j| !used[j] && photons[j].photon.band == d.band)
+            .min_by(|&a, &b| {
+                let da = photons[a].pos().distance_squared(d.position);
+                let db = photons[b].pos().distance_squared(d.position);
+                da.total_cmp(&db)
+            })
+            .unwrap();
+        used[j] = true;
+        let err = (photons[j].pos() - d.position).abs();
+        assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
+        assert_eq!(photons[j].photon.unpack().direction, d.direction);
+        assert_eq!(d.power, photons[j].photon.power);
+    }
+}
+
+#[test]
+fn blob_is_independent_of_input_order() {
+    let mut photons = staged(3000, 4);
+    let a = TileEncoder::default().encode(&photons).unwrap();
+    photons.reverse();
+    let b = TileEncoder::default().encode(&photons).unwrap();
+    assert_eq!(a.blob, b.blob);
+    assert_eq!(a.crc, b.crc);
+}
+
+#[test]
+fn corrupt_blobs_are_rejected() {
+    let photons = staged(2000, 5);
+    let t = TileEncoder::default().encode(&photons).unwrap();
+    let mut dec = TileDecoder::default();
+    let mut out = Vec::new();
+    let mut bad = t.blob.clone();
+    bad[t.blob.len() / 2] ^= 0x40;
+    assert!(matches!(
+        dec.decode(&bad, &t.entry(0), &mut out),
+        Err(DecodeError::Checksum { .. })
+    ));
+    // A valid frame with the wrong count is caught by its length.
+    let e = t.entry(0);
+    let fewer = TileEntry {
+        count: t.count - 1,
+        ..e
+    };
+    assert!(dec.decode(&t.blob, &fewer, &mut out).is_err());
+    let more = TileEntry {
+        count: t.count + 1,
+        ..e
+    };
+    assert!(matches!(
+        dec.decode(&t.blob, &more, &mut out),
+        Err(DecodeError::Length { .. })
+    ));
+    // A truncated frame (with a matching checksum) is caught by zstd.
+    let short = &t.blob[..t.blob.len() - 3];
+    let short_entry = TileEntry {
+        crc: crc32fast::hash(short),
+        ..e
+    };
+    assert!(dec.decode(short, &short_entry, &mut out).is_err());
+}
