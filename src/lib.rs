@@ -28,6 +28,7 @@
 
 pub mod bounds;
 pub mod cli;
+pub mod csv;
 pub mod cube;
 pub mod emit;
 pub mod error;

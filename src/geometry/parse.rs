@@ -1,8 +1,9 @@
 //! Text inputs for geometry: heightfield CSV and a minimal Wavefront OBJ.
 //!
-//! Hand-written rather than a crate: both formats are tiny subsets here, and
-//! every error must name the file and line (`path:line: what`), which the
-//! OBJ crates do not report.
+//! The height field is read by the one table reader (`crate::csv`). The
+//! OBJ reader is hand-written rather than a crate: the format is a tiny
+//! subset here, and every error must name the file and line, which the OBJ
+//! crates do not report. Both report [`Error::Data`].
 
 use std::path::Path;
 
@@ -12,7 +13,7 @@ use crate::{Error, Result};
 
 /// An error at `line` (1-based) of `path`.
 fn at(path: &Path, line: usize, what: impl Into<String>) -> Error {
-    Error::invalid(format!("{}:{line}", path.display()), what)
+    Error::data(path, Some(line), "target.file", what)
 }
 
 fn read(path: &Path) -> Result<String> {
@@ -27,55 +28,29 @@ fn strip_comment(line: &str) -> &str {
 /// Depths (m), one grid row per line, first data line y = 0; see
 /// [`super::GeometryBuilder::heightfield_from_csv`].
 pub(super) fn read_heightfield_csv(path: &Path) -> Result<(Vec<f32>, usize, usize)> {
-    let text = read(path)?;
-    let mut depths = Vec::new();
-    // (values per row, line it was set on)
-    let mut width: Option<(usize, usize)> = None;
-    let mut rows = 0usize;
-    for (i, raw) in text.lines().enumerate() {
-        let line_no = i + 1;
-        let line = strip_comment(raw).trim();
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = if line.contains(',') {
-            line.split(',').map(str::trim).collect()
-        } else {
-            line.split_whitespace().collect()
-        };
-        for field in &fields {
-            if field.is_empty() {
-                return Err(at(path, line_no, "empty value"));
-            }
-            let d: f32 = field
-                .parse()
-                .map_err(|_| at(path, line_no, format!("'{field}' is not a number")))?;
-            if !(d.is_finite() && d > 0.0) {
-                return Err(at(
-                    path,
-                    line_no,
-                    format!("depth {field} is not a positive finite number of metres"),
-                ));
-            }
-            depths.push(d);
-        }
-        match width {
-            None => width = Some((fields.len(), line_no)),
-            Some((w, first)) if w != fields.len() => {
-                return Err(at(
-                    path,
-                    line_no,
-                    format!("{} values, but line {first} has {w}", fields.len()),
-                ));
-            }
-            Some(_) => {}
-        }
-        rows += 1;
+    let csv = crate::csv::read(path, "bottom.heightfield")?;
+    if let Some((line, _)) = &csv.header {
+        return Err(csv.error(
+            Some(*line),
+            "a heightfield has no header: rows of depths only",
+        ));
     }
-    let nx = width.map_or(0, |(w, _)| w);
+    let mut depths = Vec::with_capacity(csv.rows.len() * csv.width());
+    for row in &csv.rows {
+        for d in csv.numbers(row)? {
+            if d <= 0.0 {
+                return Err(csv.error(
+                    Some(row.line),
+                    format!("depth {d} is not a positive number of metres"),
+                ));
+            }
+            depths.push(d as f32);
+        }
+    }
+    let (nx, rows) = (csv.width(), csv.rows.len());
     if nx < 2 || rows < 2 {
-        return Err(Error::invalid(
-            path.display().to_string(),
+        return Err(csv.error(
+            None,
             format!("a heightfield needs at least 2 rows of 2 depths, found {rows} rows of {nx}"),
         ));
     }

@@ -575,7 +575,7 @@ fn obj_faces_and_transform() {
 fn assert_err_at(err: Error, path: &Path, line: usize, what: &str) {
     let msg = err.to_string();
     assert!(
-        msg.contains(&format!("{}:{line}:", path.display())),
+        msg.contains(&format!("{}: line {line}:", path.display())),
         "{msg}"
     );
     assert!(msg.contains(what), "{msg}");
@@ -655,10 +655,11 @@ fn heightfield_csv() {
     ));
 
     let cases = [
-        ("1,2\n3,x\n", 2, "'x' is not a number"),
-        ("1,2\n# c\n3,4,5\n", 3, "3 values, but line 1 has 2"),
+        ("1,2\n3,x\n", 2, "'x' is not a finite number"),
+        ("1,2\n# c\n3,4,5\n", 3, "3 fields, but line 1 has 2 fields"),
         ("1,2\n3,-4\n", 2, "not a positive"),
-        ("1,2\n3,,4\n", 2, "empty value"),
+        ("1,2,3\n3,,4\n", 2, "empty field"),
+        ("1,2\n3,inf\n", 2, "'inf' is not a finite number"),
     ];
     for (i, (text, line, what)) in cases.iter().enumerate() {
         let path = write_file(dir.path(), &format!("bad{i}.csv"), text);

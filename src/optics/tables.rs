@@ -343,94 +343,37 @@ fn parse_csv(
     name: &str,
     columns: Columns,
 ) -> Result<Vec<Table>> {
-    // (value column indices, fields per row): known up front for a user
-    // file, read from the header for an embedded one.
-    let mut layout: Option<(Vec<usize>, usize)> = match columns {
-        Columns::UserPair => Some((vec![1], 2)),
-        Columns::Named(_) => None,
+    let csv = crate::csv::parse(text, path, field)?;
+    // Value columns, and the fields a row has.
+    let wanted: Vec<usize> = match columns {
+        Columns::UserPair => {
+            csv.expect_width(2, "2 fields (nm,value)")?;
+            vec![1]
+        }
+        Columns::Named(names) => names.iter().map(|n| csv.column(n)).collect::<Result<_>>()?,
     };
-    let mut ys: Vec<Vec<f64>> = match columns {
-        Columns::UserPair => vec![Vec::new()],
-        Columns::Named(names) => vec![Vec::new(); names.len()],
-    };
-    let mut x_nm: Vec<f64> = Vec::new();
-    let mut first = true;
-    let err = |line: Option<usize>, what: String| Error::data(path, line, field, what);
-
-    for (index, raw) in text.lines().enumerate() {
-        let line_no = index + 1;
-        let line = raw.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if std::mem::take(&mut first) {
-            // A header is a line with no numeric field: a bad first data row
-            // such as "4OO,0.1" still has a number, so it is reported rather
-            // than silently skipped as a header.
-            if fields.iter().all(|f| f.parse::<f64>().is_err()) {
-                if let Columns::Named(names) = columns {
-                    let wanted = names
-                        .iter()
-                        .map(|n| {
-                            fields.iter().position(|f| f == n).ok_or_else(|| {
-                                err(Some(line_no), format!("header has no column '{n}'"))
-                            })
-                        })
-                        .collect::<Result<_>>()?;
-                    layout = Some((wanted, fields.len()));
-                }
-                continue;
-            }
-        }
-        let Some((wanted, width)) = &layout else {
-            return Err(err(
-                Some(line_no),
-                "expected a header line naming the columns".into(),
-            ));
-        };
-        if fields.len() != *width {
-            let expect = match columns {
-                Columns::UserPair => "2 fields (nm,value)".to_string(),
-                Columns::Named(_) => format!("{width} fields as in the header"),
-            };
-            return Err(err(
-                Some(line_no),
-                format!("expected {expect}, found {}", fields.len()),
-            ));
-        }
-        let number = |col: usize, what: &str| -> Result<f64> {
-            let text = fields[col];
-            match text.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                _ => Err(err(
-                    Some(line_no),
-                    format!("{what} '{text}' is not a finite number"),
-                )),
-            }
-        };
-        let x = number(0, "wavelength")?;
+    let mut ys: Vec<Vec<f64>> = vec![Vec::with_capacity(csv.rows.len()); wanted.len()];
+    let mut x_nm: Vec<f64> = Vec::with_capacity(csv.rows.len());
+    for row in &csv.rows {
+        let x = csv.number(row, 0)?;
         if x <= 0.0 {
-            return Err(err(
-                Some(line_no),
-                format!("wavelength {x} nm is not positive"),
-            ));
+            return Err(csv.error(Some(row.line), format!("wavelength {x} nm is not positive")));
         }
         if let Some(&prev) = x_nm.last() {
             if x <= prev {
-                return Err(err(
-                    Some(line_no),
+                return Err(csv.error(
+                    Some(row.line),
                     format!("wavelengths must increase strictly: {x} nm follows {prev} nm"),
                 ));
             }
         }
         for (k, &col) in wanted.iter().enumerate() {
-            ys[k].push(number(col, "value")?);
+            ys[k].push(csv.number(row, col)?);
         }
         x_nm.push(x);
     }
     if x_nm.len() < 2 {
-        return Err(err(
+        return Err(csv.error(
             None,
             format!("needs at least 2 data rows, found {}", x_nm.len()),
         ));

@@ -622,40 +622,14 @@ fn water(ctx: &Ctx, w: &WaterFile, domain: &Domain) -> Result<(WaterModel, Phase
 /// A constituent grid CSV: header `x_m,y_m,depth_m,chl,cdom_440,nap_440`,
 /// one row per node of a full regular grid, in any order.
 fn read_grid(path: &Path) -> Result<ConstituentGrid> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-    let bad = |line: usize, what: String| Error::Scene {
-        path: path.to_path_buf(),
-        line,
-        key: "water.grid".into(),
-        what,
-    };
+    let csv = crate::csv::read(path, "water.grid")?;
+    csv.expect_header(&["x_m", "y_m", "depth_m", "chl", "cdom_440", "nap_440"])?;
+    let bad = |line: Option<usize>, what: String| csv.error(line, what);
     let mut rows: Vec<[f64; 6]> = Vec::new();
-    let mut header_seen = false;
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        if !header_seen {
-            header_seen = true;
-            if line.replace(' ', "") != "x_m,y_m,depth_m,chl,cdom_440,nap_440" {
-                return Err(bad(
-                    i + 1,
-                    "header must be x_m,y_m,depth_m,chl,cdom_440,nap_440".into(),
-                ));
-            }
-            continue;
-        }
-        let v: Vec<f64> = line
-            .split(',')
-            .map(|s| s.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| bad(i + 1, format!("'{line}' is not six numbers")))?;
-        if v.len() != 6 || !v.iter().all(|x| x.is_finite()) || v[3..].iter().any(|&x| x < 0.0) {
-            return Err(bad(
-                i + 1,
-                format!("'{line}' needs six finite numbers, concentrations >= 0"),
-            ));
+    for row in &csv.rows {
+        let v = csv.numbers(row)?;
+        if v[3..].iter().any(|&x| x < 0.0) {
+            return Err(bad(Some(row.line), "concentrations must be >= 0".into()));
         }
         rows.push([v[0], v[1], v[2], v[3], v[4], v[5]]);
     }
@@ -668,7 +642,7 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
     let (xs, ys, ds) = (axis(0), axis(1), axis(2));
     if rows.is_empty() || xs.len() * ys.len() * ds.len() != rows.len() {
         return Err(bad(
-            1,
+            None,
             format!(
                 "{} rows do not form a full {}x{}x{} grid",
                 rows.len(),
@@ -686,7 +660,7 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
         let slot = &mut values[i + xs.len() * (j + ys.len() * k)];
         if slot.is_some() {
             return Err(bad(
-                1,
+                None,
                 format!("node ({}, {}, {}) appears twice", r[0], r[1], r[2]),
             ));
         }

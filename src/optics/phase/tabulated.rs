@@ -13,6 +13,7 @@ use std::sync::{Arc, OnceLock};
 use super::{solve_increasing, S2_MIN, TWO_PI};
 use crate::error::{Error, Result};
 
+const PETZOLD_FILE: &str = "petzold_avg_particle_mobley1993.csv";
 const PETZOLD_CSV: &str = include_str!("../../../data/petzold_avg_particle_mobley1993.csv");
 /// Below this angle (deg) the paper replaces the table by a power law.
 const PETZOLD_POWER_LAW_BELOW_DEG: f64 = 0.12589;
@@ -117,31 +118,12 @@ impl TabulatedPhase {
 /// law replaces the table there.
 fn parse_petzold(text: &str) -> Result<TabulatedPhase> {
     const FIELD: &str = "petzold table";
-    let mut column = None;
+    let csv = crate::csv::parse(text, std::path::Path::new(PETZOLD_FILE), FIELD)?;
+    let col = csv.column(PETZOLD_COLUMN)?;
     let (mut angles, mut values) = (Vec::new(), Vec::new());
-    for (line_index, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let Some(col) = column else {
-            column = cells.iter().position(|&c| c == PETZOLD_COLUMN);
-            if column.is_none() {
-                return Err(Error::invalid(
-                    FIELD,
-                    format!("header has no {PETZOLD_COLUMN} column"),
-                ));
-            }
-            continue;
-        };
-        let number = |cell: Option<&&str>| {
-            cell.and_then(|c| c.parse::<f64>().ok()).ok_or_else(|| {
-                Error::invalid(FIELD, format!("line {}: bad number", line_index + 1))
-            })
-        };
-        let angle = number(cells.first())?;
-        let value = number(cells.get(col))?;
+    for row in &csv.rows {
+        let angle = csv.number(row, 0)?;
+        let value = csv.number(row, col)?;
         if angle >= PETZOLD_POWER_LAW_BELOW_DEG {
             angles.push(angle);
             values.push(value);
