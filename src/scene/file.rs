@@ -1,8 +1,12 @@
 //! The scene file as written: TOML deserialised by serde, every table
 //! closed to unknown keys. `scene::Scene::parse` turns it into a validated
-//! scene; this module only describes the syntax.
+//! scene; this module only describes the syntax. Every choice among names is
+//! an enum, so a misspelt value is refused by the parser with the allowed
+//! names listed. Spectra and reflectances stay strings: each is a built-in
+//! name or the path of a CSV file.
 
-use crate::estimate::{BoundaryMode, SpectralMode};
+use crate::geometry::Axis;
+use crate::scene::settings::{BoundaryMode, SpectralMode};
 use serde::Deserialize;
 
 #[derive(Debug, Deserialize)]
@@ -36,7 +40,7 @@ pub struct SceneFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorFile {
-    pub kind: Option<String>,
+    pub kind: Option<SensorKindName>,
     pub pixels: Option<[usize; 2]>,
     pub gsd_m: Option<f64>,
     pub samples_per_pixel: Option<u32>,
@@ -79,6 +83,68 @@ pub struct EstimateFile {
     pub boundary_grid_m: Option<f64>,
 }
 
+/// `[spectral] out_of_range`: what to do with a band centre outside a data
+/// table's range.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OutOfRange {
+    /// Refuse the scene (the default).
+    #[default]
+    Error,
+    /// Use the table's nearest value.
+    Clamp,
+}
+
+/// `[surface] kind`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SurfaceKind {
+    #[default]
+    Flat,
+    CoxMunk,
+}
+
+/// `[domain] edges`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Edges {
+    /// Photons leaving one side come back on the other (the default).
+    #[default]
+    Periodic,
+    /// Photons leaving the domain are lost.
+    Open,
+}
+
+/// `[water] phase.kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PhaseKind {
+    FournierForand,
+    Petzold,
+    Rayleigh,
+    Isotropic,
+    HenyeyGreenstein,
+    Table,
+}
+
+/// `[[target]] kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TargetKind {
+    Box,
+    Panel,
+    Mesh,
+}
+
+/// `[sensor] kind`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SensorKindName {
+    #[default]
+    Orthographic,
+    Pinhole,
+}
+
 fn default_name() -> String {
     "scene".into()
 }
@@ -96,7 +162,7 @@ pub struct SpectralFile {
     pub fwhm_nm: Option<Vec<f64>>,
     /// "error" (default) or "clamp": what to do with a band whose centre lies
     /// outside a data table's range.
-    pub out_of_range: Option<String>,
+    pub out_of_range: Option<OutOfRange>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -119,7 +185,7 @@ pub struct SkyFile {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceFile {
-    pub kind: Option<String>,
+    pub kind: Option<SurfaceKind>,
     pub wind_speed: Option<f64>,
     pub refractive_index: Option<f64>,
 }
@@ -128,7 +194,7 @@ pub struct SurfaceFile {
 #[serde(deny_unknown_fields)]
 pub struct DomainFile {
     pub size_m: [f64; 2],
-    pub edges: Option<String>,
+    pub edges: Option<Edges>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -162,7 +228,7 @@ pub struct IopFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PhaseFile {
-    pub kind: String,
+    pub kind: PhaseKind,
     pub bb_ratio: Option<f64>,
     pub q: Option<f64>,
     pub g: Option<f64>,
@@ -172,7 +238,7 @@ pub struct PhaseFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GradientFile {
-    pub axis: String,
+    pub axis: Axis,
     pub chl: Option<[f64; 2]>,
     pub cdom_440: Option<[f64; 2]>,
     pub nap_440: Option<[f64; 2]>,
@@ -205,7 +271,7 @@ pub struct BottomFile {
 pub struct SlopeFile {
     pub from_depth_m: f64,
     pub to_depth_m: f64,
-    pub axis: Option<String>,
+    pub axis: Option<Axis>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -227,7 +293,7 @@ pub enum Reflectance {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TargetFile {
-    pub kind: String,
+    pub kind: TargetKind,
     pub center_m: [f64; 3],
     pub size_m: Option<Vec<f64>>,
     pub file: Option<String>,

@@ -1,7 +1,7 @@
 //! Line numbers for scene errors: where a key sits in the TOML text.
 
 use std::path::{Path, PathBuf};
-use toml::de::{DeTable, DeValue};
+use toml::de::{DeArray, DeTable, DeValue};
 
 /// One step of a key path: a table key or an array index.
 #[derive(Clone, Copy, Debug)]
@@ -60,6 +60,63 @@ impl<'t> Source<'t> {
             };
         }
         best
+    }
+
+    /// The `water.layer[1].chl` style name of the deepest key whose value
+    /// spans byte `at`; `None` if the text does not parse as TOML or no key
+    /// spans it.
+    pub fn key_at(&self, at: usize) -> Option<String> {
+        let root = DeTable::parse(self.text).ok()?;
+        let mut name = String::new();
+        let mut table: Option<&DeTable> = Some(root.get_ref());
+        let mut array: Option<&DeArray> = None;
+        loop {
+            // A table opened by a `[header]` spans only its header, so where
+            // no value spans `at`, the container whose key last precedes it
+            // holds it.
+            let next = if let Some(t) = table.take() {
+                t.iter()
+                    .find(|(_, v)| v.span().contains(&at))
+                    .or_else(|| {
+                        t.iter()
+                            .filter(|(k, v)| {
+                                k.span().start <= at
+                                    && matches!(v.get_ref(), DeValue::Table(_) | DeValue::Array(_))
+                            })
+                            .max_by_key(|(k, _)| k.span().start)
+                    })
+                    .map(|(k, v)| {
+                        if !name.is_empty() {
+                            name.push('.');
+                        }
+                        name.push_str(k.get_ref());
+                        v
+                    })
+            } else if let Some(a) = array.take() {
+                a.iter()
+                    .enumerate()
+                    .find(|(_, v)| v.span().contains(&at))
+                    .or_else(|| {
+                        a.iter()
+                            .enumerate()
+                            .filter(|(_, v)| v.span().start <= at)
+                            .max_by_key(|(_, v)| v.span().start)
+                    })
+                    .map(|(i, v)| {
+                        name.push_str(&format!("[{i}]"));
+                        v
+                    })
+            } else {
+                None
+            };
+            let Some(v) = next else { break };
+            match v.get_ref() {
+                DeValue::Table(t) => table = Some(t),
+                DeValue::Array(a) => array = Some(a),
+                _ => break,
+            }
+        }
+        (!name.is_empty()).then_some(name)
     }
 
     /// An error about the value at `steps`.

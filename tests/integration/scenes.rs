@@ -73,6 +73,110 @@ fn bad_scenes_name_the_key_and_line() {
     assert!(parse_err(&text).starts_with(&format!("bad.toml:{want}:")));
 }
 
+/// Every choice among names is typed: a misspelt value is refused naming the
+/// file, the line of the value, the key, and the allowed values. Type errors
+/// name their key too.
+#[test]
+fn misspelt_choices_list_the_allowed_values() {
+    let m = MINIMAL_SCENE;
+    let target =
+        "[[target]]\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 0.5\n";
+    let cases: Vec<(String, &str, &str, &[&str])> = vec![
+        (
+            m.replace("bands = 4", "bands = 4\nout_of_range = \"wrap\""),
+            "wrap",
+            "spectral.out_of_range",
+            &["error", "clamp"],
+        ),
+        (
+            format!("{m}[surface]\nkind = \"wavy\"\n"),
+            "wavy",
+            "surface.kind",
+            &["flat", "cox-munk"],
+        ),
+        (
+            m.replace(
+                "size_m = [10.0, 10.0]",
+                "size_m = [10.0, 10.0]\nedges = \"closed\"",
+            ),
+            "closed",
+            "domain.edges",
+            &["periodic", "open"],
+        ),
+        (
+            m.replace(
+                "iop = { a = 0.1, b = 0.2 }",
+                "iop = { a = 0.1, b = 0.2 }\nphase = { kind = \"mie\" }",
+            ),
+            "mie",
+            "water.phase.kind",
+            &["fournier-forand", "petzold", "henyey-greenstein", "table"],
+        ),
+        (
+            m.replace(
+                "iop = { a = 0.1, b = 0.2 }",
+                "chl = 1.0\ngradient = { axis = \"z\", chl = [1.0, 2.0] }",
+            ),
+            "axis = \"z\"",
+            "water.gradient.axis",
+            &["x", "y"],
+        ),
+        (
+            format!(
+                "{m}[bottom]\nslope = {{ from_depth_m = 1.0, to_depth_m = 5.0, axis = \"q\" }}\n"
+            ),
+            "axis = \"q\"",
+            "bottom.slope.axis",
+            &["x", "y"],
+        ),
+        (
+            format!(
+                "{m}{}",
+                target.replace("[[target]]", "[[target]]\nkind = \"sphere\"")
+            ),
+            "sphere",
+            "target[0].kind",
+            &["box", "panel", "mesh"],
+        ),
+        (
+            format!("{m}[sensor]\nkind = \"fisheye\"\n"),
+            "fisheye",
+            "sensor.kind",
+            &["orthographic", "pinhole"],
+        ),
+        (
+            format!("{m}[estimate]\nboundary = \"cube\"\n"),
+            "cube",
+            "estimate.boundary",
+            &["none", "ellipsoid", "clipped-sphere"],
+        ),
+        (
+            format!("{m}[estimate]\nspectral = \"smart\"\n"),
+            "smart",
+            "estimate.spectral",
+            &["naive", "compensated"],
+        ),
+        (
+            m.replace("zenith_deg = 30.0", "zenith_deg = \"high\""),
+            "high",
+            "sun.zenith_deg",
+            &["invalid type"],
+        ),
+    ];
+    for (text, value, key, allowed) in cases {
+        let e = parse_err(&text);
+        let want_line = text.lines().position(|l| l.contains(value)).unwrap() + 1;
+        assert!(
+            e.starts_with(&format!("bad.toml:{want_line}: {key}: ")),
+            "want line {want_line} and key {key}: {e}"
+        );
+        for a in allowed {
+            assert!(e.contains(a), "'{a}' not in: {e}");
+        }
+        assert!(!e.contains('\n'), "{e}");
+    }
+}
+
 #[test]
 fn scene_commands() {
     let out = littoral(&["scene", "default"]);

@@ -38,8 +38,8 @@ pub(super) fn render_settings(
     }
     let vec3 = |v: [f64; 3]| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
     let kind =
-        match s.kind.as_deref() {
-            None | Some("orthographic") => {
+        match s.kind.unwrap_or_default() {
+            SensorKindName::Orthographic => {
                 let gsd = s.gsd_m.unwrap_or(
                     domain.size_m[0].min(domain.size_m[1]) / pixels[0].max(pixels[1]) as f64,
                 );
@@ -60,7 +60,7 @@ pub(super) fn render_settings(
                     center_m,
                 }
             }
-            Some("pinhole") => {
+            SensorKindName::Pinhole => {
                 let position = vec3(s.position_m.ok_or_else(|| {
                     ctx.err(&sk("position_m"), "a pinhole camera needs position_m")
                 })?);
@@ -82,12 +82,6 @@ pub(super) fn render_settings(
                     look_at,
                     fov_deg,
                 }
-            }
-            Some(o) => {
-                return Err(ctx.err(
-                    &sk("kind"),
-                    format!("'{o}': use \"orthographic\" or \"pinhole\""),
-                ))
             }
         };
     let sensor = Sensor {

@@ -1,0 +1,114 @@
+//! Validation of the light sources and the interface: `[sun]`, `[sky]`
+//! and `[surface]`.
+
+use super::*;
+
+/// The sun: position and direct normal irradiance per band.
+pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
+    let nb = ctx.bands.len();
+    if !finite_in(s.zenith_deg, 0.0, 89.0) {
+        return Err(ctx.err(
+            &[K("sun"), K("zenith_deg")],
+            "must be between 0 and 89 degrees",
+        ));
+    }
+    if !s.azimuth_deg.is_finite() {
+        return Err(ctx.err(&[K("sun"), K("azimuth_deg")], "must be a finite angle"));
+    }
+    let key = |k| [K("sun"), K(k)];
+    let sun_irr = match (&s.spectrum, s.irradiance) {
+        (Some(name), None) => {
+            let solar = |which| ctx.per_band(tables::solar(which), &key("spectrum"));
+            match name.as_str() {
+                "astm-g173-direct" => solar(SolarSpectrum::DirectCircumsolar)?,
+                "astm-g173-extraterrestrial" => solar(SolarSpectrum::Extraterrestrial)?,
+                csv if csv.ends_with(".csv") => {
+                    let t = Table::from_csv_file(&ctx.path(csv), "sun.spectrum")?;
+                    ctx.per_band(&t, &key("spectrum"))?
+                }
+                other => {
+                    let what = format!(
+                        "'{other}': use \"astm-g173-direct\", \"astm-g173-extraterrestrial\" or a .csv file"
+                    );
+                    return Err(ctx.err(&key("spectrum"), what));
+                }
+            }
+        }
+        (None, Some(e)) if finite_in(e, 0.0, f64::MAX) => vec![e; nb],
+        (None, Some(_)) => return Err(ctx.err(&key("irradiance"), "must be >= 0")),
+        (None, None) => return Err(ctx.err(&[K("sun")], "give spectrum or irradiance")),
+        (Some(_), Some(_)) => {
+            let what = "give spectrum or irradiance, not both";
+            return Err(ctx.err(&key("irradiance"), what));
+        }
+    };
+    let (zen, az) = (s.zenith_deg.to_radians(), s.azimuth_deg.to_radians());
+    let toward_sun = Vec3::new(
+        (zen.sin() * az.cos()) as f32,
+        (zen.sin() * az.sin()) as f32,
+        zen.cos() as f32,
+    );
+    let sun = Sun {
+        zenith_rad: zen,
+        azimuth_rad: az,
+        direction: -toward_sun.normalize(),
+        irradiance: sun_irr,
+    };
+    Ok(sun)
+}
+
+/// The sky: horizontal diffuse irradiance per band.
+pub(super) fn sky(ctx: &Ctx, s: &SkyFile) -> Result<Sky> {
+    let nb = ctx.bands.len();
+    let key = |k| [K("sky"), K(k)];
+    let sky_irr = match (&s.spectrum, s.radiance) {
+        (None, None) => vec![0.0; nb],
+        (Some(n), None) if n == "none" => vec![0.0; nb],
+        (Some(n), None) if n == "astm-g173-diffuse" => {
+            ctx.per_band(tables::sky_diffuse_irradiance(), &key("spectrum"))?
+        }
+        (Some(n), None) if n.ends_with(".csv") => {
+            let t = Table::from_csv_file(&ctx.path(n), "sky.spectrum")?;
+            ctx.per_band(&t, &key("spectrum"))?
+        }
+        (Some(n), None) => {
+            let what = format!(
+                "'{n}': use \"none\", \"astm-g173-diffuse\" or a .csv file of horizontal irradiance"
+            );
+            return Err(ctx.err(&key("spectrum"), what));
+        }
+        (None, Some(l)) if finite_in(l, 0.0, f64::MAX) => vec![std::f64::consts::PI * l; nb],
+        (None, Some(_)) => return Err(ctx.err(&key("radiance"), "must be >= 0")),
+        (Some(_), Some(_)) => {
+            let what = "give spectrum or radiance, not both";
+            return Err(ctx.err(&key("radiance"), what));
+        }
+    };
+    let sky = Sky {
+        irradiance: sky_irr,
+    };
+    Ok(sky)
+}
+
+/// The sea surface: refractive index and roughness.
+pub(super) fn surface(ctx: &Ctx, s: &SurfaceFile) -> Result<SeaSurface> {
+    let n_water = s.refractive_index.unwrap_or(1.34);
+    if !finite_in(n_water, 1.0, 2.0) {
+        return Err(ctx.err(
+            &[K("surface"), K("refractive_index")],
+            "must be between 1 and 2",
+        ));
+    }
+    let wind = s.wind_speed.unwrap_or(0.0);
+    if !finite_in(wind, 0.0, 30.0) {
+        return Err(ctx.err(
+            &[K("surface"), K("wind_speed")],
+            "must be between 0 and 30 m/s",
+        ));
+    }
+    let surface = match s.kind.unwrap_or_default() {
+        SurfaceKind::Flat => SeaSurface::flat(n_water),
+        SurfaceKind::CoxMunk => SeaSurface::cox_munk(n_water, wind),
+    };
+    Ok(surface)
+}

@@ -1,0 +1,252 @@
+//! Validation of the water column: `[water]` (explicit IOPs or
+//! constituents, their gradient, layers or grid) and the particle phase
+//! function.
+
+use super::*;
+
+fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
+    let Some(p) = p else {
+        return PhaseFunction::fournier_forand(0.0183)
+            .map_err(|e| ctx.err(&[K("water")], e.to_string()));
+    };
+    let pk = |k| [K("water"), K("phase"), K(k)];
+    let wrap = |k, r: Result<PhaseFunction>| r.map_err(|e| ctx.err(&pk(k), e.to_string()));
+    match p.kind {
+        PhaseKind::FournierForand => wrap(
+            "bb_ratio",
+            PhaseFunction::fournier_forand(p.bb_ratio.unwrap_or(0.0183)),
+        ),
+        PhaseKind::Petzold => Ok(PhaseFunction::petzold()),
+        PhaseKind::Rayleigh => wrap(
+            "q",
+            PhaseFunction::rayleigh(p.q.unwrap_or(crate::optics::phase::RAYLEIGH_Q_WATER)),
+        ),
+        PhaseKind::Isotropic => Ok(PhaseFunction::isotropic()),
+        PhaseKind::HenyeyGreenstein => {
+            let g =
+                p.g.ok_or_else(|| ctx.err(&pk("g"), "henyey-greenstein needs g"))?;
+            wrap("g", PhaseFunction::henyey_greenstein(g))
+        }
+        PhaseKind::Table => {
+            let file = p.file.as_ref().ok_or_else(|| {
+                ctx.err(&pk("file"), "a table needs file = \"angle_deg,value CSV\"")
+            })?;
+            let t = Table::from_csv_file(&ctx.path(file), "water.phase.file")?;
+            let (angles, values) = (t.x_nm(), t.y());
+            wrap(
+                "file",
+                PhaseFunction::tabulated(angles, values, "water.phase.file"),
+            )
+        }
+    }
+}
+
+pub(super) fn water(
+    ctx: &Ctx,
+    w: &WaterFile,
+    domain: &Domain,
+) -> Result<(WaterModel, PhaseFunction)> {
+    let wk = |k| [K("water"), K(k)];
+    let particle_phase = phase(ctx, w.phase.as_ref())?;
+    if let Some(iop) = &w.iop {
+        let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550]
+            .iter()
+            .any(Option::is_some)
+            || w.gradient.is_some()
+            || !w.layer.is_empty()
+            || w.grid.is_some();
+        if constituents {
+            let what = "explicit IOPs exclude constituents (chl, cdom_440, nap_440, bp_550, gradient, layer, grid)";
+            return Err(ctx.err(&wk("iop"), what));
+        }
+        if !finite_in(iop.a, 0.0, 1e4) || iop.a <= 0.0 && iop.b <= 0.0 {
+            return Err(ctx.err(
+                &[K("water"), K("iop"), K("a")],
+                "must be >= 0 with a + b > 0 (1/m)",
+            ));
+        }
+        if !finite_in(iop.b, 0.0, 1e4) {
+            return Err(ctx.err(&[K("water"), K("iop"), K("b")], "must be >= 0 (1/m)"));
+        }
+        return Ok((WaterModel::Explicit { a: iop.a, b: iop.b }, particle_phase));
+    }
+    for (k, v) in [
+        ("chl", w.chl),
+        ("cdom_440", w.cdom_440),
+        ("nap_440", w.nap_440),
+        ("bp_550", w.bp_550),
+    ] {
+        if let Some(v) = v {
+            if !finite_in(v, 0.0, 1e4) {
+                return Err(ctx.err(&wk(k), "must be >= 0"));
+            }
+        }
+    }
+    for (k, v) in [
+        ("cdom_slope", w.cdom_slope),
+        ("nap_slope", w.nap_slope),
+        ("bp_slope", w.bp_slope),
+    ] {
+        if let Some(v) = v {
+            if !finite_in(v, 0.0, 10.0) {
+                return Err(ctx.err(&wk(k), "must be between 0 and 10"));
+            }
+        }
+    }
+    let base = Constituents {
+        chl: w.chl.unwrap_or(0.0),
+        cdom_440: w.cdom_440.unwrap_or(0.0),
+        nap_440: w.nap_440.unwrap_or(0.0),
+    };
+    let field = match (&w.gradient, w.layer.is_empty(), &w.grid) {
+        (None, true, None) => ConstituentField::Uniform(base),
+        (Some(g), true, None) => {
+            let gk = |k| [K("water"), K("gradient"), K(k)];
+            let axis = match g.axis {
+                Axis::X => 0,
+                Axis::Y => 1,
+            };
+            let pair = |k: &'static str, v: Option<[f64; 2]>, d: f64| -> Result<[f64; 2]> {
+                let v = v.unwrap_or([d, d]);
+                if v.iter().all(|&x| finite_in(x, 0.0, 1e4)) {
+                    Ok(v)
+                } else {
+                    Err(ctx.err(&gk(k), "values must be >= 0"))
+                }
+            };
+            let chl = pair("chl", g.chl, base.chl)?;
+            let cdom = pair("cdom_440", g.cdom_440, base.cdom_440)?;
+            let nap = pair("nap_440", g.nap_440, base.nap_440)?;
+            ConstituentField::Gradient {
+                axis,
+                size_m: domain.size_m[axis],
+                from: Constituents {
+                    chl: chl[0],
+                    cdom_440: cdom[0],
+                    nap_440: nap[0],
+                },
+                to: Constituents {
+                    chl: chl[1],
+                    cdom_440: cdom[1],
+                    nap_440: nap[1],
+                },
+            }
+        }
+        (None, false, None) => {
+            let mut layers = Vec::new();
+            for (i, l) in w.layer.iter().enumerate() {
+                let lk = |k| [K("water"), K("layer"), I(i), K(k)];
+                if !(finite_in(l.top_m, 0.0, 1e5)
+                    && finite_in(l.bottom_m, 0.0, 1e5)
+                    && l.bottom_m > l.top_m)
+                {
+                    return Err(ctx.err(&lk("bottom_m"), "need 0 <= top_m < bottom_m (m)"));
+                }
+                let c = Constituents {
+                    chl: l.chl.unwrap_or(base.chl),
+                    cdom_440: l.cdom_440.unwrap_or(base.cdom_440),
+                    nap_440: l.nap_440.unwrap_or(base.nap_440),
+                };
+                if ![c.chl, c.cdom_440, c.nap_440]
+                    .iter()
+                    .all(|&v| finite_in(v, 0.0, 1e4))
+                {
+                    return Err(ctx.err(&lk("chl"), "concentrations must be >= 0"));
+                }
+                layers.push((l.top_m, l.bottom_m, c));
+            }
+            ConstituentField::Layers { base, layers }
+        }
+        (None, true, Some(g)) => ConstituentField::Grid(read_grid(&ctx.path(g))?),
+        _ => {
+            return Err(ctx.err(
+                &[K("water")],
+                "give at most one of gradient, layer and grid",
+            ))
+        }
+    };
+    let centers: Vec<f64> = ctx.bands.centers_nm().iter().map(|&c| c as f64).collect();
+    let (a_phi_a, a_phi_e) = tables::bricaud_a_phi();
+    let s_g = w.cdom_slope.unwrap_or(0.015);
+    let s_nap = w.nap_slope.unwrap_or(0.011);
+    let n_bp = w.bp_slope.unwrap_or(1.0);
+    let spectra = BandSpectra {
+        a_w: ctx.per_band(tables::water_absorption(), &wk("chl"))?,
+        b_w: ctx.per_band(tables::seawater_scattering(), &wk("chl"))?,
+        a_phi_a: ctx.per_band(a_phi_a, &wk("chl"))?,
+        a_phi_e: ctx.per_band(a_phi_e, &wk("chl"))?,
+        cdom_shape: centers.iter().map(|l| (-s_g * (l - 440.0)).exp()).collect(),
+        nap_shape: centers
+            .iter()
+            .map(|l| (-s_nap * (l - 440.0)).exp())
+            .collect(),
+        bp_shape: centers.iter().map(|l| (550.0 / l).powf(n_bp)).collect(),
+    };
+    Ok((
+        WaterModel::Constituents {
+            spectra: Box::new(spectra),
+            field,
+            bp_550: w.bp_550,
+        },
+        particle_phase,
+    ))
+}
+
+/// A constituent grid CSV: header `x_m,y_m,depth_m,chl,cdom_440,nap_440`,
+/// one row per node of a full regular grid, in any order.
+fn read_grid(path: &Path) -> Result<ConstituentGrid> {
+    let csv = crate::csv::read(path, "water.grid")?;
+    csv.expect_header(&["x_m", "y_m", "depth_m", "chl", "cdom_440", "nap_440"])?;
+    let bad = |line: Option<usize>, what: String| csv.error(line, what);
+    let mut rows: Vec<[f64; 6]> = Vec::new();
+    for row in &csv.rows {
+        let v = csv.numbers(row)?;
+        if v[3..].iter().any(|&x| x < 0.0) {
+            return Err(bad(Some(row.line), "concentrations must be >= 0".into()));
+        }
+        rows.push([v[0], v[1], v[2], v[3], v[4], v[5]]);
+    }
+    let axis = |k: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    };
+    let (xs, ys, ds) = (axis(0), axis(1), axis(2));
+    if rows.is_empty() || xs.len() * ys.len() * ds.len() != rows.len() {
+        return Err(bad(
+            None,
+            format!(
+                "{} rows do not form a full {}x{}x{} grid",
+                rows.len(),
+                xs.len(),
+                ys.len(),
+                ds.len()
+            ),
+        ));
+    }
+    let mut values = vec![None; rows.len()];
+    for r in &rows {
+        let i = xs.partition_point(|&x| x < r[0]);
+        let j = ys.partition_point(|&y| y < r[1]);
+        let k = ds.partition_point(|&d| d < r[2]);
+        let slot = &mut values[i + xs.len() * (j + ys.len() * k)];
+        if slot.is_some() {
+            return Err(bad(
+                None,
+                format!("node ({}, {}, {}) appears twice", r[0], r[1], r[2]),
+            ));
+        }
+        *slot = Some(Constituents {
+            chl: r[3],
+            cdom_440: r[4],
+            nap_440: r[5],
+        });
+    }
+    Ok(ConstituentGrid {
+        xs,
+        ys,
+        depths: ds,
+        values: values.into_iter().map(|v| v.unwrap_or_default()).collect(),
+    })
+}
