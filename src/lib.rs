@@ -1,15 +1,15 @@
 //! littoral — out-of-core spectral photon mapping for coastal waters.
 //!
 //! The modules, in data-flow order:
-//! - [`scene`]: the scene file, validated ([`scene::Scene`]).
+//! - [`scene`]: the scene file, validated ([`scene::Scene`]), its
+//!   `[estimate]` settings and defaults ([`scene::EstimateSettings`]) and its
+//!   emission inputs for map provenance.
 //! - [`optics`]: embedded spectral tables averaged over the band grid
 //!   ([`optics::tables::Table`]), IOPs, phase functions with exact samplers
 //!   ([`optics::phase::PhaseFunction`]), the sea surface.
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
-//! - [`emit`]: photon tracing into the store, tallies, energy ([`emit::Emitter`]).
-//! - [`spectral`]: the band grid every photon indexes ([`BandGrid`]).
-//! - [`photon`]: the stored photon and its quantised encodings ([`Photon`]).
-//! - [`synth`]: synthetic photon sources for tests and benchmarks ([`synth::SynthSource`]).
+//! - [`emit`]: photon tracing into the store, tallies, energy, the
+//!   emission report ([`emit::Emitter`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader —
 //!   and its read side: the tile cache ([`store::cache::TileCache`]) and exact
 //!   kNN and radius queries behind one interface ([`store::PhotonQuery`]),
@@ -17,14 +17,30 @@
 //!   ([`store::InMemoryMap`]).
 //! - [`estimate`]: radiance from photons, with boundary- and spectral-bias
 //!   compensation and the forward peak as a delta ([`estimate::Estimator`]).
-//! - [`render`]: sensor, ray marching and radiometers ([`render::render`],
-//!   [`render::march::RayMarcher`]).
-//! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR) and its quicklook (PNG).
+//! - [`render`]: sensor rays, the ray marcher and radiometers
+//!   ([`render::render`], [`render::march::RayMarcher`]).
+//! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR) and its
+//!   quicklook (PNG).
+//! - [`job`]: the whole pipeline as one call — scene, map (reused by
+//!   provenance or emitted), render, outputs — with the typed report and the
+//!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]).
 //!
-//! Support: [`bounds`] (axis-aligned boxes), [`error`] (typed errors naming file, tile and field), [`rng`]
+//! Data types every stage shares: [`spectral`] (the band grid every photon
+//! indexes, [`BandGrid`]), [`photon`] (the stored photon and its quantised
+//! encodings, [`Photon`]), [`bounds`] (axis-aligned boxes), [`provenance`]
+//! (what a map was made from).
+//!
+//! Support: [`error`] (typed errors naming file, tile and field), [`csv`]
+//! (the one reader of numeric tables), [`json`] (reports read back),
+//! [`morton`] (Z-order codes), [`parallel`] (worker pools), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
 //! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory),
-//! [`output`] (files written whole or not at all).
+//! [`output`] (files written whole or not at all, positioned I/O), [`synth`]
+//! (synthetic photon sources for tests and benchmarks), [`cli`] (what the
+//! command-line programs share).
+//!
+//! Layering: `scene`, `optics`, `geometry` and `store` import neither
+//! `estimate` nor `render`; only `job` and the programs know every stage.
 
 pub mod bounds;
 pub mod cli;

@@ -2,11 +2,11 @@
 //! bias compensations, with their defaults. The numerical behaviour of the
 //! modes lives with the estimator (`estimate::boundary`, `estimate::spectral`,
 //! `estimate::peak`); what they are called and what they default to is
-//! defined here, once, for the scene file, the command line and reports.
+//! defined here, once, for the scene file, the command line and reports:
+//! serde and clap take the names from the same kebab-case rule, and
+//! `as_str` (for messages and reports) is tested against both.
 
-use crate::error::Error;
 use std::fmt;
-use std::str::FromStr;
 
 /// Photons in the local search.
 pub const DEFAULT_K: usize = 64;
@@ -73,22 +73,6 @@ impl std::fmt::Display for BoundaryMode {
     }
 }
 
-impl FromStr for BoundaryMode {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self, Error> {
-        BoundaryMode::ALL
-            .into_iter()
-            .find(|m| m.as_str() == s)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "boundary mode",
-                    format!("'{s}': use \"none\", \"ellipsoid\" or \"clipped-sphere\""),
-                )
-            })
-    }
-}
-
 /// How per-band radiance is formed from band-tagged photons. Named in scene
 /// files and on the command line as `naive` or `compensated`.
 #[derive(
@@ -129,23 +113,6 @@ impl SpectralMode {
 impl fmt::Display for SpectralMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())
-    }
-}
-
-impl FromStr for SpectralMode {
-    type Err = Error;
-
-    /// Parses `naive` or `compensated`, ignoring ASCII case.
-    fn from_str(s: &str) -> Result<Self, Error> {
-        SpectralMode::ALL
-            .into_iter()
-            .find(|m| s.eq_ignore_ascii_case(m.as_str()))
-            .ok_or_else(|| {
-                Error::invalid(
-                    "spectral mode",
-                    format!("unknown mode {s:?}; expected \"naive\" or \"compensated\""),
-                )
-            })
     }
 }
 

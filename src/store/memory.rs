@@ -134,13 +134,9 @@ impl PhotonQuery for InMemoryMap {
         out: &mut Vec<Neighbour>,
     ) -> Result<()> {
         out.clear();
-        let (k, limit_sq) = match search {
-            Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
-            Search::Radius { radius } => (usize::MAX, radius * radius),
-        };
-        if k == 0 || limit_sq.is_nan() || limit_sq < 0.0 {
+        let Some((k, limit_sq)) = search.limits() else {
             return Ok(());
-        }
+        };
         let mut found = Vec::new();
         for (l, data) in self.layers.iter().enumerate() {
             if layer.is_none_or(|want| want as usize == l) {

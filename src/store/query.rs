@@ -153,6 +153,19 @@ pub(super) fn search_tree(
     }
 }
 
+impl Search {
+    /// The most photons to return (`usize::MAX` for a radius search) and
+    /// the squared distance they may lie at; `None` when the search can
+    /// find nothing (k = 0, a negative or NaN radius).
+    pub fn limits(self) -> Option<(usize, f32)> {
+        let (k, limit_sq) = match self {
+            Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
+            Search::Radius { radius } => (usize::MAX, radius * radius),
+        };
+        (k > 0 && limit_sq >= 0.0).then_some((k, limit_sq))
+    }
+}
+
 /// Per-thread query scratch: candidate tiles, and results with directions
 /// still packed.
 type QueryScratch = (Vec<(f32, u32)>, Vec<(f32, PackedPhoton)>);
@@ -197,13 +210,9 @@ impl PhotonMap {
         out: &mut Vec<Neighbour>,
     ) -> Result<()> {
         out.clear();
-        let (k, limit_sq) = match search {
-            Search::Nearest { k, max_radius } => (k, max_radius.map_or(f32::INFINITY, |r| r * r)),
-            Search::Radius { radius } => (usize::MAX, radius * radius),
-        };
-        if k == 0 || limit_sq.is_nan() || limit_sq < 0.0 {
+        let Some((k, limit_sq)) = search.limits() else {
             return Ok(());
-        }
+        };
         CANDIDATES.with(|c| {
             let (candidates, packed) = &mut *c.borrow_mut();
             packed.clear();

@@ -7,7 +7,7 @@ use littoral::job::report::RunReport;
 use littoral::job::{EmitJob, MemoryBudget, RenderJob};
 use littoral::progress::Silent;
 use littoral::scene::{Overrides, Scene};
-use littoral::store::MapFile;
+use littoral::store::{MapFile, PhotonMap};
 use std::path::{Path, PathBuf};
 
 /// A small shallow scene whose floor reflectance is a CSV file beside it.
@@ -191,11 +191,19 @@ fn emit_job_then_render_reuses() {
 }
 
 /// The JSON report is the typed report: it parses back into `RunReport`
-/// and equals what the job returned; its shares add up to the budget.
+/// and equals what the job returned; its shares add up to the budget; the
+/// radiometers read alone from the kept map equal the render's.
 #[test]
 fn typed_report_round_trips() {
     let s = Setup::new();
-    let r = s.render(&s.scene(&scene_text("k = 50", "")));
+    let scene = s.scene(&scene_text("k = 50", ""));
+    let r = s.render(&scene);
+    // Radiometers alone, from the kept map, read what the render reported.
+    let map = PhotonMap::new(MapFile::open(s.map()).unwrap(), 64 * MIB).unwrap();
+    assert_eq!(
+        littoral::render::radiometers(&scene, &map).unwrap(),
+        r.radiometers
+    );
     let text = std::fs::read_to_string(&r.outputs.json).unwrap();
     let back: RunReport = serde_json::from_str(&text).unwrap();
     assert_eq!(back, r);

@@ -14,8 +14,28 @@
 //! metadata) are inside the budget (`WRITER_FIXED_BYTES`).
 
 use crate::common::*;
+use littoral::job::report::{EmitReport, RunReport};
+use std::path::Path;
 
 const OVERHEAD: u64 = 16 * MIB;
+
+/// The typed report a successful run wrote to `path`.
+fn report_of<T: serde::de::DeserializeOwned>(run: &std::process::Output, path: &Path) -> T {
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+fn assert_peak_within_64mib(stage: &str, peak: u64) {
+    eprintln!("{stage}: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
+    assert!(
+        peak > MIB && peak <= 64 * MIB + OVERHEAD,
+        "{stage}: peak {peak}"
+    );
+}
 
 #[test]
 fn synth_20m_photons_within_64mib() {
@@ -79,15 +99,8 @@ fn emit_builtin_scene_within_64mib() {
         "64MiB",
         "--quiet",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    let peak = r["peak_rss_bytes"].as_u64().unwrap();
-    eprintln!("emit: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
-    assert!(peak > MIB && peak <= 64 * MIB + OVERHEAD, "peak {peak}");
+    let r: EmitReport = report_of(&run, &report);
+    assert_peak_within_64mib("emit", r.peak_rss_bytes);
 }
 
 /// A reduced render of the built-in scene (300 k photons, 64 x 64 pixels,
@@ -113,15 +126,7 @@ fn render_builtin_scene_within_64mib() {
         "64MiB",
         "--quiet",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("coastal.json")).unwrap()).unwrap();
-    let peak = r["peak_rss_bytes"].as_u64().unwrap();
-    eprintln!("render: peak RSS {:.1} MiB", peak as f64 / MIB as f64);
-    assert!(peak > MIB && peak <= 64 * MIB + OVERHEAD, "peak {peak}");
-    assert!(r["cache"]["peak_resident_bytes"].as_u64().unwrap() <= 64 * MIB);
+    let r: RunReport = report_of(&run, &out.join("coastal.json"));
+    assert_peak_within_64mib("render", r.peak_rss_bytes);
+    assert!(r.cache.peak_resident_bytes <= r.memory.tile_cache_bytes);
 }

@@ -5,8 +5,11 @@
 use crate::common::*;
 use glam::Vec3;
 use littoral::bounds::Aabb;
-use littoral::estimate::estimator::{Estimator, Scratch};
+use littoral::estimate::{Estimator, Scratch};
+use littoral::job::report::RunReport;
+use littoral::job::{MemoryBudget, RenderJob};
 use littoral::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
+use littoral::progress::Silent;
 use littoral::rng::Pcg32;
 use littoral::scene::{BoundaryMode, Overrides, Scene};
 use littoral::store::InMemoryMap;
@@ -343,6 +346,28 @@ fn render_json(dir: &Path, scene: &str, extra: &[&str]) -> serde_json::Value {
     name.unwrap()
 }
 
+/// Render `scene` through the library (`RenderJob`) into `dir/out` with
+/// `photons` photons on `threads` threads; the typed report.
+fn render_report(dir: &Path, scene: &str, photons: u64, threads: usize) -> RunReport {
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    let o = Overrides {
+        photons: Some(photons),
+        ..Overrides::default()
+    };
+    let scene = Scene::load(&path, &o).unwrap();
+    RenderJob {
+        scene: &scene,
+        out_dir: dir.join("out"),
+        map: None,
+        threads,
+        budget: MemoryBudget::new(512 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&Silent)
+    .unwrap()
+}
+
 /// Mean and standard error of the mean.
 fn mean_se(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
@@ -380,42 +405,34 @@ fn radiometer_grid(depths: &[f64], view: &str) -> String {
 /// Band-mean readings of the radiometers at depth number `depth_index` of
 /// [`radiometer_grid`], one per position (the bands share their photons
 /// through the spectral compensation, so each position is one sample).
-fn readings(r: &serde_json::Value, depth_index: usize, bands: usize) -> Vec<f64> {
+fn readings(r: &RunReport, depth_index: usize, bands: usize) -> Vec<f64> {
     (0..POSITIONS.len())
         .map(|i| {
-            let rd = &r["radiometers"][depth_index * POSITIONS.len() + i];
-            (0..bands)
-                .map(|b| rd["L"][b].as_f64().unwrap())
-                .sum::<f64>()
-                / bands as f64
+            let rd = &r.radiometers[depth_index * POSITIONS.len() + i];
+            rd.L[..bands].iter().sum::<f64>() / bands as f64
         })
         .collect()
 }
 
 /// Band mean of tally `key` at tally row `row`, with its standard error.
-fn tally_mean(r: &serde_json::Value, row: usize, key: &str, bands: usize) -> (f64, f64) {
+fn tally_mean(r: &RunReport, row: usize, key: &str, bands: usize) -> (f64, f64) {
+    let t = &r.emission.tally[row];
+    let (values, stderr) = match key {
+        "Lu" => (&t.Lu, &t.Lu_stderr),
+        "Ld" => (&t.Ld, &t.Ld_stderr),
+        "Ed" => (&t.Ed, &t.Ed_stderr),
+        other => panic!("no tally {other}"),
+    };
     let nb = bands as f64;
-    let mean = (0..bands)
-        .map(|b| r["tally"][row][key][b].as_f64().unwrap())
-        .sum::<f64>()
-        / nb;
-    let se = (0..bands)
-        .map(|b| {
-            r["tally"][row][format!("{key}_stderr")][b]
-                .as_f64()
-                .unwrap()
-                .powi(2)
-        })
-        .sum::<f64>()
-        .sqrt()
-        / nb;
+    let mean = values[..bands].iter().sum::<f64>() / nb;
+    let se = stderr[..bands].iter().map(|s| s * s).sum::<f64>().sqrt() / nb;
     (mean, se)
 }
 
 /// Radiometers against a radiance tally: within 3 standard errors plus
 /// `allowance` (relative). Returns the radiometers' mean.
 fn check_against_tally(
-    r: &serde_json::Value,
+    r: &RunReport,
     depth_index: usize,
     depth: f64,
     row: usize,
@@ -450,10 +467,11 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
     let dir = tempdir();
     let depths = [0.01, 1.0, 6.0];
     let bands = 8;
-    let r = render_json(
+    let r = render_report(
         dir.path(),
         &deep_scene(bands, &radiometer_grid(&depths, "nadir")),
-        &["--threads", "2", "--photons", "8000000"],
+        8_000_000,
+        2,
     );
     // Tally rows: depths 0, 1, 2 and 6 m.
     let lu: Vec<f64> = [(0usize, 0usize), (1, 1), (2, 3)]
@@ -500,11 +518,7 @@ fn zenith_radiometers_match_the_ld_tally() {
     let bands = 4;
     let scene = deep_scene(bands, &radiometer_grid(&depths, "zenith"))
         .replace("zenith_deg = 20.0", "zenith_deg = 60.0");
-    let r = render_json(
-        dir.path(),
-        &scene,
-        &["--threads", "2", "--photons", "4000000"],
-    );
+    let r = render_report(dir.path(), &scene, 4_000_000, 2);
     for (i, row) in [(0usize, 1usize), (1, 3)] {
         check_against_tally(&r, i, depths[i], row, "Ld", bands, 0.05);
     }
@@ -514,13 +528,9 @@ fn zenith_radiometers_match_the_ld_tally() {
 #[test]
 fn cube_is_identical_for_any_thread_count() {
     let mut cubes = Vec::new();
-    for threads in ["1", "2"] {
+    for threads in [1, 2] {
         let dir = tempdir();
-        render_json(
-            dir.path(),
-            &deep_scene(2, ""),
-            &["--threads", threads, "--photons", "50000"],
-        );
+        render_report(dir.path(), &deep_scene(2, ""), 50_000, threads);
         cubes.push(std::fs::read(dir.path().join("out/deep.bsq")).unwrap());
     }
     assert!(!cubes[0].is_empty() && cubes[0] == cubes[1]);

@@ -503,20 +503,20 @@ fn estimator_weights_and_reuses() {
 }
 
 #[test]
-fn mode_parsing_names_the_bad_value() {
+fn mode_names_agree_between_scene_files_command_line_and_reports() {
+    use clap::ValueEnum;
     for mode in SpectralMode::ALL {
-        assert_eq!(mode.to_string().parse::<SpectralMode>().unwrap(), mode);
+        let quoted = format!("\"{}\"", mode.as_str());
+        assert_eq!(serde_json::from_str::<SpectralMode>(&quoted).unwrap(), mode);
+        assert_eq!(serde_json::to_string(&mode).unwrap(), quoted);
+        assert_eq!(mode.to_possible_value().unwrap().get_name(), mode.as_str());
+        assert_eq!(mode.to_string(), mode.as_str());
     }
-    assert_eq!(
-        "Compensated".parse::<SpectralMode>().unwrap(),
-        SpectralMode::Compensated
-    );
-    for bad in ["compensate", "", "naive ", "spectral"] {
-        let msg = bad.parse::<SpectralMode>().unwrap_err().to_string();
-        assert!(msg.contains(&format!("{bad:?}")), "{msg}");
-        assert!(
-            msg.contains("spectral mode") && msg.contains("compensated"),
-            "{msg}"
-        );
+    assert_eq!(SpectralMode::value_variants(), SpectralMode::ALL);
+    for bad in ["compensate", "", "naive ", "Naive"] {
+        let e = serde_json::from_str::<SpectralMode>(&format!("{bad:?}"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("naive") && e.contains("compensated"), "{e}");
     }
 }
