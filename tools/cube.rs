@@ -174,8 +174,9 @@ fn run(cli: Cli) -> AnyResult<()> {
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default();
             let dir = littoral::output::parent_dir(&out);
-            let (hdr, bsq) = littoral::cube::ops::window(&cube, (x, y, w, h), dir, &name)?;
-            let summary = serde_json::json!({ "hdr": hdr, "bsq": bsq, "samples": w, "lines": h });
+            let files = littoral::cube::ops::window(&cube, (x, y, w, h), dir, &name)?;
+            let summary =
+                serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "samples": w, "lines": h });
             print(&format!("{summary}\n"))
         }
         Command::Diff { a, b } => {

@@ -130,6 +130,15 @@ impl CubeSpec {
     }
 }
 
+/// The two files of a cube on disk.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CubeFiles {
+    /// The ENVI header, `NAME.hdr`.
+    pub hdr: PathBuf,
+    /// The data, `NAME.bsq`.
+    pub bsq: PathBuf,
+}
+
 /// Writes one ENVI BSQ cube tile by tile; see the module doc.
 ///
 /// `Sync`: [`EnviWriter::write_tile`] takes `&self`, so render threads can
@@ -263,9 +272,8 @@ impl EnviWriter {
 
     /// Sync both files and rename them to their final names, the data file
     /// first and the header last, so a header always describes a complete
-    /// data file. Returns `(bsq, hdr)` paths. Existing files of the same
-    /// names are replaced.
-    pub fn finish(self) -> Result<(PathBuf, PathBuf)> {
+    /// data file. Existing files of the same names are replaced.
+    pub fn finish(self) -> Result<CubeFiles> {
         let EnviWriter {
             bsq,
             hdr,
@@ -280,6 +288,9 @@ impl EnviWriter {
             .map_err(|e| Error::io(&bsq_path, "rename into place", e.error))?;
         hdr.persist(&hdr_path)
             .map_err(|e| Error::io(&hdr_path, "rename into place", e.error))?;
-        Ok((bsq_path, hdr_path))
+        Ok(CubeFiles {
+            hdr: hdr_path,
+            bsq: bsq_path,
+        })
     }
 }

@@ -2,11 +2,11 @@
 //! window cut into a new cube (one 64 x 64 tile of all bands at a time),
 //! and the per-band difference of two cubes (two bands at a time).
 
-use super::envi::{CubeSpec, EnviCube, EnviWriter};
+use super::envi::{CubeFiles, CubeSpec, EnviCube, EnviWriter};
 use crate::error::{Error, Result};
 use crate::spectral::BandGrid;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Tile side (pixels) for copying windows.
 const TILE: usize = 64;
@@ -33,13 +33,13 @@ fn band_grid(cube: &EnviCube) -> Result<BandGrid> {
 }
 
 /// Copy the window `x0..x0+w` x `y0..y0+h` of `cube` into a new cube
-/// `dir/NAME.{hdr,bsq}` with the same bands; returns (hdr, bsq).
+/// `dir/NAME.{hdr,bsq}` with the same bands; returns its files.
 pub fn window(
     cube: &EnviCube,
     (x0, y0, w, h): (usize, usize, usize, usize),
     dir: &Path,
     name: &str,
-) -> Result<(PathBuf, PathBuf)> {
+) -> Result<CubeFiles> {
     let inside = |start: usize, len: usize, size: usize| {
         len > 0 && start.checked_add(len).is_some_and(|end| end <= size)
     };

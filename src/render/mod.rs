@@ -150,7 +150,7 @@ pub fn render(
     }
     let png = dir.join(format!("{}.png", scene.name));
     write_png(&png, w, h, &image, None)?;
-    let (hdr, bsq) = writer.finish()?;
+    let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
     // The spectral OpenEXR copy, tile by tile from the finished cube.
     let exr = dir.join(format!("{}.exr", scene.name));
     crate::cube::exr::write_spectral_exr(&crate::cube::EnviCube::open(&hdr)?, &exr)?;

@@ -537,65 +537,60 @@ impl MapWriter {
         };
 
         // Pass 2: route every photon to a child, spilling children as they grow.
-        let mut kids = [CellBuf::new(), CellBuf::new()];
-        let limit = (self.plan.budget - WRITER_FIXED_BYTES) / 16;
-        let chunk_records = self.plan.chunk_records;
-        let mut kid_bytes = [0u64; 2];
+        let mut split = Split {
+            route: &route,
+            kids: [CellBuf::new(), CellBuf::new()],
+            kid_bytes: [0; 2],
+            limit: (self.plan.budget - WRITER_FIXED_BYTES) / 16,
+            chunk_records: self.plan.chunk_records,
+        };
         // Children spill to the end of the scratch file while the parent's
         // (immutable) frames are read back.
         let mut next = cell.last_frame.take();
         while let Some(f) = next {
             next = self.scratch.read(f, frame_buf)?;
             let batch = std::mem::take(frame_buf);
-            self.route(
-                &batch,
-                &route,
-                &mut kids,
-                &mut kid_bytes,
-                limit,
-                chunk_records,
-            )?;
+            self.route(&batch, &mut split)?;
             *frame_buf = batch;
         }
         for chunk in std::mem::take(&mut cell.chunks) {
-            self.route(
-                &chunk,
-                &route,
-                &mut kids,
-                &mut kid_bytes,
-                limit,
-                chunk_records,
-            )?;
+            self.route(&chunk, &mut split)?;
             self.buffered -= (chunk.capacity() * STAGED) as u64;
         }
+        let (kids, kid_bytes) = (split.kids, split.kid_bytes);
         let [left, right] = kids;
         self.buffered += kid_bytes[0] + kid_bytes[1];
         debug_assert!(plane.is_none() || (left.count > 0 && right.count > 0));
         Ok((left, right))
     }
 
-    fn route(
-        &mut self,
-        photons: &[StagedPhoton],
-        route: &dyn Fn(&StagedPhoton) -> bool,
-        kids: &mut [CellBuf; 2],
-        kid_bytes: &mut [u64; 2],
-        limit: u64,
-        chunk_records: usize,
-    ) -> Result<()> {
+    /// Send `photons` to the children of `split`, spilling a child whose
+    /// buffers pass the limit.
+    fn route(&mut self, photons: &[StagedPhoton], split: &mut Split) -> Result<()> {
         for p in photons {
-            let k = if route(p) { 0 } else { 1 };
-            let kid = &mut kids[k];
-            if kid.push(p, chunk_records) {
-                kid_bytes[k] += (chunk_records * STAGED) as u64;
+            let k = if (split.route)(p) { 0 } else { 1 };
+            let kid = &mut split.kids[k];
+            if kid.push(p, split.chunk_records) {
+                split.kid_bytes[k] += (split.chunk_records * STAGED) as u64;
             }
-            if kid_bytes[k] > limit {
+            if split.kid_bytes[k] > split.limit {
                 self.scratch.spill(kid)?;
-                kid_bytes[k] = 0;
+                split.kid_bytes[k] = 0;
             }
         }
         Ok(())
     }
+}
+
+/// A cell being split in two: which side each photon goes to, and the two
+/// children with their buffered bytes.
+struct Split<'r> {
+    route: &'r dyn Fn(&StagedPhoton) -> bool,
+    kids: [CellBuf; 2],
+    kid_bytes: [u64; 2],
+    /// Buffered bytes at which a child spills.
+    limit: u64,
+    chunk_records: usize,
 }
 
 fn next_after(x: f32) -> f32 {

@@ -50,7 +50,7 @@ fn small_cube(dir: &Path) -> PathBuf {
             .collect();
         writer.write_tile(x0, 0, tw, h, &values).unwrap();
     }
-    writer.finish().unwrap().1
+    writer.finish().unwrap().hdr
 }
 
 #[test]
@@ -192,7 +192,7 @@ fn window_and_diff() {
     let dir = tempdir();
     let hdr = small_cube(dir.path());
     let out = dir.path().join("win.hdr");
-    stdout(&cube_tool(&[
+    let said: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
         "window",
         p(&hdr),
         "1",
@@ -201,7 +201,11 @@ fn window_and_diff() {
         "2",
         "--out",
         p(&out),
-    ]));
+    ])))
+    .unwrap();
+    // The summary names each file as what it is.
+    assert_eq!(said["hdr"], p(&out));
+    assert_eq!(said["bsq"], p(&out.with_extension("bsq")));
     let win = littoral::cube::EnviCube::open(&out).unwrap();
     assert_eq!((win.samples(), win.lines(), win.bands()), (4, 2, 3));
     for y in 0..2 {

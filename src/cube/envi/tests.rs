@@ -71,7 +71,7 @@ fn write_cube(
             .write_tile(t.0, t.1, t.2, t.3, &tile_values(bands, t))
             .unwrap();
     }
-    writer.finish().unwrap().1
+    writer.finish().unwrap().hdr
 }
 
 fn assert_whole_cube(cube: &EnviCube) {
@@ -144,7 +144,7 @@ fn threads_share_one_writer() {
             });
         }
     });
-    let (bsq, _) = writer.finish().unwrap();
+    let bsq = writer.finish().unwrap().bsq;
     assert_whole_cube(&EnviCube::open(&bsq).unwrap());
 }
 
@@ -164,7 +164,8 @@ fn header_parses_back() {
         },
     )
     .unwrap();
-    let (bsq, hdr) = writer.finish().unwrap();
+    let files = writer.finish().unwrap();
+    let (bsq, hdr) = (files.bsq, files.hdr);
     assert_eq!(bsq, dir.path().join("scene.bsq"));
     assert_eq!(hdr, dir.path().join("scene.hdr"));
     let text = std::fs::read_to_string(&hdr).unwrap();

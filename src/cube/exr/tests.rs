@@ -31,7 +31,7 @@ fn round_trips_through_an_exr_reader() {
         }
     }
     writer.write_tile(0, 0, w, h, &tile).unwrap();
-    let (hdr, _) = writer.finish().unwrap();
+    let hdr = writer.finish().unwrap().hdr;
     let path = dir.path().join("c.exr");
     write_spectral_exr(&EnviCube::open(&hdr).unwrap(), &path).unwrap();
 
@@ -88,7 +88,7 @@ fn unwritable_destination_is_an_error() {
     };
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();
     writer.write_tile(0, 0, 2, 2, &[1.0; 8]).unwrap();
-    let (hdr, _) = writer.finish().unwrap();
+    let hdr = writer.finish().unwrap().hdr;
     let cube = EnviCube::open(&hdr).unwrap();
     let target = dir.path().join("missing").join("c.exr");
     let e = write_spectral_exr(&cube, &target).unwrap_err().to_string();

@@ -192,7 +192,7 @@ fn cube_rgb_matches_per_pixel_spectra() {
     };
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();
     writer.write_tile(0, 0, w, h, &values).unwrap();
-    let (_, hdr) = writer.finish().unwrap();
+    let hdr = writer.finish().unwrap().hdr;
     let cube = EnviCube::open(&hdr).unwrap();
     let q = Quicklook::for_cube(&cube);
     assert_eq!(q, Quicklook::new(&grid));
