@@ -51,6 +51,7 @@ pub struct EmitJob<'a> {
 impl EmitJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
+        let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
             self.scene,
@@ -59,6 +60,7 @@ impl EmitJob<'_> {
             progress,
         )?;
         let emit_s = start.elapsed().as_secs_f64();
+        let peaks = sampler.finish();
         Ok(EmitReport {
             emission: EmissionReport::new(self.scene, &em.totals, &em.photon_power),
             map: MapSummary::written(&em.map, provenance.digest_hex(), Some(&self.map)),
@@ -67,7 +69,9 @@ impl EmitJob<'_> {
                 emit_and_store: emit_s,
                 total: self.scene_seconds + emit_s,
             },
-            peak_rss_bytes: crate::mem::peak_rss_bytes().unwrap_or(0),
+            peak_memory: peaks,
+            mem_budget_bytes: self.budget.total(),
+            peak_rss_bytes: peaks.rss_bytes,
         })
     }
 }
@@ -101,6 +105,7 @@ fn reusable(path: &Path, provenance: &Provenance) -> Option<(MapFile, EmissionRe
 impl RenderJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<RunReport> {
         let start = Instant::now();
+        let sampler = crate::mem::PeakSampler::start();
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.
         let shares = self.budget.render(scene, self.threads)?;
@@ -150,6 +155,7 @@ impl RenderJob<'_> {
         drop(scratch);
 
         let json = self.out_dir.join(format!("{}.json", scene.name));
+        let peaks = sampler.finish();
         let report = RunReport {
             Ed_above_surface: emission.above_surface.Ed.clone(),
             emission,
@@ -176,7 +182,8 @@ impl RenderJob<'_> {
                 render: t_render - t_emit,
                 total: self.scene_seconds + t_render,
             },
-            peak_rss_bytes: crate::mem::peak_rss_bytes().unwrap_or(0),
+            peak_memory: peaks,
+            peak_rss_bytes: peaks.rss_bytes,
         };
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::invalid("report", e.to_string()))?

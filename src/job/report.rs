@@ -4,6 +4,7 @@
 
 use super::budget::RenderShares;
 use crate::emit::report::EmissionReport;
+use crate::mem::MemoryPeaks;
 use crate::render::RadiometerReading;
 use crate::scene::EstimateSettings;
 use crate::store::cache::CacheStats;
@@ -71,7 +72,13 @@ pub struct EmitReport {
     pub emission: EmissionReport,
     pub map: MapSummary,
     pub timings_s: EmitTimings,
-    /// Peak resident memory of the process (VmHWM, bytes).
+    /// Peak anonymous memory (what `--mem-budget` bounds) and peak mapped
+    /// file pages, apart.
+    pub peak_memory: MemoryPeaks,
+    /// The budget the run was given (bytes).
+    pub mem_budget_bytes: u64,
+    /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
+    /// plus resident file pages.
     pub peak_rss_bytes: u64,
 }
 
@@ -122,6 +129,9 @@ pub struct RunReport {
     pub memory: RenderShares,
     pub outputs: Outputs,
     pub timings_s: RenderTimings,
+    /// Peak anonymous memory (what `--mem-budget` bounds) and peak mapped
+    /// file pages (the photon map's resident pages), apart.
+    pub peak_memory: MemoryPeaks,
     /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
     /// plus resident pages of the mapped photon map.
     pub peak_rss_bytes: u64,
@@ -131,11 +141,21 @@ fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1u64 << 20) as f64
 }
 
+/// "peak memory A MiB anonymous of a B MiB budget, C MiB mapped file pages".
+fn memory_line(peaks: &MemoryPeaks, budget: u64) -> String {
+    format!(
+        "peak memory {:.1} MiB anonymous of a {:.1} MiB budget, {:.1} MiB mapped file pages",
+        mib(peaks.anon_bytes),
+        mib(budget),
+        mib(peaks.file_bytes)
+    )
+}
+
 impl EmitReport {
     /// The one-line summary `littoral emit` prints.
     pub fn summary(&self) -> String {
         format!(
-            "emitted {} photons: {} volume + {} surface photons stored in {} ({} tiles, {:.2} bytes/photon); energy closure {:.2} sigma; {:.1} s, peak memory {:.1} MiB",
+            "emitted {} photons: {} volume + {} surface photons stored in {} ({} tiles, {:.2} bytes/photon); energy closure {:.2} sigma; {:.1} s, {}",
             self.emission.photons.traced,
             self.emission.photons.stored_volume,
             self.emission.photons.stored_surface,
@@ -144,7 +164,7 @@ impl EmitReport {
             self.map.bytes_per_photon,
             self.emission.energy.closure_sigma,
             self.timings_s.total,
-            mib(self.peak_rss_bytes)
+            memory_line(&self.peak_memory, self.mem_budget_bytes)
         )
     }
 }
@@ -156,17 +176,21 @@ impl RunReport {
             .parent()
             .map_or_else(String::new, |d| d.display().to_string());
         format!(
-            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({} {:.1} s, render {:.1} s); peak memory {:.1} MiB",
+            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({} {:.1} s, render {:.1} s); {}",
             self.emission.scene,
             self.sensor.pixels[0],
             self.sensor.pixels[1],
             self.emission.bands_nm.len(),
             dir,
             self.timings_s.total,
-            if self.reused_map { "reused map" } else { "emit" },
+            if self.reused_map {
+                "reused map"
+            } else {
+                "emit"
+            },
             self.timings_s.emit,
             self.timings_s.render,
-            mib(self.peak_rss_bytes)
+            memory_line(&self.peak_memory, self.memory.budget_bytes)
         )
     }
 }
