@@ -33,6 +33,27 @@ pub fn release_free_memory() {
     }
 }
 
+/// Allocations at least this large get their own mapping (see
+/// [`fixed_mmap_threshold`]).
+pub const MMAP_THRESHOLD: usize = 256 << 10;
+
+/// Fix glibc's mmap threshold at [`MMAP_THRESHOLD`]. By default glibc
+/// raises the threshold (up to 32 MiB) each time a mapped block is freed,
+/// after which tile-sized buffers (decoded photons and k-d trees, 1-2 MiB
+/// each) come from the heap arenas, where a cache that keeps evicting and
+/// decoding tiles fragments them: rendering a 47 M-photon map under a
+/// 256 MiB budget peaked at 333 MiB of anonymous memory with 245 MiB of
+/// cache. With a fixed threshold every such buffer is its own mapping and
+/// goes back to the system when freed. A no-op elsewhere.
+pub fn fixed_mmap_threshold() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets an allocator parameter; called before the
+    // stage's threads allocate, and safe to call at any time regardless.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD as libc::c_int);
+    }
+}
+
 fn status_kib(key: &str) -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     status_field(&status, key)

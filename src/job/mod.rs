@@ -51,6 +51,7 @@ pub struct EmitJob<'a> {
 impl EmitJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
+        crate::mem::fixed_mmap_threshold();
         let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
@@ -105,6 +106,7 @@ fn reusable(path: &Path, provenance: &Provenance) -> Option<(MapFile, EmissionRe
 impl RenderJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<RunReport> {
         let start = Instant::now();
+        crate::mem::fixed_mmap_threshold();
         let sampler = crate::mem::PeakSampler::start();
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.
