@@ -171,17 +171,36 @@ fn sizes_and_arguments_are_validated() {
         &littoral(&["map", "query", p(&map), "--at", "1,2,3", "--radius", "-1"]),
         "--radius",
     );
-    assert_clean_failure(
-        &littoral(&[
+    // Counts out of range, negative ones included, are usage errors (exit 2)
+    // naming the flag, and nothing is written.
+    let z = dir.path().join("z");
+    for args in [
+        &["map", "synth", "--out", p(&z), "--photons", "0"][..],
+        &["map", "synth", "--out", p(&z), "--photons", "-5"],
+        &[
             "map",
             "synth",
-            "--photons",
-            "0",
             "--out",
-            p(&dir.path().join("z.map")),
-        ]),
-        "--photons",
-    );
+            p(&z),
+            "--photons",
+            "10",
+            "--bands",
+            "0",
+        ],
+        &["render", "--out", p(&z), "--photons", "-5"],
+        &["render", "--out", p(&z), "--bands", "0"],
+        &["emit", "scene.toml", "--map", p(&z), "--photons", "0"],
+    ] {
+        let out = littoral(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let flag = args[args.len() - 2];
+        assert!(
+            err.contains(flag) && err.contains(args[args.len() - 1]),
+            "{args:?}: {err}"
+        );
+        assert!(!z.exists());
+    }
     // Neither --k nor --radius: a usage error from the parser (exit 2).
     assert_eq!(
         littoral(&["map", "query", p(&map), "--at", "1,2,3"])
@@ -245,6 +264,22 @@ fn unwritable_outputs_fail_cleanly() {
     assert_clean_failure(&synth(p(&file.join("x.map"))), "x.map");
     std::fs::remove_file(&file).unwrap();
     assert_clean_failure(&synth(p(&out_dir)), "directory");
+    assert_nothing_written(&out_dir);
+
+    // `emit --report` to a place that cannot be written fails before any
+    // photon is traced: no map either.
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, MINIMAL_SCENE).unwrap();
+    let emit = littoral(&[
+        "emit",
+        p(&scene),
+        "--map",
+        p(&out_dir.join("e.map")),
+        "--report",
+        p(&out_dir.join("missing/r.json")),
+        "--quiet",
+    ]);
+    assert_clean_failure(&emit, "r.json");
     assert_nothing_written(&out_dir);
 }
 

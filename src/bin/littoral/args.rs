@@ -43,11 +43,11 @@ pub struct RenderArgs {
     #[arg(long)]
     pub map: Option<PathBuf>,
     /// Photons to trace (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
     pub photons: Option<u64>,
     /// Bands evenly spaced over 400-700 nm (overrides the scene's grid).
-    #[arg(long)]
-    pub bands: Option<usize>,
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..), allow_hyphen_values = true)]
+    pub bands: Option<u16>,
     /// Worker threads (0 = one per core); outputs are identical for any number.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -87,9 +87,9 @@ pub struct EmitArgs {
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// Photons to trace (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
     pub photons: Option<u64>,
-    /// Worker threads (default: all cores); the map is identical for any number.
+    /// Worker threads (0 = one per core); the map is identical for any number.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// Random seed (overrides the scene).
@@ -124,21 +124,25 @@ pub enum MapCommand {
 #[derive(Args)]
 pub struct SynthArgs {
     /// Number of photons.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
     pub photons: u64,
     /// Number of spectral bands (evenly spaced over 400-700 nm).
-    #[arg(long, default_value_t = 16)]
-    pub bands: usize,
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..), allow_hyphen_values = true)]
+    pub bands: u16,
+    /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Where the photons lie: evenly in a 100 x 100 x 10 m box, or crowded
+    /// toward the surface with a quarter on a flat floor at 10 m.
     #[arg(long, value_enum, default_value_t = Distribution::Water)]
     pub distribution: Distribution,
     /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
     #[arg(long, default_value = "256MiB")]
     pub mem_budget: String,
-    /// Producer threads (default: all cores).
+    /// Producer threads (0 = one per core); the map is identical for any number.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// The map file to write.
     #[arg(long)]
     pub out: PathBuf,
     /// No progress on stderr.

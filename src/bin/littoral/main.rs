@@ -32,10 +32,10 @@ fn run(cli: Cli) -> AnyResult<()> {
 
 fn run_render(a: RenderArgs) -> AnyResult<()> {
     let start = Instant::now();
-    let budget = run_budget(&a.mem_budget, a.photons)?;
+    let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
     let overrides = Overrides {
         photons: a.photons,
-        bands: a.bands,
+        bands: a.bands.map(usize::from),
         seed: a.seed,
         boundary: a.boundary,
         spectral: a.spectral,
@@ -59,23 +59,21 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     Ok(())
 }
 
-/// The memory budget of a run, after checking a `--photons` override.
-fn run_budget(mem_budget: &str, photons: Option<u64>) -> AnyResult<MemoryBudget> {
-    if photons == Some(0) {
-        return Err(littoral::Error::invalid("--photons", "must be at least 1").into());
-    }
-    Ok(MemoryBudget::parse("--mem-budget", mem_budget)?)
-}
-
 fn run_emit(a: EmitArgs) -> AnyResult<()> {
     let start = Instant::now();
-    let budget = run_budget(&a.mem_budget, a.photons)?;
+    let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
     let overrides = Overrides {
         photons: a.photons,
         seed: a.seed,
         ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &overrides)?;
+    // The report's file is made now, so that an unwritable path fails
+    // before the photons are traced rather than after.
+    let report_file = match &a.report {
+        Some(path) => Some(littoral::output::temp_beside(path)?),
+        None => None,
+    };
     let job = EmitJob {
         scene: &scene,
         map: a.map.clone(),
@@ -85,9 +83,14 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
     };
     let r = job.run(&Bars::new(a.quiet))?;
     let text = serde_json::to_string_pretty(&r)? + "\n";
-    match &a.report {
-        Some(path) => littoral::output::write_atomic(path, text.as_bytes())?,
-        None => print!("{text}"),
+    match (report_file, &a.report) {
+        (Some(mut tmp), Some(path)) => {
+            use std::io::Write;
+            tmp.write_all(text.as_bytes())
+                .map_err(|e| littoral::Error::io(path, "write", e))?;
+            littoral::output::publish(tmp, path)?;
+        }
+        _ => cli::print(&text)?,
     }
     if !a.quiet {
         eprintln!("{}", r.summary());
@@ -98,8 +101,8 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
 fn run_map(cmd: MapCommand) -> AnyResult<()> {
     match cmd {
         MapCommand::Synth(a) => {
-            let budget = run_budget(&a.mem_budget, Some(a.photons))?;
-            let source = SynthSource::new(a.photons, a.bands, a.seed, a.distribution)?;
+            let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
+            let source = SynthSource::new(a.photons, a.bands.into(), a.seed, a.distribution)?;
             let bars = Bars::new(a.quiet);
             let summary = build_map(&a.out, &source, &budget.emission(a.threads), &bars)?;
             if !a.quiet {
