@@ -32,6 +32,20 @@ fn report_of<T: serde::de::DeserializeOwned>(run: &std::process::Output, path: &
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
+/// The built-in scene imaged with `pixels` x `pixels` pixels of `gsd_m`,
+/// written into `dir`.
+fn coarse_builtin_scene(dir: &Path, pixels: usize, gsd_m: f64) -> std::path::PathBuf {
+    let scene = dir.join("coastal.toml");
+    let text = littoral::scene::COASTAL_TOML
+        .replace(
+            "pixels = [256, 256]",
+            &format!("pixels = [{pixels}, {pixels}]"),
+        )
+        .replace("gsd_m = 0.75", &format!("gsd_m = {gsd_m:?}"));
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
 /// Both the sampled anonymous peak (what the budget bounds) and VmHWM
 /// (anonymous plus file pages: the map here is small) within 64 MiB plus
 /// the overhead; the anonymous peak is at most VmHWM.
@@ -125,11 +139,7 @@ fn emit_builtin_scene_within_64mib() {
 #[test]
 fn render_builtin_scene_within_64mib() {
     let dir = tempdir();
-    let scene = dir.path().join("coastal.toml");
-    let text = littoral::scene::COASTAL_TOML
-        .replace("pixels = [256, 256]", "pixels = [64, 64]")
-        .replace("gsd_m = 0.75", "gsd_m = 3.0");
-    std::fs::write(&scene, text).unwrap();
+    let scene = coarse_builtin_scene(dir.path(), 64, 3.0);
     let out = dir.path().join("out");
     let run = littoral(&[
         "render",
@@ -157,11 +167,7 @@ fn render_builtin_scene_within_64mib() {
 #[test]
 fn render_with_a_churning_cache_within_its_budget() {
     let dir = tempdir();
-    let scene = dir.path().join("coastal.toml");
-    let text = littoral::scene::COASTAL_TOML
-        .replace("pixels = [256, 256]", "pixels = [32, 32]")
-        .replace("gsd_m = 0.75", "gsd_m = 6.0");
-    std::fs::write(&scene, text).unwrap();
+    let scene = coarse_builtin_scene(dir.path(), 32, 6.0);
     let map = dir.path().join("c.map");
     let out = dir.path().join("out");
     let render = |budget: &str| {
