@@ -23,3 +23,38 @@ fn merging_in_any_order_gives_identical_totals() {
     let (m, se) = a.mean_and_stderr(a.slot(0, ED), 0);
     assert!((m - 34.0 / 100.0).abs() < 1e-9 && se > 0.0);
 }
+
+/// The standard error the totals report is the sample standard error of
+/// the mean over traced photons (zeros included), computed here by hand
+/// with the two-pass formula sqrt(sum (x - m)^2 / (n (n - 1))).
+#[test]
+fn standard_error_matches_a_hand_computation() {
+    let mut rng = crate::rng::Pcg32::new(5, 1);
+    let n = 1000;
+    // Heavy-tailed contributions with many zeros, like 1/|mu| crossings.
+    let xs: Vec<f64> = (0..n)
+        .map(|_| {
+            let u = rng.uniform_f64();
+            if u < 0.4 {
+                0.0
+            } else {
+                1.0 / (0.01 + rng.uniform_f64())
+            }
+        })
+        .collect();
+    let mut totals = Totals::new(1, 1);
+    for &x in &xs {
+        let mut t = PhotonTally::new(1);
+        t.add(0, EOU, x);
+        totals.record(0, Fate::Escaped, &t);
+    }
+    let m = xs.iter().sum::<f64>() / n as f64;
+    let ss = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+    let se = (ss / (n as f64 * (n as f64 - 1.0))).sqrt();
+    let (got_m, got_se) = totals.mean_and_stderr(totals.slot(0, EOU), 0);
+    // Fixed-point sums (2^-32) leave ~1e-9 relative.
+    assert!((got_m - m).abs() < 1e-9 * m, "{got_m} vs {m}");
+    assert!((got_se - se).abs() < 1e-7 * se, "{got_se} vs {se}");
+    // A quantity nothing contributed to has mean and error 0.
+    assert_eq!(totals.mean_and_stderr(totals.slot(0, ED), 0), (0.0, 0.0));
+}
