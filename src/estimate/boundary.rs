@@ -35,8 +35,9 @@
 //! B comes either from six axis rays traced through the scene
 //! ([`axial_distances_traced`]) or from a precomputed grid, trilinearly
 //! interpolated ([`BoundaryGrid`]), the cheap alternative. Periodic domain
-//! edges are not boundaries, so there the photon search must wrap around
-//! them too (`query` does not wrap yet).
+//! edges are not boundaries, so there the photon search continues across
+//! them (the estimator searches the periodic images; `store::query` itself
+//! knows nothing of the domain).
 //!
 //! Not for: boundaries that are not axis-aligned planes. Both modes model
 //! the water near O as the box of the six axial distances, so a sloping floor

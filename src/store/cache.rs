@@ -11,7 +11,7 @@
 //! should pin one tile at a time (as the query code does); a budget smaller
 //! than the largest tile is refused when the cache is made.
 //!
-//! Not for: deciding which tiles a query needs (see `query`).
+//! Not for: deciding which tiles a query needs (see `store::query`).
 
 use crate::error::{Error, Result};
 use crate::photon::PackedPhoton;
