@@ -90,6 +90,11 @@ enum Command {
         a: PathBuf,
         /// The other cube's header or data file.
         b: PathBuf,
+        /// Fail (exit 1, after printing the JSON) if any |b - a| exceeds
+        /// this (in the cube's units), or a NaN or infinity of one cube is
+        /// not in the other.
+        #[arg(long, allow_hyphen_values = true)]
+        tol: Option<f64>,
     },
     /// Write the cube as a spectral OpenEXR file (one channel per band,
     /// named S0.<nm>nm), tile by tile.
@@ -127,8 +132,21 @@ fn run(cli: Cli) -> AnyResult<()> {
                     Error::invalid("NM", format!("'{nm}' is not a wavelength in nm")).into(),
                 );
             }
+            png_only(&out)?;
             let cube = EnviCube::open(&cube)?;
             let b = cube.band_index_nearest(nm);
+            let centre = cube.wavelengths_nm()[b];
+            let reach = cube.fwhm_nm().map_or(0.0, |f| f[b]).max(1e-9);
+            if (nm - centre).abs() > reach {
+                return Err(Error::invalid(
+                    "NM",
+                    format!(
+                        "{nm} nm is {:.1} nm from the nearest band ({centre} nm, FWHM {reach} nm): no band covers it",
+                        (nm - centre).abs()
+                    ),
+                )
+                .into());
+            }
             let values = cube.band(b)?;
             let range = write_grey_png(&out, cube.samples(), cube.lines(), &values)?;
             let summary = serde_json::json!({
@@ -145,6 +163,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
             exposure,
         } => {
+            png_only(&out)?;
             let cube = EnviCube::open(&cube)?;
             let q = Quicklook::for_cube(&cube);
             if !q.has_visible_bands() {
@@ -179,14 +198,47 @@ fn run(cli: Cli) -> AnyResult<()> {
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "samples": w, "lines": h });
             print(&format!("{summary}\n"))
         }
-        Command::Diff { a, b } => {
+        Command::Diff { a, b, tol } => {
+            if tol.is_some_and(|t| t.is_nan() || t < 0.0) {
+                return Err(Error::invalid("--tol", "must be a number >= 0").into());
+            }
             let d = littoral::cube::ops::diff(&EnviCube::open(&a)?, &EnviCube::open(&b)?)?;
-            print(&format!("{}\n", serde_json::to_string_pretty(&d)?))
+            print(&format!("{}\n", serde_json::to_string_pretty(&d)?))?;
+            match tol {
+                Some(t) if !d.within(t) => Err(Error::invalid(
+                    "--tol",
+                    format!(
+                        "{} differs from {}: largest difference {:e}, {} non-finite values differ (tolerance {t:e})",
+                        b.display(),
+                        a.display(),
+                        d.max_abs,
+                        d.non_finite_differ
+                    ),
+                )
+                .into()),
+                _ => Ok(()),
+            }
         }
         Command::Exr { cube, out } => {
             littoral::cube::exr::write_spectral_exr(&EnviCube::open(&cube)?, &out)?;
             Ok(())
         }
+    }
+}
+
+/// Images are written as PNG only; another extension is refused rather
+/// than given PNG bytes under a misleading name.
+fn png_only(out: &std::path::Path) -> AnyResult<()> {
+    match out.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(()),
+        _ => Err(Error::invalid(
+            "--out",
+            format!(
+                "{}: only PNG images are written (name it .png)",
+                out.display()
+            ),
+        )
+        .into()),
     }
 }
 

@@ -86,16 +86,23 @@ pub fn window(
     writer.finish()
 }
 
-/// How one band of two cubes differs.
+/// How one band of two cubes differs. Statistics run over the pixels where
+/// both values are finite; a pixel where a or b is NaN or infinite is
+/// counted apart, as agreeing (the same bits in both) or not.
 #[derive(Clone, Debug, Serialize)]
 pub struct BandDiff {
     pub wavelength_nm: f64,
-    /// Root-mean-square of b - a over the pixels.
+    /// Root-mean-square of b - a over the finite pixels.
     pub rmse: f64,
-    /// Largest |b - a|.
+    /// Largest |b - a| over the finite pixels.
     pub max_abs: f64,
     pub mean_a: f64,
     pub mean_b: f64,
+    /// Pixels where a or b is not finite and the two differ (NaN against a
+    /// number, or different non-finite values).
+    pub non_finite_differ: u64,
+    /// Pixels where both hold the same non-finite value.
+    pub non_finite_same: u64,
 }
 
 /// How two cubes of the same shape and bands differ.
@@ -108,6 +115,19 @@ pub struct CubeDiff {
     pub rmse: f64,
     /// `rmse` over the RMS of a.
     pub relative_rmse: f64,
+    /// The largest `max_abs` of any band.
+    pub max_abs: f64,
+    /// Pixels, over all bands, where a or b is not finite and they differ.
+    pub non_finite_differ: u64,
+}
+
+impl CubeDiff {
+    /// Whether b is within `tol` of a everywhere: every finite difference
+    /// at most `tol` (absolute, in the cube's units) and no non-finite value
+    /// in one cube that the other does not hold too.
+    pub fn within(&self, tol: f64) -> bool {
+        self.max_abs <= tol && self.non_finite_differ == 0
+    }
 }
 
 /// Compare `b` against `a` band by band. The cubes must match in size and
@@ -142,14 +162,23 @@ pub fn diff(a: &EnviCube, b: &EnviCube) -> Result<CubeDiff> {
             ),
         ));
     }
-    let n = (a.samples() * a.lines()) as f64;
-    let (mut sq_all, mut a_sq_all) = (0.0f64, 0.0f64);
+    let (mut sq_all, mut a_sq_all, mut n_all) = (0.0f64, 0.0f64, 0u64);
     let mut bands = Vec::with_capacity(a.bands());
     for i in 0..a.bands() {
         let (va, vb) = (a.band(i)?, b.band(i)?);
         let (mut sq, mut max_abs, mut sum_a, mut sum_b, mut a_sq) = (0.0, 0.0f64, 0.0, 0.0, 0.0);
+        let (mut finite, mut differ, mut same) = (0u64, 0u64, 0u64);
         for (&x, &y) in va.iter().zip(&vb) {
+            if !(x.is_finite() && y.is_finite()) {
+                if x.to_bits() == y.to_bits() {
+                    same += 1;
+                } else {
+                    differ += 1;
+                }
+                continue;
+            }
             let d = y as f64 - x as f64;
+            finite += 1;
             sq += d * d;
             max_abs = max_abs.max(d.abs());
             sum_a += x as f64;
@@ -158,19 +187,25 @@ pub fn diff(a: &EnviCube, b: &EnviCube) -> Result<CubeDiff> {
         }
         sq_all += sq;
         a_sq_all += a_sq;
+        n_all += finite;
+        let n = finite.max(1) as f64;
         bands.push(BandDiff {
             wavelength_nm: a.wavelengths_nm()[i],
             rmse: (sq / n).sqrt(),
             max_abs,
             mean_a: sum_a / n,
             mean_b: sum_b / n,
+            non_finite_differ: differ,
+            non_finite_same: same,
         });
     }
-    let rmse = (sq_all / (n * a.bands() as f64)).sqrt();
-    let rms_a = (a_sq_all / (n * a.bands() as f64)).sqrt();
+    let n = n_all.max(1) as f64;
+    let (rmse, rms_a) = ((sq_all / n).sqrt(), (a_sq_all / n).sqrt());
     Ok(CubeDiff {
         samples: a.samples(),
         lines: a.lines(),
+        max_abs: bands.iter().map(|b| b.max_abs).fold(0.0, f64::max),
+        non_finite_differ: bands.iter().map(|b| b.non_finite_differ).sum(),
         bands,
         rmse,
         relative_rmse: if rms_a > 0.0 { rmse / rms_a } else { 0.0 },

@@ -23,6 +23,84 @@ fn stdout(out: &Output) -> String {
     String::from_utf8(out.stdout.clone()).unwrap()
 }
 
+/// `diff --tol`: exit 0 within the tolerance, one clean failure line (after
+/// the JSON) beyond it; a NaN in one cube only is counted and fails any
+/// tolerance, while the same NaN in both agrees.
+#[test]
+fn diff_tolerance_and_non_finite_values() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    let sub = dir.path().join("nan");
+    std::fs::create_dir(&sub).unwrap();
+    let nan = small_cube_with(&sub, |x, y, b| {
+        if (x, y, b) == (2, 1, 1) {
+            f32::NAN
+        } else {
+            value(x, y, b) + 1e-4
+        }
+    });
+    let d = cube_tool(&["diff", p(&hdr), p(&nan), "--tol", "1e-3"]);
+    let said: serde_json::Value = serde_json::from_slice(&d.stdout).unwrap();
+    assert_eq!(said["non_finite_differ"], 1);
+    assert_eq!(said["bands"][1]["non_finite_differ"], 1);
+    assert!(
+        (said["max_abs"].as_f64().unwrap() - 1e-4).abs() < 1e-6,
+        "{said}"
+    );
+    assert_clean_failure(&d, "--tol");
+    // Within tolerance: the same cube, and the same NaN on both sides.
+    assert!(cube_tool(&["diff", p(&hdr), p(&hdr), "--tol", "0"])
+        .status
+        .success());
+    assert!(cube_tool(&["diff", p(&nan), p(&nan), "--tol", "0"])
+        .status
+        .success());
+    let same: serde_json::Value =
+        serde_json::from_slice(&cube_tool(&["diff", p(&nan), p(&nan)]).stdout).unwrap();
+    assert_eq!(same["bands"][1]["non_finite_same"], 1);
+    // A finite difference beyond the tolerance fails too.
+    let sub2 = dir.path().join("off");
+    std::fs::create_dir(&sub2).unwrap();
+    let off = small_cube_with(&sub2, |x, y, b| value(x, y, b) + 0.01);
+    assert!(cube_tool(&["diff", p(&hdr), p(&off), "--tol", "0.02"])
+        .status
+        .success());
+    assert_clean_failure(
+        &cube_tool(&["diff", p(&hdr), p(&off), "--tol", "0.005"]),
+        "--tol",
+    );
+    assert_clean_failure(
+        &cube_tool(&["diff", p(&hdr), p(&off), "--tol", "-1"]),
+        "--tol",
+    );
+}
+
+/// A wavelength no band covers, and an image name that is not .png, are
+/// errors, not a silent nearest band or PNG bytes under another name.
+#[test]
+fn band_out_of_range_and_non_png_outputs_are_refused() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    let png = dir.path().join("b.png");
+    // Bands at 450, 550, 650 nm with FWHM 100 nm: 1200 nm is no band's.
+    assert_clean_failure(
+        &cube_tool(&["band", p(&hdr), "1200", "--out", p(&png)]),
+        "1200 nm",
+    );
+    assert!(!png.exists());
+    assert!(cube_tool(&["band", p(&hdr), "700", "--out", p(&png)])
+        .status
+        .success());
+    let tif = dir.path().join("q.tif");
+    for args in [
+        &["band", p(&hdr), "550", "--out", p(&tif)][..],
+        &["quicklook", p(&hdr), "--out", p(&tif)],
+    ] {
+        assert_clean_failure(&cube_tool(args), "q.tif");
+        assert!(!tif.exists());
+    }
+}
+
 /// Value of pixel (x, y) in band b of the test cube.
 fn value(x: usize, y: usize, b: usize) -> f32 {
     0.001 * (x + 10 * y) as f32 + 0.25 * b as f32
@@ -30,6 +108,11 @@ fn value(x: usize, y: usize, b: usize) -> f32 {
 
 /// A 6 x 4 cube with bands at 450, 550, 650 nm, written as two tiles.
 fn small_cube(dir: &Path) -> PathBuf {
+    small_cube_with(dir, value)
+}
+
+/// The 6 x 4, 3-band cube `small` in `dir` with `value(x, y, b)` per pixel.
+fn small_cube_with(dir: &Path, value: impl Fn(usize, usize, usize) -> f32 + Copy) -> PathBuf {
     let (w, h) = (6, 4);
     let bands = BandGrid::explicit(vec![450.0, 550.0, 650.0], vec![100.0; 3]).unwrap();
     let writer = EnviWriter::create(
