@@ -153,3 +153,6 @@ impl EstimateSettings {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

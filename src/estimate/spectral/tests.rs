@@ -501,22 +501,3 @@ fn estimator_weights_and_reuses() {
     assert_eq!(out, [1.0, 0.0, 0.0]);
     assert_eq!(comp.dropped(), 0);
 }
-
-#[test]
-fn mode_names_agree_between_scene_files_command_line_and_reports() {
-    use clap::ValueEnum;
-    for mode in SpectralMode::ALL {
-        let quoted = format!("\"{}\"", mode.as_str());
-        assert_eq!(serde_json::from_str::<SpectralMode>(&quoted).unwrap(), mode);
-        assert_eq!(serde_json::to_string(&mode).unwrap(), quoted);
-        assert_eq!(mode.to_possible_value().unwrap().get_name(), mode.as_str());
-        assert_eq!(mode.to_string(), mode.as_str());
-    }
-    assert_eq!(SpectralMode::value_variants(), SpectralMode::ALL);
-    for bad in ["compensate", "", "naive ", "Naive"] {
-        let e = serde_json::from_str::<SpectralMode>(&format!("{bad:?}"))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("naive") && e.contains("compensated"), "{e}");
-    }
-}
