@@ -21,6 +21,7 @@ fn estimate(c: &mut Criterion) {
     if !path.exists() {
         littoral::emit::emit(
             &scene,
+            &littoral::emit::emission_provenance(&scene).unwrap(),
             &path,
             &BuildOptions::with_budget(512 * MIB),
             &littoral::progress::Silent,

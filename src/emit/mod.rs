@@ -27,7 +27,7 @@ use crate::store::{build_map, BuildOptions, PhotonSource, StagedPhoton, WriteSum
 use glam::Vec3;
 use std::ops::Range;
 use std::path::Path;
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 use tally::{PhotonTally, Totals};
 use trace::Source;
 
@@ -39,7 +39,10 @@ pub struct Emitter<'s> {
     /// Power per photon of each band (W nm^-1).
     photon_power: Vec<f64>,
     totals: Mutex<Totals>,
+    /// Recorded in the map's header ([`emit`] sets it).
     provenance: Provenance,
+    /// The emission report, made once when the last photon is traced.
+    report: OnceLock<report::EmissionReport>,
 }
 
 impl<'s> Emitter<'s> {
@@ -72,7 +75,16 @@ impl<'s> Emitter<'s> {
             cdf,
             photon_power,
             totals: Mutex::new(Totals::new(nb, scene.tally_depths.len())),
-            provenance: emission_provenance(scene)?,
+            provenance: Provenance::unrecorded(),
+            report: OnceLock::new(),
+        })
+    }
+
+    /// The report of the photons traced (call once tracing is done: it is
+    /// made on the first call and kept).
+    pub fn report(&self) -> &report::EmissionReport {
+        self.report.get_or_init(|| {
+            report::EmissionReport::new(self.scene, &self.totals(), &self.photon_power)
         })
     }
 
@@ -181,8 +193,7 @@ impl PhotonSource for Emitter<'_> {
 
     /// The emission report, as JSON.
     fn metadata(&self) -> Vec<u8> {
-        let report = report::EmissionReport::new(self.scene, &self.totals(), &self.photon_power);
-        serde_json::to_vec(&report).expect("the report serialises")
+        serde_json::to_vec(self.report()).expect("the report serialises")
     }
 
     fn bounds(&self) -> Aabb {
@@ -211,22 +222,22 @@ pub fn emission_provenance(scene: &Scene) -> Result<Provenance> {
 /// What `emit` produced.
 pub struct Emission {
     pub map: WriteSummary,
-    pub totals: Totals,
-    pub photon_power: Vec<f64>,
+    /// The emission report, as recorded in the map.
+    pub report: report::EmissionReport,
 }
 
-/// Trace the scene's photons into the map at `map_path`.
+/// Trace the scene's photons into the map at `map_path`, recording
+/// `provenance` (from [`emission_provenance`]) and the emission report in it.
 pub fn emit(
     scene: &Scene,
+    provenance: &Provenance,
     map_path: &Path,
     options: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Emission> {
-    let emitter = Emitter::new(scene)?;
+    let mut emitter = Emitter::new(scene)?;
+    emitter.provenance = provenance.clone();
     let map = build_map(map_path, &emitter, options, progress)?;
-    Ok(Emission {
-        map,
-        totals: emitter.totals(),
-        photon_power: emitter.photon_power.clone(),
-    })
+    let report = emitter.report().clone();
+    Ok(Emission { map, report })
 }

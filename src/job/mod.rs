@@ -56,6 +56,7 @@ impl EmitJob<'_> {
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
             self.scene,
+            &provenance,
             &self.map,
             &self.budget.emission(self.threads),
             progress,
@@ -63,7 +64,7 @@ impl EmitJob<'_> {
         let emit_s = start.elapsed().as_secs_f64();
         let peaks = sampler.finish();
         Ok(EmitReport {
-            emission: EmissionReport::new(self.scene, &em.totals, &em.photon_power),
+            emission: em.report,
             map: MapSummary::written(&em.map, provenance.digest_hex(), Some(&self.map)),
             timings_s: EmitTimings {
                 scene: self.scene_seconds,
@@ -123,12 +124,9 @@ impl RenderJob<'_> {
                     .map_err(|e| Error::io(&self.out_dir, "create", e))?,
             ),
         };
-        let (map_path, kept) = match (&self.map, &scratch) {
-            (Some(p), _) => (p.clone(), Some(p.as_path())),
-            (None, Some(s)) => (s.path().to_path_buf(), None),
-            (None, None) => unreachable!("a scratch map is made when no map is kept"),
-        };
-        let reused = self.map.as_deref().and_then(|p| reusable(p, &provenance));
+        let kept = self.map.as_deref();
+        let map_path = kept.or(scratch.as_ref().map(|s| s.path())).expect("a map path");
+        let reused = kept.and_then(|p| reusable(p, &provenance));
         let reused_map = reused.is_some();
         let (file, emission, map_summary) = match reused {
             Some((file, emission)) => {
@@ -138,13 +136,13 @@ impl RenderJob<'_> {
             None => {
                 let em = crate::emit::emit(
                     scene,
-                    &map_path,
+                    &provenance,
+                    map_path,
                     &self.budget.emission(self.threads),
                     progress,
                 )?;
                 let summary = MapSummary::written(&em.map, provenance.digest_hex(), kept);
-                let emission = EmissionReport::new(scene, &em.totals, &em.photon_power);
-                (MapFile::open(&map_path)?, emission, summary)
+                (MapFile::open(map_path)?, em.report, summary)
             }
         };
         let t_emit = start.elapsed().as_secs_f64();
