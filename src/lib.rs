@@ -17,8 +17,11 @@
 //!   ([`store::InMemoryMap`]).
 //! - [`estimate`]: radiance from photons, with boundary- and spectral-bias
 //!   compensation and the forward peak as a delta ([`estimate::Estimator`]).
-//! - [`render`]: sensor rays, the ray marcher and radiometers
-//!   ([`render::render`], [`render::march::RayMarcher`]).
+//! - [`render`]: sensor rays, the two integrators behind one trait
+//!   ([`render::Integrator`]): the photon map's ray marcher
+//!   ([`render::march::RayMarcher`]) and the unbiased reference path tracer
+//!   ([`render::path::PathTracer`]); the image loop and radiometers
+//!   ([`render::render_with`]).
 //! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR) and its
 //!   quicklook (PNG).
 //! - [`job`]: the whole pipeline as one call — scene, map (reused by

@@ -17,7 +17,7 @@
 //! asks for it, since the renderer adds that single scattering directly.
 
 use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LD, LU, MIN_ABS_MU};
-use crate::optics::phase::scatter;
+use crate::optics::phase::{cosine_hemisphere, scatter};
 use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
@@ -40,14 +40,6 @@ pub struct Traced {
     pub truncated: bool,
     pub stored_volume: u32,
     pub stored_surface: u32,
-}
-
-/// Cosine-weighted direction in the hemisphere around `n`.
-fn cosine_hemisphere(n: Vec3, rng: &mut Pcg32) -> Vec3 {
-    // cos(theta) = sqrt(u) has density 2 cos(theta) sin(theta): Lambertian.
-    let cos_theta = rng.uniform_f64().sqrt();
-    let phi = std::f64::consts::TAU * rng.uniform_f64();
-    scatter(n, cos_theta as f32, phi as f32)
 }
 
 /// Trace photon `index` of band `band` from `source`; stored photons go to
@@ -126,7 +118,7 @@ pub fn trace(
         } else {
             f64::INFINITY
         };
-        let t_edge = edge_distance(pos, dir, sx, sy);
+        let t_edge = scene.domain.edge_distance(pos, dir);
         let t_limit = t_flight.min(t_surface).min(t_edge);
         let hit = scene
             .geometry
@@ -182,7 +174,7 @@ pub fn trace(
                 result.fate = Fate::LostEdge;
                 return result;
             }
-            pos = wrap(next, dir, sx, sy);
+            pos = scene.domain.wrap(next, dir);
             continue;
         }
         // A tentative collision.
@@ -251,33 +243,4 @@ fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir:
             }
         }
     }
-}
-
-/// Distance along `dir` from `p` to the domain's side walls.
-fn edge_distance(p: Vec3, dir: Vec3, sx: f64, sy: f64) -> f64 {
-    let along = |x: f32, d: f32, size: f64| -> f64 {
-        if d > 0.0 {
-            (size - x as f64) / d as f64
-        } else if d < 0.0 {
-            -(x as f64) / d as f64
-        } else {
-            f64::INFINITY
-        }
-    };
-    along(p.x, dir.x, sx).min(along(p.y, dir.y, sy)).max(0.0)
-}
-
-/// Move a point that reached a side wall to the opposite wall.
-fn wrap(p: Vec3, dir: Vec3, sx: f64, sy: f64) -> Vec3 {
-    let w = |x: f32, d: f32, size: f64| -> f32 {
-        let s = size as f32;
-        if d > 0.0 && x >= s * (1.0 - 1e-6) {
-            0.0
-        } else if d < 0.0 && x <= s * 1e-6 {
-            s
-        } else {
-            x.clamp(0.0, s)
-        }
-    };
-    Vec3::new(w(p.x, dir.x, sx), w(p.y, dir.y, sy), p.z)
 }

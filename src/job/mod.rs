@@ -27,7 +27,7 @@ use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::provenance::Provenance;
-use crate::scene::Scene;
+use crate::scene::{IntegratorMode, Scene};
 use crate::store::{MapFile, PhotonMap};
 pub use budget::{MemoryBudget, RenderShares};
 use report::{
@@ -104,6 +104,13 @@ fn reusable(path: &Path, provenance: &Provenance) -> Option<(MapFile, EmissionRe
     Some((map, report))
 }
 
+/// The photon map a render used: what it reported and how long it took.
+struct MapStage {
+    emission: EmissionReport,
+    summary: MapSummary,
+    reused: bool,
+}
+
 impl RenderJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<RunReport> {
         let start = Instant::now();
@@ -113,8 +120,89 @@ impl RenderJob<'_> {
         // Everything that can be refused is refused before any photon is traced.
         let shares = self.budget.render(scene, self.threads)?;
         create_dir(&self.out_dir)?;
-        let provenance = crate::emit::emission_provenance(scene)?;
+        let integrator = scene.render.integrator;
+        let (rendered, stage, t_emit) = match integrator {
+            IntegratorMode::PhotonMap => {
+                let (rendered, stage, t_emit) = self.photon_map(&shares, start, progress)?;
+                (rendered, Some(stage), t_emit)
+            }
+            IntegratorMode::Path => (
+                crate::render::render_path(scene, &self.out_dir, self.threads, progress)?,
+                None,
+                0.0,
+            ),
+        };
+        let t_render = start.elapsed().as_secs_f64();
 
+        let json = self.out_dir.join(format!("{}.json", scene.name));
+        let peaks = sampler.finish();
+        let ed_above = match &stage {
+            Some(s) => s.emission.above_surface.Ed.clone(),
+            None => (0..scene.bands.len())
+                .map(|b| scene.incident_irradiance(b))
+                .collect(),
+        };
+        let (emission, map, reused_map) = match stage {
+            Some(s) => (Some(s.emission), Some(s.summary), s.reused),
+            None => (None, None, false),
+        };
+        let report = RunReport {
+            integrator,
+            Ed_above_surface: ed_above,
+            emission,
+            map,
+            reused_map,
+            radiometers: rendered.radiometers,
+            estimate: scene.estimate.clone(),
+            sensor: SensorSummary {
+                pixels: scene.sensor.pixels,
+                samples_per_pixel: scene.sensor.samples_per_pixel,
+                bands: scene.bands.len(),
+            },
+            cache: rendered.cache,
+            memory: shares,
+            outputs: Outputs {
+                hdr: rendered.hdr.display().to_string(),
+                bsq: rendered.bsq.display().to_string(),
+                png: rendered.png.display().to_string(),
+                exr: rendered.exr.display().to_string(),
+                json: json.display().to_string(),
+                stderr_hdr: rendered
+                    .stderr
+                    .as_ref()
+                    .map(|c| c.hdr.display().to_string()),
+                stderr_bsq: rendered
+                    .stderr
+                    .as_ref()
+                    .map(|c| c.bsq.display().to_string()),
+            },
+            timings_s: RenderTimings {
+                scene: self.scene_seconds,
+                emit: t_emit,
+                render: t_render - t_emit,
+                total: self.scene_seconds + t_render,
+            },
+            peak_memory: peaks,
+            peak_rss_bytes: peaks.rss_bytes,
+        };
+        let text = serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::invalid("report", e.to_string()))?
+            + "\n";
+        crate::output::write_atomic(&json, text.as_bytes())?;
+        Ok(report)
+    }
+
+    /// The photon-map integrator: the map (reused or emitted), then the
+    /// render; returns the render, the map stage and the seconds to the end
+    /// of emission.
+    fn photon_map(
+        &self,
+        shares: &RenderShares,
+        start: Instant,
+        progress: &dyn Progress,
+    ) -> Result<(crate::render::Rendered, MapStage, f64)> {
+        let scene = self.scene;
+        let provenance = crate::emit::emission_provenance(scene)?;
         let scratch = match &self.map {
             Some(_) => None,
             None => Some(
@@ -125,10 +213,12 @@ impl RenderJob<'_> {
             ),
         };
         let kept = self.map.as_deref();
-        let map_path = kept.or(scratch.as_ref().map(|s| s.path())).expect("a map path");
+        let map_path = kept
+            .or(scratch.as_ref().map(|s| s.path()))
+            .expect("a map path");
         let reused = kept.and_then(|p| reusable(p, &provenance));
         let reused_map = reused.is_some();
-        let (file, emission, map_summary) = match reused {
+        let (file, emission, summary) = match reused {
             Some((file, emission)) => {
                 let summary = MapSummary::existing(&file, kept);
                 (file, emission, summary)
@@ -150,46 +240,14 @@ impl RenderJob<'_> {
 
         let map = PhotonMap::new(file, shares.tile_cache_bytes)?;
         let rendered = crate::render::render(scene, &map, &self.out_dir, self.threads, progress)?;
-        let t_render = start.elapsed().as_secs_f64();
         drop(map);
         drop(scratch);
-
-        let json = self.out_dir.join(format!("{}.json", scene.name));
-        let peaks = sampler.finish();
-        let report = RunReport {
-            Ed_above_surface: emission.above_surface.Ed.clone(),
+        let stage = MapStage {
             emission,
-            map: map_summary,
-            reused_map,
-            radiometers: rendered.radiometers,
-            estimate: scene.estimate.clone(),
-            sensor: SensorSummary {
-                pixels: scene.sensor.pixels,
-                samples_per_pixel: scene.sensor.samples_per_pixel,
-            },
-            cache: rendered.cache,
-            memory: shares,
-            outputs: Outputs {
-                hdr: rendered.hdr.display().to_string(),
-                bsq: rendered.bsq.display().to_string(),
-                png: rendered.png.display().to_string(),
-                exr: rendered.exr.display().to_string(),
-                json: json.display().to_string(),
-            },
-            timings_s: RenderTimings {
-                scene: self.scene_seconds,
-                emit: t_emit,
-                render: t_render - t_emit,
-                total: self.scene_seconds + t_render,
-            },
-            peak_memory: peaks,
-            peak_rss_bytes: peaks.rss_bytes,
+            summary,
+            reused: reused_map,
         };
-        let text = serde_json::to_string_pretty(&report)
-            .map_err(|e| Error::invalid("report", e.to_string()))?
-            + "\n";
-        crate::output::write_atomic(&json, text.as_bytes())?;
-        Ok(report)
+        Ok((rendered, stage, t_emit))
     }
 }
 

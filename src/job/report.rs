@@ -6,7 +6,7 @@ use super::budget::RenderShares;
 use crate::emit::report::EmissionReport;
 use crate::mem::MemoryPeaks;
 use crate::render::RadiometerReading;
-use crate::scene::EstimateSettings;
+use crate::scene::{EstimateSettings, IntegratorMode};
 use crate::store::cache::CacheStats;
 use crate::store::{MapFile, WriteSummary};
 use serde::{Deserialize, Serialize};
@@ -87,6 +87,8 @@ pub struct EmitReport {
 pub struct SensorSummary {
     pub pixels: [usize; 2],
     pub samples_per_pixel: u32,
+    /// Bands of the cube.
+    pub bands: usize,
 }
 
 /// The files a render wrote.
@@ -97,6 +99,12 @@ pub struct Outputs {
     pub png: String,
     pub exr: String,
     pub json: String,
+    /// The standard-error cube (path integrator with two or more samples
+    /// per pixel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stderr_hdr: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stderr_bsq: Option<String>,
 }
 
 /// Seconds spent in each stage of `render`.
@@ -113,14 +121,20 @@ pub struct RenderTimings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct RunReport {
+    /// The integrator that rendered.
+    pub integrator: IntegratorMode,
+    /// The emission report of the photon map (none for the path integrator).
     #[serde(flatten)]
-    pub emission: EmissionReport,
-    pub map: MapSummary,
+    pub emission: Option<EmissionReport>,
+    /// The photon map (none for the path integrator).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<MapSummary>,
     /// True when the map was reused (its provenance matched the scene's).
     pub reused_map: bool,
     pub radiometers: Vec<RadiometerReading>,
     /// Downwelling irradiance just above the surface per band (W m^-2
-    /// nm^-1), for Rrs = L / Ed.
+    /// nm^-1), for Rrs = L / Ed: the emission's tally for the photon map,
+    /// the scene's sun and sky for the path integrator.
     #[serde(deserialize_with = "crate::json::f64s")]
     pub Ed_above_surface: Vec<f64>,
     pub estimate: EstimateSettings,
@@ -175,21 +189,34 @@ impl RunReport {
         let dir = Path::new(&self.outputs.json)
             .parent()
             .map_or_else(String::new, |d| d.display().to_string());
+        let name = Path::new(&self.outputs.json)
+            .file_stem()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let stages = match self.integrator {
+            IntegratorMode::PhotonMap => format!(
+                "{} {:.1} s, render {:.1} s",
+                if self.reused_map {
+                    "reused map"
+                } else {
+                    "emit"
+                },
+                self.timings_s.emit,
+                self.timings_s.render
+            ),
+            IntegratorMode::Path => format!(
+                "path integrator, {} paths per pixel",
+                self.sensor.samples_per_pixel
+            ),
+        };
         format!(
-            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({} {:.1} s, render {:.1} s); {}",
-            self.emission.scene,
+            "rendered {} ({}x{} px, {} bands) into {} in {:.1} s ({}); {}",
+            name,
             self.sensor.pixels[0],
             self.sensor.pixels[1],
-            self.emission.bands_nm.len(),
+            self.sensor.bands,
             dir,
             self.timings_s.total,
-            if self.reused_map {
-                "reused map"
-            } else {
-                "emit"
-            },
-            self.timings_s.emit,
-            self.timings_s.render,
+            stages,
             memory_line(&self.peak_memory, self.memory.budget_bytes)
         )
     }

@@ -229,6 +229,15 @@ pub fn scatter(w: Vec3, cos_theta: f32, phi: f32) -> Vec3 {
     scatter_sin_cos(w, sin_theta, cos_theta, phi)
 }
 
+/// Cosine-weighted (Lambertian) direction of travel in the hemisphere
+/// around the unit normal `n`.
+pub fn cosine_hemisphere(n: Vec3, rng: &mut crate::rng::Pcg32) -> Vec3 {
+    // cos(theta) = sqrt(u) has density 2 cos(theta) sin(theta): Lambertian.
+    let cos_theta = rng.uniform_f64().sqrt();
+    let phi = std::f64::consts::TAU * rng.uniform_f64();
+    scatter(n, cos_theta as f32, phi as f32)
+}
+
 fn scatter_sin_cos(w: Vec3, sin_theta: f32, cos_theta: f32, phi: f32) -> Vec3 {
     let (b1, b2) = w.any_orthonormal_pair();
     let (sin_phi, cos_phi) = phi.sin_cos();

@@ -10,13 +10,13 @@
 //! Choices: the sun is refracted through the mean (flat) surface for next
 //! event estimation, also under a rough surface; the transmittance toward
 //! the sun is integrated with four midpoint samples in heterogeneous water
-//! (exact in uniform water); sun glint on a rough surface is added
-//! analytically from the Cox–Munk slope density (a point sun cannot be
-//! found by sampling); camera rays are not wrapped at periodic edges; a
+//! (exact in uniform water); the surface seen from the air is
+//! `interface::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! radiometer looking up at the surface sees the transmitted sky (internal
 //! reflection of upwelling light there is not followed).
 
 use super::camera::CameraRay;
+use super::interface::{from_air, sky_radiance};
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
 use crate::optics::iop::Iop;
@@ -59,12 +59,7 @@ impl<'a> RayMarcher<'a> {
             .iter()
             .map(|e| e * t * cos_s / cos_w)
             .collect();
-        let sky_l = scene
-            .sky
-            .irradiance
-            .iter()
-            .map(|e| e / std::f64::consts::PI)
-            .collect();
+        let sky_l = sky_radiance(scene);
         RayMarcher {
             scene,
             est,
@@ -191,7 +186,9 @@ impl<'a> RayMarcher<'a> {
         Ok(())
     }
 
-    /// Radiance per band reaching a sensor along `ray` (in air, toward the water).
+    /// Radiance per band reaching a sensor along `ray` (in air, toward the
+    /// water): the surface as `interface::from_air` treats it, the march
+    /// below it.
     pub fn camera(
         &self,
         ray: CameraRay,
@@ -199,77 +196,13 @@ impl<'a> RayMarcher<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
-        let scene = self.scene;
-        let d = ray.direction;
-        if d.z >= 0.0 {
-            out.copy_from_slice(&self.sky_l);
-            return Ok(());
-        }
-        let p = ray.origin + d * (-ray.origin.z / d.z);
-        let p = Vec3::new(p.x, p.y, 0.0);
-        // Both branches of the facet the ray meets are followed, weighted by
-        // Fresnel: choosing one would make the bright reflected sky speckle.
-        let split = scene.surface.split_from_above(d, rng);
-        let mut part = vec![0.0; self.bands()];
-        self.leave_surface(p, split.reflected, false, rng, scratch, out)?;
-        self.leave_surface(p, split.refracted, true, rng, scratch, &mut part)?;
-        let r = split.reflectance;
-        for (o, t) in out.iter_mut().zip(&part) {
-            *o = r * *o + (1.0 - r) * t;
-        }
-        self.add_glint(-d, out);
-        Ok(())
-    }
-
-    /// Radiance reaching the surface point `p` along `-dir`, for a ray
-    /// leaving it along `dir` into the water (`in_water`) or the air; a ray
-    /// heading back into the surface meets it again (`SeaSurface::interact`).
-    /// Radiance leaving the water drops by n^2.
-    fn leave_surface(
-        &self,
-        p: Vec3,
-        dir: Vec3,
-        in_water: bool,
-        rng: &mut Pcg32,
-        scratch: &mut Scratch,
-        out: &mut [f64],
-    ) -> Result<()> {
-        let scene = self.scene;
-        let (dir, in_water) = if (in_water && dir.z < 0.0) || (!in_water && dir.z > 0.0) {
-            (dir, in_water)
-        } else {
-            let ev = scene.surface.interact(dir, rng);
-            (ev.direction, in_water != ev.transmitted)
-        };
-        if in_water {
-            let n2 = scene.surface.n_water * scene.surface.n_water;
-            self.march(p + dir * 1e-4, dir, rng, scratch, out)?;
-            out.iter_mut().for_each(|o| *o /= n2);
-        } else {
-            out.copy_from_slice(&self.sky_l);
-        }
-        Ok(())
-    }
-
-    /// Sun glint on a Cox–Munk surface seen from direction `v` (up):
-    /// L = E_sun rho p(zx, zy) / (4 cos(theta_v) cos^4(beta)).
-    fn add_glint(&self, v: Vec3, out: &mut [f64]) {
-        let s2 = self.scene.surface.slope_variance;
-        if s2 <= 0.0 {
-            return;
-        }
-        let v = v.as_dvec3();
-        let s = -self.scene.sun.direction.as_dvec3();
-        let h = (v + s).normalize();
-        if h.z <= 0.0 || v.z <= 0.0 {
-            return;
-        }
-        let (zx, zy) = (-h.x / h.z, -h.y / h.z);
-        let p = (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2);
-        let rho = fresnel_reflectance(h.dot(v), 1.0, self.scene.surface.n_water);
-        let g = rho * p / (4.0 * v.z * h.z.powi(4));
-        for (o, e) in out.iter_mut().zip(&self.scene.sun.irradiance) {
-            *o += e * g;
-        }
+        from_air(
+            self.scene,
+            &self.sky_l,
+            ray,
+            rng,
+            out,
+            &mut |p, dir, rng, out| self.march(p, dir, rng, scratch, out),
+        )
     }
 }

@@ -1,17 +1,25 @@
 //! Rendering: the radiance cube an imaging spectrometer sees, and in-water
-//! radiometers, from a scene and its photon map.
+//! radiometers, by either integrator ([`Integrator`]): the photon map's ray
+//! marcher ([`march::RayMarcher`]) or the reference path tracer
+//! ([`path::PathTracer`]).
 //!
 //! The image is split into 16 x 16 pixel tiles rendered in parallel in
 //! Morton order (neighbouring tiles query neighbouring photons, which keeps
 //! the tile cache warm) and written to the ENVI cube as they finish, so the
 //! whole cube is never in memory. Every pixel sample draws from the random
 //! stream (seed, pixel, sample), so the cube is bit-identical for any
-//! thread count.
+//! thread count. With two or more samples per pixel the path integrator
+//! also writes a standard-error cube (`NAME.stderr.hdr`): the standard
+//! error of the mean over a pixel's independent paths. The photon map's
+//! samples share one map, so their spread is not its error, and no such
+//! cube is written for it.
 //!
 //! Not for: emission (see `emit`) or file formats (see `cube`).
 
 pub mod camera;
+pub mod interface;
 pub mod march;
+pub mod path;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
@@ -20,11 +28,14 @@ use crate::estimate::estimator::{with_scratch, Estimator};
 use crate::morton::morton3;
 use crate::progress::Progress;
 use crate::rng::{mix64, Pcg32};
+use crate::scene::settings::PATH_RADIOMETER_PATHS_PER_SPP;
 use crate::scene::{Radiometer, Scene};
 use crate::store::PhotonQuery;
 use glam::Vec3;
 use march::RayMarcher;
+use path::{PathScratch, PathTracer};
 use rayon::prelude::*;
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
 /// Side of an image tile in pixels.
@@ -45,12 +56,85 @@ pub struct RadiometerReading {
     /// Radiance per band (W m^-2 sr^-1 nm^-1).
     #[serde(deserialize_with = "crate::json::f64s")]
     pub L: Vec<f64>,
-    /// Standard error per band of the mean over the jittered samples: the
-    /// march's sampling error. Photon-map noise is correlated over the
-    /// search radius, so it is not in this figure (in deep water at 8 M
-    /// photons and k = 800 it was 3-7 % between distant positions).
+    /// Standard error per band of the mean over the jittered samples. For
+    /// the path integrator it is the whole error (independent paths); for
+    /// the photon map it is the march's sampling error only: photon-map
+    /// noise is correlated over the search radius, so it is not in this
+    /// figure (in deep water at 8 M photons and k = 800 it was 3-7 %
+    /// between distant positions).
     #[serde(deserialize_with = "crate::json::f64s")]
     pub stderr: Vec<f64>,
+}
+
+/// A light-transport integrator: radiance along sensor rays and at
+/// radiometers. Implementations are shared by all rendering threads.
+pub trait Integrator: Sync {
+    /// Bands of every radiance vector.
+    fn bands(&self) -> usize;
+    /// Radiance per band reaching a sensor along `ray` (in air).
+    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
+    /// Radiance per band arriving at `p` (in water) along `-dir`.
+    fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
+    /// Samples (jittered positions, each one path or march) per radiometer
+    /// reading.
+    fn radiometer_samples(&self) -> u64;
+    /// True when a pixel's samples are independent, so that their spread
+    /// is the pixel's error and a standard-error cube can be written.
+    fn independent_samples(&self) -> bool;
+}
+
+impl Integrator for RayMarcher<'_> {
+    fn bands(&self) -> usize {
+        self.scene.bands.len()
+    }
+    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
+        with_scratch(self.bands(), |s| RayMarcher::camera(self, ray, rng, s, out))
+    }
+    fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
+        with_scratch(self.bands(), |s| self.march(p, dir, rng, s, out))
+    }
+    fn radiometer_samples(&self) -> u64 {
+        RADIOMETER_SAMPLES
+    }
+    fn independent_samples(&self) -> bool {
+        false
+    }
+}
+
+thread_local! {
+    static PATH_SCRATCH: RefCell<Option<PathScratch>> = const { RefCell::new(None) };
+}
+
+/// Run `f` with this thread's path buffers for `bands` bands.
+fn with_path_scratch<R>(bands: usize, f: impl FnOnce(&mut PathScratch) -> R) -> R {
+    PATH_SCRATCH.with(|s| {
+        let mut s = s.borrow_mut();
+        if s.as_ref().is_none_or(|sc| sc.bands() != bands) {
+            *s = Some(PathScratch::new(bands));
+        }
+        f(s.as_mut().expect("just set"))
+    })
+}
+
+impl Integrator for PathTracer<'_> {
+    fn bands(&self) -> usize {
+        self.scene.bands.len()
+    }
+    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
+        with_path_scratch(out.len(), |s| PathTracer::camera(self, ray, rng, s, out))
+    }
+    fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
+        with_path_scratch(out.len(), |s| {
+            PathTracer::in_water(self, p, dir, rng, s, out)
+        });
+        Ok(())
+    }
+    fn radiometer_samples(&self) -> u64 {
+        PATH_RADIOMETER_PATHS_PER_SPP * self.scene.sensor.samples_per_pixel as u64
+    }
+    fn independent_samples(&self) -> bool {
+        true
+    }
 }
 
 /// What a render wrote.
@@ -60,13 +144,16 @@ pub struct Rendered {
     pub bsq: PathBuf,
     pub exr: PathBuf,
     pub png: PathBuf,
+    /// The standard-error cube, when one was written (path integrator, two
+    /// or more samples per pixel).
+    pub stderr: Option<crate::cube::envi::CubeFiles>,
     pub radiometers: Vec<RadiometerReading>,
-    /// Tile-cache counters after the render.
+    /// Tile-cache counters after the render (zero without a photon map).
     pub cache: crate::store::cache::CacheStats,
 }
 
-/// Render `scene` from `map` into `dir/NAME.{hdr,bsq,png}` with `threads`
-/// threads (0 = all cores).
+/// Render `scene` from `map` with the photon-map integrator into
+/// `dir/NAME.{hdr,bsq,exr,png}` with `threads` threads (0 = all cores).
 pub fn render(
     scene: &Scene,
     map: &dyn PhotonQuery,
@@ -74,18 +161,61 @@ pub fn render(
     threads: usize,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    let pool = crate::parallel::pool(threads)?;
     let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
+    let mut r = render_with(scene, &light, dir, threads, progress)?;
+    r.cache = map.cache_stats();
+    Ok(r)
+}
+
+/// Render `scene` with the path integrator (no photon map) into
+/// `dir/NAME.{hdr,bsq,exr,png}` and, with two or more samples per pixel,
+/// `dir/NAME.stderr.{hdr,bsq}`.
+pub fn render_path(
+    scene: &Scene,
+    dir: &Path,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<Rendered> {
+    render_with(scene, &PathTracer::new(scene), dir, threads, progress)
+}
+
+/// Render `scene` with `light`: the image tiles, the quicklook, the EXR,
+/// the standard-error cube where the samples allow one, the radiometers.
+pub fn render_with(
+    scene: &Scene,
+    light: &dyn Integrator,
+    dir: &Path,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<Rendered> {
+    let pool = crate::parallel::pool(threads)?;
     let nb = scene.bands.len();
     let [w, h] = scene.sensor.pixels;
-    let spec = CubeSpec {
+    let spp = scene.sensor.samples_per_pixel as u64;
+    let spec = |description: String| CubeSpec {
         samples: w,
         lines: h,
         bands: scene.bands.clone(),
-        description: format!("littoral radiance cube of scene '{}'", scene.name),
+        description,
         data_units: "W m-2 sr-1 nm-1".into(),
     };
-    let writer = EnviWriter::create(dir, &scene.name, spec)?;
+    let writer = EnviWriter::create(
+        dir,
+        &scene.name,
+        spec(format!("littoral radiance cube of scene '{}'", scene.name)),
+    )?;
+    let se_writer = if light.independent_samples() && spp >= 2 {
+        Some(EnviWriter::create(
+            dir,
+            &format!("{}.stderr", scene.name),
+            spec(format!(
+                "littoral standard error of the radiance cube of scene '{}' ({} independent paths per pixel)",
+                scene.name, spp
+            )),
+        )?)
+    } else {
+        None
+    };
     let quicklook = Quicklook::new(&scene.bands);
     let (tx, ty) = (w.div_ceil(TILE_PX), h.div_ceil(TILE_PX));
     let mut tiles: Vec<(u64, usize, usize)> = (0..ty)
@@ -93,7 +223,6 @@ pub fn render(
         .collect();
     tiles.sort_unstable();
     progress.stage("render tiles", tiles.len() as u64);
-    let spp = scene.sensor.samples_per_pixel as u64;
     let rgb_tiles: Vec<(usize, usize, Vec<f32>)> = pool.install(|| {
         tiles
             .par_iter()
@@ -101,38 +230,51 @@ pub fn render(
                 let (x0, y0) = (i * TILE_PX, j * TILE_PX);
                 let (tw, th) = (TILE_PX.min(w - x0), TILE_PX.min(h - y0));
                 let mut values = vec![0f32; tw * th * nb];
+                let mut errors = vec![0f32; if se_writer.is_some() { tw * th * nb } else { 0 }];
                 let mut rgb = vec![0f32; tw * th * 3];
                 let mut acc = vec![0f64; nb];
+                let mut acc_sq = vec![0f64; nb];
                 let mut sample = vec![0f64; nb];
-                with_scratch(nb, |scratch| -> Result<()> {
-                    for py in 0..th {
-                        for px in 0..tw {
-                            let (gx, gy) = (x0 + px, y0 + py);
-                            let pixel = (gy * w + gx) as u64;
-                            acc.iter_mut().for_each(|a| *a = 0.0);
-                            for s in 0..spp {
-                                let mut rng =
-                                    Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
-                                let (u, v) = if spp == 1 {
-                                    (0.5, 0.5)
-                                } else {
-                                    (rng.uniform_f32(), rng.uniform_f32())
-                                };
-                                let ray = camera::ray(&scene.sensor, gx, gy, u, v);
-                                light.camera(ray, &mut rng, scratch, &mut sample)?;
-                                acc.iter_mut().zip(&sample).for_each(|(a, s)| *a += s);
-                            }
-                            let base = (py * tw + px) * nb;
+                for py in 0..th {
+                    for px in 0..tw {
+                        let (gx, gy) = (x0 + px, y0 + py);
+                        let pixel = (gy * w + gx) as u64;
+                        acc.iter_mut().for_each(|a| *a = 0.0);
+                        acc_sq.iter_mut().for_each(|a| *a = 0.0);
+                        for s in 0..spp {
+                            let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
+                            let (u, v) = if spp == 1 {
+                                (0.5, 0.5)
+                            } else {
+                                (rng.uniform_f32(), rng.uniform_f32())
+                            };
+                            let ray = camera::ray(&scene.sensor, gx, gy, u, v);
+                            light.camera(ray, &mut rng, &mut sample)?;
                             for b in 0..nb {
-                                values[base + b] = (acc[b] / spp as f64) as f32;
+                                acc[b] += sample[b];
+                                acc_sq[b] += sample[b] * sample[b];
                             }
-                            let c = quicklook.rgb(&values[base..base + nb]);
-                            rgb[(py * tw + px) * 3..(py * tw + px) * 3 + 3].copy_from_slice(&c);
                         }
+                        let base = (py * tw + px) * nb;
+                        for b in 0..nb {
+                            values[base + b] = (acc[b] / spp as f64) as f32;
+                        }
+                        if !errors.is_empty() {
+                            let n = spp as f64;
+                            for b in 0..nb {
+                                let m = acc[b] / n;
+                                let var = (acc_sq[b] / n - m * m).max(0.0) * n / (n - 1.0);
+                                errors[base + b] = (var / n).sqrt() as f32;
+                            }
+                        }
+                        let c = quicklook.rgb(&values[base..base + nb]);
+                        rgb[(py * tw + px) * 3..(py * tw + px) * 3 + 3].copy_from_slice(&c);
                     }
-                    Ok(())
-                })?;
+                }
                 writer.write_tile(x0, y0, tw, th, &values)?;
+                if let Some(se) = &se_writer {
+                    se.write_tile(x0, y0, tw, th, &errors)?;
+                }
                 progress.advance(1);
                 Ok((i, j, rgb))
             })
@@ -151,6 +293,7 @@ pub fn render(
     let png = dir.join(format!("{}.png", scene.name));
     write_png(&png, w, h, &image, None)?;
     let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
+    let stderr = se_writer.map(|s| s.finish()).transpose()?;
     // The spectral OpenEXR copy, tile by tile from the finished cube.
     let exr = dir.join(format!("{}.exr", scene.name));
     crate::cube::exr::write_spectral_exr(&crate::cube::EnviCube::open(&hdr)?, &exr)?;
@@ -159,7 +302,7 @@ pub fn render(
             .radiometers
             .par_iter()
             .enumerate()
-            .map(|(i, r)| read_radiometer(&light, i as u64, r))
+            .map(|(i, r)| read_radiometer(scene, light, i as u64, r))
             .collect::<Result<Vec<_>>>()
     })?;
     Ok(Rendered {
@@ -167,59 +310,76 @@ pub fn render(
         bsq,
         exr,
         png,
+        stderr,
         radiometers,
-        cache: map.cache_stats(),
+        cache: Default::default(),
     })
 }
 
-/// Radiometer readings only (no image).
+/// Radiometer readings only (no image), with the photon-map integrator.
 pub fn radiometers(scene: &Scene, map: &dyn PhotonQuery) -> Result<Vec<RadiometerReading>> {
     let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
     scene
         .radiometers
         .iter()
         .enumerate()
-        .map(|(i, r)| read_radiometer(&light, i as u64, r))
+        .map(|(i, r)| read_radiometer(scene, &light, i as u64, r))
         .collect()
 }
 
-fn read_radiometer(light: &RayMarcher, index: u64, r: &Radiometer) -> Result<RadiometerReading> {
-    let nb = light.scene.bands.len();
+/// Radiometer readings only (no image), with the path integrator.
+pub fn radiometers_path(scene: &Scene, threads: usize) -> Result<Vec<RadiometerReading>> {
+    let pool = crate::parallel::pool(threads)?;
+    let light = PathTracer::new(scene);
+    pool.install(|| {
+        scene
+            .radiometers
+            .par_iter()
+            .enumerate()
+            .map(|(i, r)| read_radiometer(scene, &light, i as u64, r))
+            .collect()
+    })
+}
+
+fn read_radiometer(
+    scene: &Scene,
+    light: &dyn Integrator,
+    index: u64,
+    r: &Radiometer,
+) -> Result<RadiometerReading> {
+    let nb = scene.bands.len();
+    let samples = light.radiometer_samples();
     let mut sum = vec![0f64; nb];
     let mut sum_sq = vec![0f64; nb];
     let mut one = vec![0f64; nb];
-    with_scratch(nb, |scratch| -> Result<()> {
-        for s in 0..RADIOMETER_SAMPLES {
-            let mut rng = Pcg32::new(light.scene.seed ^ RADIOMETER_STREAM, mix64(index) ^ s);
-            // Jitter within a 0.5 m footprint: the spread gives the error.
-            let jx = (rng.uniform_f64() - 0.5) * 0.5;
-            let jy = (rng.uniform_f64() - 0.5) * 0.5;
-            let p = Vec3::new(
-                (r.position_m[0] + jx) as f32,
-                (r.position_m[1] + jy) as f32,
-                -r.depth_m as f32,
-            );
-            if r.depth_m > 0.0 {
-                light.march(p, r.view, &mut rng, scratch, &mut one)?;
-            } else {
-                light.camera(
-                    camera::CameraRay {
-                        origin: p,
-                        direction: r.view,
-                    },
-                    &mut rng,
-                    scratch,
-                    &mut one,
-                )?;
-            }
-            for b in 0..nb {
-                sum[b] += one[b];
-                sum_sq[b] += one[b] * one[b];
-            }
+    for s in 0..samples {
+        let mut rng = Pcg32::new(scene.seed ^ RADIOMETER_STREAM, mix64(index) ^ s);
+        // Jitter within a 0.5 m footprint: the spread gives the error.
+        let jx = (rng.uniform_f64() - 0.5) * 0.5;
+        let jy = (rng.uniform_f64() - 0.5) * 0.5;
+        let p = Vec3::new(
+            (r.position_m[0] + jx) as f32,
+            (r.position_m[1] + jy) as f32,
+            -r.depth_m as f32,
+        );
+        if r.depth_m > 0.0 {
+            light.in_water(p, r.view, &mut rng, &mut one)?;
+        } else {
+            light.camera(
+                camera::CameraRay {
+                    origin: p,
+                    direction: r.view,
+                },
+                &mut rng,
+                &mut one,
+            )?;
         }
-        Ok(())
-    })?;
-    let n = RADIOMETER_SAMPLES as f64;
+        for b in 0..nb {
+            sum[b] += one[b];
+            sum_sq[b] += one[b] * one[b];
+        }
+    }
+    let n = samples as f64;
     let l: Vec<f64> = sum.iter().map(|s| s / n).collect();
     let se = sum_sq
         .iter()

@@ -194,7 +194,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let bottom = floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)?;
     let target_reflectance = floor::targets(&ctx, &f.target, &mut geo)?;
     let geometry = geo.build();
-    let (sensor, radiometers, estimate) = render_settings(&ctx, &f, &domain, ov)?;
+    let (sensor, radiometers, estimate, render) = render_settings(&ctx, &f, &domain, ov)?;
     let mut inputs = ctx.inputs.take();
     inputs.sort();
     inputs.dedup();
@@ -240,6 +240,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         sensor,
         radiometers,
         estimate,
+        render,
         inputs,
     })
 }

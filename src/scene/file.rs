@@ -6,7 +6,7 @@
 //! name or the path of a CSV file.
 
 use crate::geometry::Axis;
-use crate::scene::settings::{BoundaryMode, SpectralMode};
+use crate::scene::settings::{BoundaryMode, IntegratorMode, SpectralMode};
 use serde::Deserialize;
 
 #[derive(Debug, Deserialize)]
@@ -35,6 +35,14 @@ pub struct SceneFile {
     pub radiometer: Vec<RadiometerFile>,
     #[serde(default)]
     pub estimate: EstimateFile,
+    #[serde(default)]
+    pub render: RenderFile,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderFile {
+    pub integrator: Option<IntegratorMode>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -18,7 +18,7 @@ pub mod locate;
 mod provenance;
 pub mod settings;
 
-pub use settings::{BoundaryMode, EstimateSettings, SpectralMode};
+pub use settings::{BoundaryMode, EstimateSettings, IntegratorMode, RenderSettings, SpectralMode};
 
 use crate::error::Result;
 use crate::geometry::{Geometry, SurfaceId};
@@ -68,6 +68,58 @@ pub struct Domain {
 impl Domain {
     pub fn area_m2(&self) -> f64 {
         self.size_m[0] * self.size_m[1]
+    }
+
+    /// Distance along `dir` from `p` (inside) to the domain's side walls.
+    pub fn edge_distance(&self, p: Vec3, dir: Vec3) -> f64 {
+        let along = |x: f32, d: f32, size: f64| -> f64 {
+            if d > 0.0 {
+                (size - x as f64) / d as f64
+            } else if d < 0.0 {
+                -(x as f64) / d as f64
+            } else {
+                f64::INFINITY
+            }
+        };
+        along(p.x, dir.x, self.size_m[0])
+            .min(along(p.y, dir.y, self.size_m[1]))
+            .max(0.0)
+    }
+
+    /// Move a point that reached a side wall, travelling along `dir`, to the
+    /// opposite wall.
+    pub fn wrap(&self, p: Vec3, dir: Vec3) -> Vec3 {
+        let w = |x: f32, d: f32, size: f64| -> f32 {
+            let s = size as f32;
+            if d > 0.0 && x >= s * (1.0 - 1e-6) {
+                0.0
+            } else if d < 0.0 && x <= s * 1e-6 {
+                s
+            } else {
+                x.clamp(0.0, s)
+            }
+        };
+        Vec3::new(
+            w(p.x, dir.x, self.size_m[0]),
+            w(p.y, dir.y, self.size_m[1]),
+            p.z,
+        )
+    }
+
+    /// The point of the domain that `p` stands for: `p` itself inside,
+    /// its periodic image when edges are periodic, `None` outside an open
+    /// domain.
+    pub fn image(&self, p: Vec3) -> Option<Vec3> {
+        let [sx, sy] = self.size_m;
+        let inside = |x: f32, s: f64| (0.0..=s).contains(&(x as f64));
+        if inside(p.x, sx) && inside(p.y, sy) {
+            return Some(p);
+        }
+        if !self.periodic {
+            return None;
+        }
+        let m = |x: f32, s: f64| (x as f64).rem_euclid(s) as f32;
+        Some(Vec3::new(m(p.x, sx), m(p.y, sy), p.z))
     }
 }
 
@@ -149,6 +201,8 @@ pub struct Scene {
     pub sensor: Sensor,
     pub radiometers: Vec<Radiometer>,
     pub estimate: EstimateSettings,
+    /// `[render]`: which integrator renders.
+    pub render: RenderSettings,
     /// Every file the scene names (spectra, meshes, height fields, grids,
     /// phase tables), sorted: inputs of the emission's provenance.
     pub inputs: Vec<PathBuf>,
@@ -162,6 +216,9 @@ pub struct Overrides {
     pub seed: Option<u64>,
     pub boundary: Option<BoundaryMode>,
     pub spectral: Option<SpectralMode>,
+    pub integrator: Option<IntegratorMode>,
+    /// `[sensor] samples_per_pixel`.
+    pub samples_per_pixel: Option<u32>,
 }
 
 impl Scene {

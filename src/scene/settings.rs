@@ -116,6 +116,60 @@ impl fmt::Display for SpectralMode {
     }
 }
 
+/// Which integrator renders the cube and the radiometers. Named in scene
+/// files (`[render] integrator`) and on the command line as `photon-map` or
+/// `path`.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegratorMode {
+    /// Ray marching with photon-map in-scatter estimates (the default).
+    #[default]
+    PhotonMap,
+    /// Unbiased spectral backward path tracing with next-event estimation of
+    /// the sun: the reference (`render::path`). Needs no photon map.
+    Path,
+}
+
+impl IntegratorMode {
+    /// Every mode, in the order help text lists them.
+    pub const ALL: [IntegratorMode; 2] = [IntegratorMode::PhotonMap, IntegratorMode::Path];
+
+    /// The name used in scene files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            IntegratorMode::PhotonMap => "photon-map",
+            IntegratorMode::Path => "path",
+        }
+    }
+}
+
+impl fmt::Display for IntegratorMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Paths per radiometer reading of the path integrator, per sample per
+/// pixel of the sensor (`[sensor] samples_per_pixel`).
+pub const PATH_RADIOMETER_PATHS_PER_SPP: u64 = 1024;
+
+/// The `[render]` settings of a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct RenderSettings {
+    pub integrator: IntegratorMode,
+}
+
 /// Radiance-estimate settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EstimateSettings {

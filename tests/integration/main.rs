@@ -10,6 +10,7 @@ mod determinism;
 mod job;
 mod memory;
 mod oracle;
+mod path;
 mod physics;
 mod render;
 mod roundtrip;

@@ -416,7 +416,7 @@ fn readings(r: &RunReport, depth_index: usize, bands: usize) -> Vec<f64> {
 
 /// Band mean of tally `key` at tally row `row`, with its standard error.
 fn tally_mean(r: &RunReport, row: usize, key: &str, bands: usize) -> (f64, f64) {
-    let t = &r.emission.tally[row];
+    let t = &r.emission.as_ref().unwrap().tally[row];
     let (values, stderr) = match key {
         "Lu" => (&t.Lu, &t.Lu_stderr),
         "Ld" => (&t.Ld, &t.Ld_stderr),

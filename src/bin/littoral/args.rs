@@ -1,7 +1,7 @@
 //! The command line of `littoral`: subcommands and flags, with their help.
 
 use clap::{Args, Parser, Subcommand};
-use littoral::scene::{BoundaryMode, SpectralMode};
+use littoral::scene::{BoundaryMode, IntegratorMode, SpectralMode};
 use littoral::synth::Distribution;
 use std::path::PathBuf;
 
@@ -63,6 +63,14 @@ pub struct RenderArgs {
     /// Spectral-bias compensation (overrides the scene).
     #[arg(long, value_enum)]
     pub spectral: Option<SpectralMode>,
+    /// Integrator (overrides the scene's `[render] integrator`): the photon
+    /// map, or the unbiased path tracer that needs no map.
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorMode>,
+    /// Samples (paths, for the path integrator) per pixel (overrides the
+    /// scene's `[sensor] samples_per_pixel`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
+    pub spp: Option<u32>,
     /// No progress on stderr.
     #[arg(long)]
     pub quiet: bool,

@@ -39,6 +39,8 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         seed: a.seed,
         boundary: a.boundary,
         spectral: a.spectral,
+        integrator: a.integrator,
+        samples_per_pixel: a.spp,
     };
     let scene = match &a.scene {
         Some(path) => Scene::load(path, &overrides)?,

@@ -1,5 +1,5 @@
-//! Validation of the rendering keys: `[sensor]`, `[[radiometer]]` and
-//! `[estimate]`.
+//! Validation of the rendering keys: `[sensor]`, `[[radiometer]]`,
+//! `[estimate]` and `[render]`.
 
 use super::*;
 use crate::scene::settings::{
@@ -12,7 +12,7 @@ pub(super) fn render_settings(
     f: &SceneFile,
     domain: &Domain,
     ov: &Overrides,
-) -> Result<(Sensor, Vec<Radiometer>, EstimateSettings)> {
+) -> Result<(Sensor, Vec<Radiometer>, EstimateSettings, RenderSettings)> {
     let sk = |k| [K("sensor"), K(k)];
     let default = SensorFile {
         kind: None,
@@ -32,7 +32,7 @@ pub(super) fn render_settings(
             "must be between 1 and 65536 in each direction",
         ));
     }
-    let spp = s.samples_per_pixel.unwrap_or(1);
+    let spp = ov.samples_per_pixel.or(s.samples_per_pixel).unwrap_or(1);
     if spp == 0 || spp > 65_536 {
         return Err(ctx.err(&sk("samples_per_pixel"), "must be between 1 and 65536"));
     }
@@ -195,5 +195,8 @@ pub(super) fn render_settings(
         forward_peak_down_deg,
         boundary_grid_m: e.boundary_grid_m,
     };
-    Ok((sensor, radiometers, estimate))
+    let render = RenderSettings {
+        integrator: ov.integrator.or(f.render.integrator).unwrap_or_default(),
+    };
+    Ok((sensor, radiometers, estimate, render))
 }

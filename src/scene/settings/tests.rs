@@ -44,3 +44,12 @@ fn spectral_mode_names_agree() {
         &["compensate", "", "naive ", "Naive"],
     );
 }
+
+#[test]
+fn integrator_mode_names_agree() {
+    names_agree(
+        &IntegratorMode::ALL,
+        IntegratorMode::as_str,
+        &["photonmap", "", "Path", "path-tracer"],
+    );
+}

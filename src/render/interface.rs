@@ -1,0 +1,124 @@
+//! Sensor rays meeting the sea surface from the air: what both integrators
+//! share above the water.
+//!
+//! A camera ray meets one facet (`SeaSurface::split_from_above`). Both
+//! branches are followed, weighted by Fresnel — choosing one would make the
+//! bright reflected sky speckle: the reflected ray sees the sky, the
+//! refracted one the water (whose radiance drops by n^2 leaving it). A ray
+//! that leaves its facet back into the surface meets it again
+//! (`SeaSurface::interact`). Sun glint on a rough surface is added
+//! analytically from the Cox–Munk slope density, since a point sun cannot
+//! be found by sampling directions.
+//!
+//! Not for: light inside the water (each integrator's own `in_water`).
+
+use super::camera::CameraRay;
+use crate::error::Result;
+use crate::optics::surface::fresnel_reflectance;
+use crate::rng::Pcg32;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// Radiance per band arriving at a point in the water along `-dir` (what
+/// an instrument there looking along `dir` sees), written into `out`.
+pub type InWater<'f> = dyn FnMut(Vec3, Vec3, &mut Pcg32, &mut [f64]) -> Result<()> + 'f;
+
+/// Isotropic sky radiance per band (W m^-2 sr^-1 nm^-1) of `scene`.
+pub fn sky_radiance(scene: &Scene) -> Vec<f64> {
+    scene
+        .sky
+        .irradiance
+        .iter()
+        .map(|e| e / std::f64::consts::PI)
+        .collect()
+}
+
+/// Radiance per band reaching a sensor along `ray` (in air), into `out`;
+/// `sky_l` is the sky radiance, `in_water` the light below the surface.
+pub fn from_air(
+    scene: &Scene,
+    sky_l: &[f64],
+    ray: CameraRay,
+    rng: &mut Pcg32,
+    out: &mut [f64],
+    in_water: &mut InWater,
+) -> Result<()> {
+    let d = ray.direction;
+    if d.z >= 0.0 {
+        out.copy_from_slice(sky_l);
+        return Ok(());
+    }
+    let p = ray.origin + d * (-ray.origin.z / d.z);
+    let p = Vec3::new(p.x, p.y, 0.0);
+    let split = scene.surface.split_from_above(d, rng);
+    let mut part = vec![0.0; out.len()];
+    leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
+    leave_surface(
+        scene,
+        sky_l,
+        p,
+        split.refracted,
+        true,
+        rng,
+        &mut part,
+        in_water,
+    )?;
+    let r = split.reflectance;
+    for (o, t) in out.iter_mut().zip(&part) {
+        *o = r * *o + (1.0 - r) * t;
+    }
+    add_glint(scene, -d, out);
+    Ok(())
+}
+
+/// Radiance reaching the surface point `p` along `-dir`, for a ray leaving
+/// it along `dir` into the water (`in_water`) or the air; a ray heading back
+/// into the surface meets it again. Radiance leaving the water drops by n^2.
+#[allow(clippy::too_many_arguments)]
+fn leave_surface(
+    scene: &Scene,
+    sky_l: &[f64],
+    p: Vec3,
+    dir: Vec3,
+    into_water: bool,
+    rng: &mut Pcg32,
+    out: &mut [f64],
+    in_water: &mut InWater,
+) -> Result<()> {
+    let (dir, into_water) = if (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0) {
+        (dir, into_water)
+    } else {
+        let ev = scene.surface.interact(dir, rng);
+        (ev.direction, into_water != ev.transmitted)
+    };
+    if into_water {
+        let n2 = scene.surface.n_water * scene.surface.n_water;
+        in_water(p + dir * 1e-4, dir, rng, out)?;
+        out.iter_mut().for_each(|o| *o /= n2);
+    } else {
+        out.copy_from_slice(sky_l);
+    }
+    Ok(())
+}
+
+/// Sun glint on a Cox–Munk surface seen from direction `v` (up), added to
+/// `out`: L = E_sun rho p(zx, zy) / (4 cos(theta_v) cos^4(beta)).
+pub fn add_glint(scene: &Scene, v: Vec3, out: &mut [f64]) {
+    let s2 = scene.surface.slope_variance;
+    if s2 <= 0.0 {
+        return;
+    }
+    let v = v.as_dvec3();
+    let s = -scene.sun.direction.as_dvec3();
+    let h = (v + s).normalize();
+    if h.z <= 0.0 || v.z <= 0.0 {
+        return;
+    }
+    let (zx, zy) = (-h.x / h.z, -h.y / h.z);
+    let p = (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2);
+    let rho = fresnel_reflectance(h.dot(v), 1.0, scene.surface.n_water);
+    let g = rho * p / (4.0 * v.z * h.z.powi(4));
+    for (o, e) in out.iter_mut().zip(&scene.sun.irradiance) {
+        *o += e * g;
+    }
+}

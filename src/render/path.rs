@@ -1,0 +1,531 @@
+//! The reference integrator: unbiased spectral backward path tracing
+//! through the same scene the photons see, with next-event estimation of
+//! the sun. It needs no photon map and is the truth the photon map is
+//! measured against.
+//!
+//! **All bands on one path (spectral tracking).** A path carries a
+//! throughput `w_b` for every band. Free flights are sampled against one
+//! majorant `c_bar`, the largest extinction of any band anywhere in the
+//! water; at a tentative collision the path scatters with probability
+//! `P_s = sum w_b b_b / (sum w_b b_b + sum w_b (c_bar - c_b))` (absorption
+//! is carried by weight) and each band's throughput is multiplied by
+//! `b_b / (c_bar P_s)` for a real scattering or `(c_bar - c_b) / (c_bar (1 -
+//! P_s))` for a null collision: the history-aware spectral tracking of
+//! Kutz et al. 2017 (SIGGRAPH, "Spectral and decomposition tracking"),
+//! unbiased in every band for any position-dependent IOPs.
+//!
+//! **Scattering.** The new direction is drawn from the mixture `q p_w + (1 -
+//! q) p_p` of the pure-water and particle phase functions, with `q` the
+//! throughput-weighted share of pure-water scattering; each band is
+//! weighted by its own `(b_w p_w + b_p p_p) / (b pdf)` (one-sample
+//! balance over the two components). The floor and targets are Lambertian
+//! (cosine-sampled, throughput times the reflectance).
+//!
+//! **The sun (next-event estimation).** At every scattering vertex and
+//! every floor or target vertex the sun's beam in the water is sampled:
+//! through a flat surface it is the refracted beam, exactly, with Fresnel
+//! transmittance `t` and beam-normal irradiance `E_h t / mu_w`; through a
+//! Cox–Munk surface the sun's ray is put through `SeaSurface::interact`,
+//! the same facet sampling (projected area, Fresnel choice, multiple
+//! surface scattering) that emits the photons, so that the sampled
+//! in-water direction has exactly the distribution of the transmitted
+//! direct beam, and the beam-normal irradiance it stands for is `E_h /
+//! |mu|`. A point sun cannot be hit by sampling, so there is nothing to
+//! weigh against (no MIS is needed): paths that leave the water see the
+//! sky only. Transmittance toward the surface is exact in uniform water and
+//! by ratio tracking against `c_bar` elsewhere; floors and targets shadow,
+//! periodic edges wrap the shadow ray, open edges end it (no light enters
+//! through the surface outside an open domain).
+//!
+//! **The surface from below.** Flat: Fresnel split, the transmitted part
+//! sees the sky (`n^2 t L_sky`), the reflected part goes on. Rough: the
+//! facet sampling of `SeaSurface::interact` chooses. **Ends.** Russian
+//! roulette on the largest band throughput after the fourth event; paths
+//! stop after `MAX_EVENTS` events, like photons do.
+//!
+//! Above the water, sensor rays meet the surface as `interface::from_air`
+//! has them, with the photon-map integrator.
+//!
+//! Not for: speed at low noise (the photon map is for that); polarisation.
+
+use super::camera::CameraRay;
+use super::interface::{from_air, sky_radiance};
+use crate::emit::trace::MAX_EVENTS;
+use crate::error::Result;
+use crate::optics::iop::Iop;
+use crate::optics::phase::{cosine_hemisphere, scatter};
+use crate::optics::surface::{fresnel_reflectance, refract};
+use crate::rng::Pcg32;
+use crate::scene::Scene;
+use glam::{DVec3, Vec3};
+use std::f64::consts::PI;
+
+/// Events (scatterings, floor and surface hits) before Russian roulette.
+const ROULETTE_AFTER: u32 = 4;
+/// Share of scattering directions drawn around the direction toward the
+/// sun rather than around the path's own direction.
+const GUIDE_FRACTION: f64 = 0.1;
+/// Angular radius of the sun's disc seen from the Earth (0.2665 degrees).
+pub const SUN_HALF_ANGLE_RAD: f64 = 4.6513e-3;
+
+/// A sample of the direct sun in the water.
+struct SunSample {
+    /// Direction of travel of the sampled sunlight in the water.
+    dir: Vec3,
+    /// The sampled radiance over its pdf, divided by the sun's horizontal
+    /// irradiance above the surface: E_h g is the beam-normal irradiance
+    /// the sample stands for.
+    g: f64,
+    /// Light-sampling pdf of `-dir` per sr in the water (infinite under a
+    /// rough surface, where it is not computed and no MIS is done).
+    pdf: f64,
+}
+
+/// The path integrator of one scene.
+pub struct PathTracer<'a> {
+    pub scene: &'a Scene,
+    sky_l: Vec<f64>,
+    /// Horizontal irradiance of the sun above the surface per band.
+    sun_h: Vec<f64>,
+    /// Extinction majorant over every band and the whole water (1/m).
+    c_bar: f64,
+    /// True for a flat surface (the sun's disc refracts exactly and is
+    /// weighed against phase sampling).
+    flat: bool,
+    /// The IOPs of uniform water (None when they vary in space).
+    uniform: Option<Vec<Iop>>,
+    /// Direction toward the sun in the water (through the mean surface),
+    /// around which scattering directions are also drawn; None without sun.
+    guide: Option<Vec3>,
+}
+
+/// Per-path buffers, one entry per band.
+pub struct PathScratch {
+    w: Vec<f64>,
+    iops: Vec<Iop>,
+    tmp: Vec<Iop>,
+    tr: Vec<f64>,
+}
+
+impl PathScratch {
+    /// Bands the buffers hold.
+    pub fn bands(&self) -> usize {
+        self.w.len()
+    }
+
+    pub fn new(bands: usize) -> Self {
+        PathScratch {
+            w: vec![0.0; bands],
+            iops: vec![Iop::default(); bands],
+            tmp: vec![Iop::default(); bands],
+            tr: vec![0.0; bands],
+        }
+    }
+}
+
+impl<'a> PathTracer<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        let nb = scene.bands.len();
+        let n = scene.surface.n_water;
+        let c_bar = (0..nb)
+            .map(|b| scene.water.majorant(b))
+            .fold(0.0f64, f64::max);
+        let uniform = scene.water.is_uniform().then(|| {
+            let mut v = vec![Iop::default(); nb];
+            scene.water.iops(Vec3::new(0.0, 0.0, -1.0), &mut v);
+            v
+        });
+        let has_sun = scene.sun.irradiance.iter().any(|&e| e > 0.0);
+        let guide = has_sun.then(|| {
+            let d = scene.sun.direction.as_dvec3();
+            -refract(d, DVec3::Z, 1.0, n)
+                .unwrap_or(DVec3::NEG_Z)
+                .as_vec3()
+        });
+        PathTracer {
+            scene,
+            guide,
+            sky_l: sky_radiance(scene),
+            sun_h: (0..nb)
+                .map(|b| scene.sun.horizontal_irradiance(b))
+                .collect(),
+            c_bar,
+            flat: scene.surface.slope_variance <= 0.0,
+            uniform,
+        }
+    }
+
+    /// Radiance per band reaching a sensor along `ray` (in air).
+    pub fn camera(
+        &self,
+        ray: CameraRay,
+        rng: &mut Pcg32,
+        scratch: &mut PathScratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        from_air(
+            self.scene,
+            &self.sky_l,
+            ray,
+            rng,
+            out,
+            &mut |p, dir, rng, out| {
+                self.in_water(p, dir, rng, scratch, out);
+                Ok(())
+            },
+        )
+    }
+
+    /// A direction of the sun's disc, uniform in solid angle (travel, in air).
+    fn sun_disc_direction(&self, rng: &mut Pcg32) -> Vec3 {
+        let cos_max = SUN_HALF_ANGLE_RAD.cos();
+        let cos_t = 1.0 - rng.uniform_f64() * (1.0 - cos_max);
+        let phi = std::f64::consts::TAU * rng.uniform_f64();
+        scatter(self.scene.sun.direction, cos_t as f32, phi as f32)
+    }
+
+    /// Solid angle of the sun's disc in air (sr).
+    fn disc_solid_angle() -> f64 {
+        std::f64::consts::TAU * (1.0 - SUN_HALF_ANGLE_RAD.cos())
+    }
+
+    /// A sample of the direct sun in the water: a point of the sun's disc
+    /// put through the surface (see [`SunSample`]); None when the sampled
+    /// ray did not enter the water.
+    fn sample_sun(&self, rng: &mut Pcg32) -> Option<SunSample> {
+        let d_a = self.sun_disc_direction(rng);
+        let cos_s = -self.scene.sun.direction.z as f64;
+        let cos_a = -d_a.z as f64;
+        if cos_a <= 0.0 {
+            return None;
+        }
+        if self.flat {
+            let n = self.scene.surface.n_water;
+            let d_w = refract(d_a.as_dvec3(), DVec3::Z, 1.0, n)?;
+            let cos_w = -d_w.z;
+            let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
+            Some(SunSample {
+                dir: d_w.as_vec3(),
+                g: t * cos_a / (cos_s * cos_w),
+                pdf: n * n * cos_w / (cos_a * Self::disc_solid_angle()),
+            })
+        } else {
+            let ev = self.scene.surface.interact(d_a, rng);
+            (ev.transmitted && ev.direction.z < 0.0).then(|| SunSample {
+                dir: ev.direction,
+                g: cos_a / (cos_s * -(ev.direction.z as f64)),
+                pdf: f64::INFINITY,
+            })
+        }
+    }
+
+    /// Through a flat surface, for a path direction `next` (in water,
+    /// pointing up): the sun's radiance along it divided by the sun's
+    /// horizontal irradiance (n^2 t / (cos_s Omega)), and the light-sampling
+    /// pdf of that direction per sr; None when `next` misses the disc.
+    fn sun_seen(&self, next: Vec3) -> Option<(f64, f64)> {
+        if !self.flat || next.z <= 0.0 {
+            return None;
+        }
+        let n = self.scene.surface.n_water;
+        let up_a = refract(next.as_dvec3(), DVec3::NEG_Z, n, 1.0)?;
+        let to_sun = -self.scene.sun.direction.as_dvec3();
+        if up_a.dot(to_sun) < SUN_HALF_ANGLE_RAD.cos() {
+            return None;
+        }
+        let (cos_a, cos_w, cos_s) = (up_a.z, next.z as f64, to_sun.z);
+        let omega = Self::disc_solid_angle();
+        let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
+        Some((n * n * t / (cos_s * omega), n * n * cos_w / (cos_a * omega)))
+    }
+
+    /// Transmittance per band from `x` along `up` to the surface, into `tr`
+    /// (0 where the floor, a target or an open edge is in the way).
+    fn transmittance(&self, x: Vec3, up: Vec3, rng: &mut Pcg32, tmp: &mut [Iop], tr: &mut [f64]) {
+        let scene = self.scene;
+        tr.iter_mut().for_each(|t| *t = 1.0);
+        let total = if x.z < 0.0 && up.z > 0.0 {
+            (-x.z / up.z) as f64
+        } else {
+            0.0
+        };
+        let mut remaining = total;
+        let mut pos = x;
+        // Segments between periodic edges (bounded in case a ray runs along one).
+        let mut segments = 0;
+        while remaining > 0.0 && segments < 100_000 {
+            segments += 1;
+            let seg = remaining.min(scene.domain.edge_distance(pos, up));
+            if scene.geometry.occluded(pos, up, seg as f32) {
+                tr.iter_mut().for_each(|t| *t = 0.0);
+                return;
+            }
+            if self.uniform.is_none() {
+                // Ratio tracking: the product of null-collision probabilities.
+                let mut t = 0.0;
+                loop {
+                    t += -(1.0 - rng.uniform_f64()).ln() / self.c_bar;
+                    if t >= seg {
+                        break;
+                    }
+                    scene.water.iops(pos + up * t as f32, tmp);
+                    for (o, iop) in tr.iter_mut().zip(tmp.iter()) {
+                        *o *= (1.0 - iop.c() / self.c_bar).max(0.0);
+                    }
+                }
+            }
+            remaining -= seg;
+            if remaining <= 1e-6 {
+                break;
+            }
+            if !scene.domain.periodic {
+                tr.iter_mut().for_each(|t| *t = 0.0);
+                return;
+            }
+            pos = scene.domain.wrap(pos + up * seg as f32, up);
+        }
+        if let Some(u) = &self.uniform {
+            for (o, iop) in tr.iter_mut().zip(u) {
+                *o = (-iop.c() * total).exp();
+            }
+        }
+    }
+
+    /// Russian roulette on the largest throughput after `ROULETTE_AFTER`
+    /// events; false ends the path.
+    fn survive(w: &mut [f64], events: u32, rng: &mut Pcg32) -> bool {
+        if events >= MAX_EVENTS {
+            return false;
+        }
+        if events < ROULETTE_AFTER {
+            return true;
+        }
+        let q = w.iter().fold(0.0f64, |m, &x| m.max(x)).min(1.0);
+        if q <= 0.0 || rng.uniform_f64() >= q {
+            return false;
+        }
+        w.iter_mut().for_each(|x| *x /= q);
+        true
+    }
+
+    /// Radiance per band arriving at `p0` (in water) travelling along
+    /// `-dir`, i.e. what an instrument at p0 looking along `dir` sees.
+    pub fn in_water(
+        &self,
+        p0: Vec3,
+        dir: Vec3,
+        rng: &mut Pcg32,
+        scratch: &mut PathScratch,
+        out: &mut [f64],
+    ) {
+        let scene = self.scene;
+        let domain = &scene.domain;
+        let n_w = scene.surface.n_water;
+        let n2 = n_w * n_w;
+        let c_bar = self.c_bar;
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let Some(mut pos) = domain.image(p0) else {
+            return; // outside an open domain: no water there
+        };
+        let PathScratch { w, iops, tmp, tr } = scratch;
+        w.iter_mut().for_each(|x| *x = 1.0);
+        let mut dir = dir;
+        let mut events = 0u32;
+        loop {
+            let t_flight = if c_bar > 0.0 {
+                -(1.0 - rng.uniform_f64()).ln() / c_bar
+            } else {
+                f64::INFINITY
+            };
+            let t_surface = if dir.z > 0.0 {
+                (-pos.z / dir.z) as f64
+            } else {
+                f64::INFINITY
+            };
+            let t_edge = domain.edge_distance(pos, dir);
+            let t_limit = t_flight.min(t_surface).min(t_edge);
+            if !t_limit.is_finite() {
+                return;
+            }
+            if let Some(h) = scene.geometry.intersect(pos, dir, t_limit as f32) {
+                // Floor or target: the sun directly, then a Lambertian bounce.
+                pos = h.position;
+                let n = h.normal;
+                if let Some(SunSample { dir: s_w, g, .. }) = self.sample_sun(rng) {
+                    let cos_n = (-s_w).dot(n) as f64;
+                    if cos_n > 0.0 {
+                        self.transmittance(pos + n * 1e-3, -s_w, rng, tmp, tr);
+                        for b in 0..out.len() {
+                            let r = scene.reflectance(h.surface, pos, b);
+                            out[b] += w[b] * r / PI * cos_n * g * self.sun_h[b] * tr[b];
+                        }
+                    }
+                }
+                for (b, x) in w.iter_mut().enumerate() {
+                    *x *= scene.reflectance(h.surface, pos, b);
+                }
+                dir = cosine_hemisphere(n, rng);
+                pos += n * 1e-4;
+                events += 1;
+                if !Self::survive(w, events, rng) {
+                    return;
+                }
+                continue;
+            }
+            if t_surface <= t_limit {
+                let next = pos + dir * t_surface as f32;
+                pos = Vec3::new(next.x, next.y, 0.0);
+                if let Some(p) = domain.image(pos) {
+                    pos = p;
+                }
+                if scene.surface.slope_variance <= 0.0 {
+                    let r = fresnel_reflectance(dir.z as f64, n_w, 1.0);
+                    for b in 0..out.len() {
+                        out[b] += w[b] * (1.0 - r) * n2 * self.sky_l[b];
+                        w[b] *= r;
+                    }
+                    dir = Vec3::new(dir.x, dir.y, -dir.z);
+                } else {
+                    let ev = scene.surface.interact(dir, rng);
+                    if ev.transmitted {
+                        for b in 0..out.len() {
+                            out[b] += w[b] * n2 * self.sky_l[b];
+                        }
+                        return;
+                    }
+                    dir = ev.direction;
+                }
+                events += 1;
+                if !Self::survive(w, events, rng) {
+                    return;
+                }
+                continue;
+            }
+            if t_edge <= t_limit {
+                if !domain.periodic {
+                    return;
+                }
+                pos = domain.wrap(pos + dir * t_edge as f32, dir);
+                continue;
+            }
+            // A tentative collision.
+            pos += dir * t_flight as f32;
+            scene.water.iops(pos, iops);
+            let (mut s_sum, mut n_sum) = (0.0, 0.0);
+            for (x, iop) in w.iter().zip(iops.iter()) {
+                s_sum += x * iop.b();
+                n_sum += x * (c_bar - iop.c()).max(0.0);
+            }
+            if s_sum + n_sum <= 0.0 {
+                return;
+            }
+            let p_s = s_sum / (s_sum + n_sum);
+            if rng.uniform_f64() >= p_s {
+                let k = 1.0 / (c_bar * (1.0 - p_s));
+                for (x, iop) in w.iter_mut().zip(iops.iter()) {
+                    *x *= (c_bar - iop.c()).max(0.0) * k;
+                }
+                continue;
+            }
+            let k = 1.0 / (c_bar * p_s);
+            for (x, iop) in w.iter_mut().zip(iops.iter()) {
+                *x *= iop.b() * k;
+            }
+            let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
+            // The two phase functions' shares of the next direction's mixture.
+            let (mut sw, mut sp) = (0.0, 0.0);
+            for (x, iop) in w.iter().zip(iops.iter()) {
+                let bb = iop.b();
+                if bb > 0.0 {
+                    sw += x * iop.b_w / bb;
+                    sp += x * iop.b_p / bb;
+                }
+            }
+            let q = if sw + sp > 0.0 { sw / (sw + sp) } else { 0.0 };
+            // 1 - cos from |a - b|^2 / 2: near the forward peak a cosine has
+            // too few digits.
+            let one_minus = |a: Vec3, b: Vec3| 0.5 * (a - b).length_squared() as f64;
+            let mix = |m: f64| q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m);
+            // Density (per sr) of drawing `next` as the next direction: the
+            // mixture around the path's direction and, guiding, around the
+            // direction toward the sun.
+            let dir_pdf = |next: Vec3| -> f64 {
+                let around = mix(one_minus(next, dir));
+                match self.guide {
+                    Some(axis) => {
+                        (1.0 - GUIDE_FRACTION) * around
+                            + GUIDE_FRACTION * mix(one_minus(next, axis))
+                    }
+                    None => around,
+                }
+            };
+            // The sun scattered toward the viewer: light sampling, weighed
+            // (balance heuristic) against finding the disc by the direction
+            // drawn below.
+            if let Some(sun) = self.sample_sun(rng) {
+                let s_w = sun.dir;
+                self.transmittance(pos, -s_w, rng, tmp, tr);
+                let mis = if sun.pdf.is_finite() {
+                    sun.pdf / (sun.pdf + dir_pdf(-s_w))
+                } else {
+                    1.0
+                };
+                let m = one_minus(-s_w, dir);
+                let (fw, fp) = (pw.eval_one_minus_cos(m), pp.eval_one_minus_cos(m));
+                for b in 0..out.len() {
+                    let iop = iops[b];
+                    let bb = iop.b();
+                    if bb > 0.0 && tr[b] > 0.0 {
+                        out[b] += w[b] * (iop.b_w * fw + iop.b_p * fp) / bb
+                            * sun.g
+                            * mis
+                            * self.sun_h[b]
+                            * tr[b];
+                    }
+                }
+            }
+            let sample_around = |axis: Vec3, rng: &mut Pcg32| -> Vec3 {
+                let u = rng.uniform_f64();
+                let mu = if rng.uniform_f64() < q {
+                    pw.sample_cos(u)
+                } else {
+                    pp.sample_cos(u)
+                };
+                let phi = std::f64::consts::TAU * rng.uniform_f64();
+                scatter(axis, mu as f32, phi as f32)
+            };
+            let next = match self.guide {
+                Some(axis) if rng.uniform_f64() < GUIDE_FRACTION => sample_around(axis, rng),
+                _ => sample_around(dir, rng),
+            };
+            let m = one_minus(next, dir);
+            let (fw, fp) = (pw.eval_one_minus_cos(m), pp.eval_one_minus_cos(m));
+            let pdf = dir_pdf(next);
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                return;
+            }
+            for (x, iop) in w.iter_mut().zip(iops.iter()) {
+                let bb = iop.b();
+                *x = if bb > 0.0 {
+                    *x * (iop.b_w * fw + iop.b_p * fp) / (bb * pdf)
+                } else {
+                    0.0
+                };
+            }
+            // The sun's disc found by the drawn direction (flat surface),
+            // weighed against light sampling.
+            if let Some((l_over_e, light_pdf)) = self.sun_seen(next) {
+                self.transmittance(pos, next, rng, tmp, tr);
+                let mis = pdf / (pdf + light_pdf);
+                for b in 0..out.len() {
+                    out[b] += w[b] * l_over_e * mis * self.sun_h[b] * tr[b];
+                }
+            }
+            dir = next;
+            events += 1;
+            if !Self::survive(w, events, rng) {
+                return;
+            }
+        }
+    }
+}
