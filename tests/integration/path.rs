@@ -238,3 +238,104 @@ fn path_render_is_identical_for_any_thread_count() {
     }
     assert!(cubes[0] == cubes[1], "cubes differ between 1 and 2 threads");
 }
+
+/// The standard-error cube tells the truth: between two renders with
+/// different seeds, (a - b) / sqrt(se_a^2 + se_b^2) over every pixel has a
+/// standard deviation of 1 within 25 % (with 400 pixels of 16 paths, the
+/// sample deviation itself is within about 4 % of the truth).
+#[test]
+fn standard_error_cube_matches_the_spread_between_seeds() {
+    let dir = tempdir();
+    let text = floor_scene()
+        .replace("pixels = [2, 2]", "pixels = [20, 20]\ngsd_m = 0.5")
+        .replace("b = 0.0 }", "b = 0.3 }\nphase = { kind = \"isotropic\" }");
+    let mut cubes = Vec::new();
+    for seed in [1u64, 2] {
+        let o = Overrides {
+            samples_per_pixel: Some(16),
+            integrator: Some(IntegratorMode::Path),
+            seed: Some(seed),
+            ..Overrides::default()
+        };
+        let s = Scene::parse(&text, Path::new("se.toml"), &o).unwrap();
+        let out = dir.path().join(format!("s{seed}"));
+        let r = RenderJob {
+            scene: &s,
+            out_dir: out.clone(),
+            map: None,
+            threads: 0,
+            budget: MemoryBudget::new(256 * MIB),
+            scene_seconds: 0.0,
+        }
+        .run(&Silent)
+        .unwrap();
+        let floats = |p: &str| -> Vec<f32> {
+            std::fs::read(p)
+                .unwrap()
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        };
+        cubes.push((
+            floats(&r.outputs.bsq),
+            floats(r.outputs.stderr_bsq.as_deref().unwrap()),
+        ));
+    }
+    // Band 0 only: the bands share their paths.
+    let n = 400;
+    let z: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (cubes[0].0[i] as f64, cubes[1].0[i] as f64);
+            let (sa, sb) = (cubes[0].1[i] as f64, cubes[1].1[i] as f64);
+            (a - b) / (sa * sa + sb * sb).sqrt()
+        })
+        .collect();
+    let mean = z.iter().sum::<f64>() / n as f64;
+    let sd = (z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
+    eprintln!("z: mean {mean}, sd {sd}");
+    assert!((0.75..=1.25).contains(&sd), "spread / predicted = {sd}");
+}
+
+/// End to end: `--integrator path --spp N` on the command line renders
+/// without a map and writes the standard-error cube beside the cube; an
+/// unknown integrator is a usage error (exit 2) listing the allowed names.
+#[test]
+fn command_line_selects_the_path_integrator() {
+    let dir = tempdir();
+    let scene = dir.path().join("floor.toml");
+    std::fs::write(&scene, floor_scene()).unwrap();
+    let out = dir.path().join("out");
+    let run = crate::common::littoral(&[
+        "render",
+        crate::common::p(&scene),
+        "--out",
+        crate::common::p(&out),
+        "--integrator",
+        "path",
+        "--spp",
+        "2",
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in [
+        "floor.hdr",
+        "floor.bsq",
+        "floor.stderr.hdr",
+        "floor.stderr.bsq",
+        "floor.json",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let report: littoral::job::report::RunReport =
+        serde_json::from_slice(&std::fs::read(out.join("floor.json")).unwrap()).unwrap();
+    assert_eq!(report.integrator, IntegratorMode::Path);
+    assert_eq!(report.sensor.samples_per_pixel, 2);
+    let bad = crate::common::littoral(&["render", crate::common::p(&scene), "--integrator", "mc"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(msg.contains("photon-map") && msg.contains("path"), "{msg}");
+}
