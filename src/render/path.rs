@@ -46,6 +46,14 @@
 //! Above the water, sensor rays meet the surface as `interface::from_air`
 //! has them, with the photon-map integrator.
 //!
+//! **Known limits.** Under a Cox–Munk surface the sun's light-sampling
+//! density is not computed, so there is no MIS there: the estimate stays
+//! unbiased but, with a forward-peaked phase function, heavy-tailed (see
+//! `benches/README.md`). The rough surface is run backwards by the same
+//! facet sampling that runs it forwards; without shadowing the model is
+//! reciprocal except through the projected-area normalisation, which
+//! departs from one only at grazing angles.
+//!
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
 use super::camera::CameraRay;
