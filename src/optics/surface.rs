@@ -73,6 +73,8 @@ pub struct SurfaceEvent {
     pub direction: Vec3,
     /// True if the ray crossed into the other medium.
     pub transmitted: bool,
+    /// Facets met (1 unless the ray left a facet back into the surface).
+    pub facets: u32,
 }
 
 const MAX_SURFACE_BOUNCES: usize = 16;
@@ -101,7 +103,7 @@ impl SeaSurface {
         // Which side the ray is on now; it flips when it is transmitted.
         let mut from_above = d.z < 0.0;
         let start_above = from_above;
-        for _ in 0..MAX_SURFACE_BOUNCES {
+        for bounce in 0..MAX_SURFACE_BOUNCES {
             let n_up = self.sample_facet(d, rng);
             let (n1, n2) = if from_above {
                 (1.0, self.n_water)
@@ -130,6 +132,7 @@ impl SeaSurface {
                 return SurfaceEvent {
                     direction: d.as_vec3(),
                     transmitted: from_above != start_above,
+                    facets: bounce as u32 + 1,
                 };
             }
         }
@@ -139,6 +142,7 @@ impl SeaSurface {
         SurfaceEvent {
             direction: d.normalize().as_vec3(),
             transmitted: from_above != start_above,
+            facets: MAX_SURFACE_BOUNCES as u32 + 1,
         }
     }
 
@@ -159,6 +163,80 @@ impl SeaSurface {
                 .normalize()
                 .as_vec3(),
         }
+    }
+
+    /// Slope density of the facets, p(zx, zy) = exp(-(zx^2 + zy^2) /
+    /// sigma^2) / (pi sigma^2), truncated (0) beyond 6 standard deviations
+    /// on either axis as the sampler truncates it (rough surfaces only).
+    pub fn slope_density(&self, zx: f64, zy: f64) -> f64 {
+        let s2 = self.slope_variance;
+        let s_max = 6.0 * (0.5 * s2).sqrt();
+        if zx.abs() > s_max || zy.abs() > s_max {
+            return 0.0;
+        }
+        (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2)
+    }
+
+    /// The normalisation of the facet sampler for a ray from the air along
+    /// `d` (`d.z < 0`): the mean over truncated slopes of max(0, -d . m~),
+    /// m~ = (-zx, -zy, 1), by the midpoint rule (400 x 400 cells; exactly
+    /// -d.z when no facet within the truncation faces away from the ray).
+    pub fn facing_normalisation(&self, d: DVec3) -> f64 {
+        let s_max = 6.0 * (0.5 * self.slope_variance).sqrt();
+        if d.z.abs() >= (d.x.abs() + d.y.abs()) * s_max {
+            return -d.z;
+        }
+        const CELLS: usize = 400;
+        let h = 2.0 * s_max / CELLS as f64;
+        let mut sum = 0.0;
+        for i in 0..CELLS {
+            let zx = -s_max + (i as f64 + 0.5) * h;
+            for j in 0..CELLS {
+                let zy = -s_max + (j as f64 + 0.5) * h;
+                let facing = -d.dot(DVec3::new(-zx, -zy, 1.0));
+                if facing > 0.0 {
+                    sum += self.slope_density(zx, zy) * facing;
+                }
+            }
+        }
+        sum * h * h
+    }
+
+    /// The single-facet transmission of a collimated beam from the air
+    /// along `i` (`i.z < 0`) into the water direction `o` (`o.z < 0`):
+    /// `(density, t)` with `density` the pdf per sr of `o` when a facet is
+    /// drawn as `interact` draws its first one and the beam is refracted
+    /// there (Fresnel ignored), and `t` that facet's Fresnel transmittance.
+    /// The facet is m = (i - n o) / |i - n o| (Walter et al. 2007); the
+    /// density is p(zx, zy) (-i . m) n^2 |o . m| / (Z cos^4 theta_m
+    /// |i - n o|^2), Z = [`Self::facing_normalisation`]. None when no facet
+    /// refracts `i` into `o`.
+    pub fn beam_transmission_density(&self, i: DVec3, o: DVec3, z_norm: f64) -> Option<(f64, f64)> {
+        let n = self.n_water;
+        let h = i - n * o;
+        let len = h.length();
+        if len <= 0.0 {
+            return None;
+        }
+        let m = h / len;
+        let cos_im = -i.dot(m);
+        let cos_om = o.dot(m);
+        if m.z <= 0.0 || cos_im <= 0.0 || cos_om >= 0.0 {
+            return None;
+        }
+        let (zx, zy) = (-m.x / m.z, -m.y / m.z);
+        let p = self.slope_density(zx, zy);
+        if p <= 0.0 {
+            return None;
+        }
+        let density = p * cos_im * n * n * (-cos_om) / (z_norm * m.z.powi(4) * len * len);
+        Some((density, 1.0 - fresnel_reflectance(cos_im, 1.0, n)))
+    }
+
+    /// A facet normal (up) drawn for a ray from the air along `d` exactly
+    /// as the first facet of `interact` is drawn (flat: +z).
+    pub fn sample_facet_from_above(&self, d: DVec3, rng: &mut Pcg32) -> DVec3 {
+        self.sample_facet(d, rng)
     }
 
     /// Upward facet normal met by a ray along `d` (flat: +z).

@@ -21,38 +21,46 @@
 //! balance over the two components). The floor and targets are Lambertian
 //! (cosine-sampled, throughput times the reflectance).
 //!
-//! **The sun (next-event estimation).** At every scattering vertex and
-//! every floor or target vertex the sun's beam in the water is sampled:
-//! through a flat surface it is the refracted beam, exactly, with Fresnel
-//! transmittance `t` and beam-normal irradiance `E_h t / mu_w`; through a
-//! Cox–Munk surface the sun's ray is put through `SeaSurface::interact`,
-//! the same facet sampling (projected area, Fresnel choice, multiple
-//! surface scattering) that emits the photons, so that the sampled
-//! in-water direction has exactly the distribution of the transmitted
-//! direct beam, and the beam-normal irradiance it stands for is `E_h /
-//! |mu|`. A point sun cannot be hit by sampling, so there is nothing to
-//! weigh against (no MIS is needed): paths that leave the water see the
-//! sky only. Transmittance toward the surface is exact in uniform water and
+//! **The sun (next-event estimation with MIS).** At every scattering
+//! vertex the direct sun is estimated twice and the two are weighed by the
+//! balance heuristic: by light sampling, and by the continuation's own
+//! drawn direction when it looks at the sun. Through a flat surface the
+//! sun is its disc (0.2665 degrees radius, where the photon map has a
+//! point; they differ within a degree of the sun only), refracted exactly
+//! with its Fresnel transmittance, so the forward peak of the phase
+//! function meets a finite radiance. Through a Cox–Munk surface the sun is
+//! a point and its beam is refracted by the facets: the first facet drawn
+//! as `SeaSurface::interact` draws it, with the analytic density of the
+//! refracted direction (`SeaSurface::beam_transmission_density`) for MIS
+//! and the Fresnel factor as a weight; the rarer beams that meet more
+//! than one facet are drawn by `interact` itself and added without MIS,
+//! so the sum is exactly the beam the photons see. Floor and target
+//! vertices take the same samples without MIS (a Lambertian surface has no
+//! peak). Transmittance toward the surface is exact in uniform water and
 //! by ratio tracking against `c_bar` elsewhere; floors and targets shadow,
 //! periodic edges wrap the shadow ray, open edges end it (no light enters
-//! through the surface outside an open domain).
+//! through the surface outside an open domain). Paths that leave the
+//! water see the sky only.
 //!
 //! **The surface from below.** Flat: Fresnel split, the transmitted part
 //! sees the sky (`n^2 t L_sky`), the reflected part goes on. Rough: the
 //! facet sampling of `SeaSurface::interact` chooses. **Ends.** Russian
-//! roulette on the largest band throughput after the fourth event; paths
-//! stop after `MAX_EVENTS` events, like photons do.
+//! roulette on the largest band throughput from the fourth event on,
+//! after each vertex's own sun estimate and before its continuation (a
+//! path drawn toward the sun with a small weight keeps that weight for the
+//! estimate it was drawn for); paths stop after `MAX_EVENTS` events, like
+//! photons do.
 //!
 //! Above the water, sensor rays meet the surface as `interface::from_air`
 //! has them, with the photon-map integrator.
 //!
-//! **Known limits.** Under a Cox–Munk surface the sun's light-sampling
-//! density is not computed, so there is no MIS there: the estimate stays
-//! unbiased but, with a forward-peaked phase function, heavy-tailed (see
-//! `benches/README.md`). The rough surface is run backwards by the same
-//! facet sampling that runs it forwards; without shadowing the model is
-//! reciprocal except through the projected-area normalisation, which
-//! departs from one only at grazing angles.
+//! **Known limits.** With a forward-peaked phase function the estimate is
+//! heavy-tailed: paths that turn toward the sun see its bright aureole
+//! (see `benches/README.md` for the per-path deviations). The rough
+//! surface is run backwards by the same facet sampling that runs it
+//! forwards; without shadowing the model is reciprocal except through the
+//! projected-area normalisation, which departs from one only at grazing
+//! angles.
 //!
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
@@ -72,7 +80,7 @@ use std::f64::consts::PI;
 const ROULETTE_AFTER: u32 = 4;
 /// Share of scattering directions drawn around the direction toward the
 /// sun rather than around the path's own direction.
-const GUIDE_FRACTION: f64 = 0.1;
+const GUIDE_FRACTION: f64 = 0.3;
 /// Angular radius of the sun's disc seen from the Earth (0.2665 degrees).
 pub const SUN_HALF_ANGLE_RAD: f64 = 4.6513e-3;
 
@@ -97,9 +105,9 @@ pub struct PathTracer<'a> {
     sun_h: Vec<f64>,
     /// Extinction majorant over every band and the whole water (1/m).
     c_bar: f64,
-    /// True for a flat surface (the sun's disc refracts exactly and is
-    /// weighed against phase sampling).
-    flat: bool,
+    /// Under a rough surface, the facet sampler's normalisation for the
+    /// sun's direction (`SeaSurface::facing_normalisation`); None when flat.
+    rough_norm: Option<f64>,
     /// The IOPs of uniform water (None when they vary in space).
     uniform: Option<Vec<Iop>>,
     /// Direction toward the sun in the water (through the mean surface),
@@ -158,7 +166,11 @@ impl<'a> PathTracer<'a> {
                 .map(|b| scene.sun.horizontal_irradiance(b))
                 .collect(),
             c_bar,
-            flat: scene.surface.slope_variance <= 0.0,
+            rough_norm: (scene.surface.slope_variance > 0.0).then(|| {
+                scene
+                    .surface
+                    .facing_normalisation(scene.sun.direction.as_dvec3())
+            }),
             uniform,
         }
     }
@@ -197,45 +209,68 @@ impl<'a> PathTracer<'a> {
         std::f64::consts::TAU * (1.0 - SUN_HALF_ANGLE_RAD.cos())
     }
 
-    /// A sample of the direct sun in the water: a point of the sun's disc
-    /// put through the surface (see [`SunSample`]); None when the sampled
-    /// ray did not enter the water.
-    fn sample_sun(&self, rng: &mut Pcg32) -> Option<SunSample> {
-        let d_a = self.sun_disc_direction(rng);
-        let cos_s = -self.scene.sun.direction.z as f64;
-        let cos_a = -d_a.z as f64;
-        if cos_a <= 0.0 {
-            return None;
-        }
-        if self.flat {
-            let n = self.scene.surface.n_water;
-            let d_w = refract(d_a.as_dvec3(), DVec3::Z, 1.0, n)?;
-            let cos_w = -d_w.z;
-            let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
+    /// Samples of the direct sun in the water: `[0]` weighed by MIS (the
+    /// sun's disc refracted by a flat surface, or the beam refracted by
+    /// the first facet of a rough one), `[1]` the part of a rough
+    /// surface's transmission that meets more than one facet (drawn by
+    /// `interact`, no MIS). None where the sampled ray does not enter the
+    /// water (see [`SunSample`]).
+    fn sample_sun(&self, rng: &mut Pcg32) -> [Option<SunSample>; 2] {
+        let n = self.scene.surface.n_water;
+        let Some(z_norm) = self.rough_norm else {
+            let d_a = self.sun_disc_direction(rng);
+            let cos_s = -self.scene.sun.direction.z as f64;
+            let cos_a = -d_a.z as f64;
+            let single = refract(d_a.as_dvec3(), DVec3::Z, 1.0, n)
+                .filter(|_| cos_a > 0.0)
+                .map(|d_w| {
+                    let cos_w = -d_w.z;
+                    let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
+                    SunSample {
+                        dir: d_w.as_vec3(),
+                        g: t * cos_a / (cos_s * cos_w),
+                        pdf: n * n * cos_w / (cos_a * Self::disc_solid_angle()),
+                    }
+                });
+            return [single, None];
+        };
+        let surface = &self.scene.surface;
+        let i = self.scene.sun.direction.as_dvec3();
+        let m = surface.sample_facet_from_above(i, rng);
+        let single = refract(i, m, 1.0, n).filter(|o| o.z < 0.0).and_then(|o| {
+            let (pdf, t) = surface.beam_transmission_density(i, o, z_norm)?;
             Some(SunSample {
-                dir: d_w.as_vec3(),
-                g: t * cos_a / (cos_s * cos_w),
-                pdf: n * n * cos_w / (cos_a * Self::disc_solid_angle()),
+                dir: o.as_vec3(),
+                g: t / -o.z,
+                pdf,
             })
-        } else {
-            let ev = self.scene.surface.interact(d_a, rng);
-            (ev.transmitted && ev.direction.z < 0.0).then(|| SunSample {
+        });
+        let ev = surface.interact(self.scene.sun.direction, rng);
+        let multiple =
+            (ev.transmitted && ev.facets > 1 && ev.direction.z < 0.0).then(|| SunSample {
                 dir: ev.direction,
-                g: cos_a / (cos_s * -(ev.direction.z as f64)),
+                g: 1.0 / -(ev.direction.z as f64),
                 pdf: f64::INFINITY,
-            })
-        }
+            });
+        [single, multiple]
     }
 
-    /// Through a flat surface, for a path direction `next` (in water,
-    /// pointing up): the sun's radiance along it divided by the sun's
-    /// horizontal irradiance (n^2 t / (cos_s Omega)), and the light-sampling
-    /// pdf of that direction per sr; None when `next` misses the disc.
+    /// For a path direction `next` (in water, pointing up): the direct
+    /// sun's radiance along it divided by the sun's horizontal irradiance,
+    /// and the MIS light-sampling pdf of that direction per sr; None when
+    /// `next` sees no direct sun (the disc through a flat surface, the
+    /// first-facet transmission through a rough one).
     fn sun_seen(&self, next: Vec3) -> Option<(f64, f64)> {
-        if !self.flat || next.z <= 0.0 {
+        if next.z <= 0.0 {
             return None;
         }
         let n = self.scene.surface.n_water;
+        if let Some(z_norm) = self.rough_norm {
+            let o = -next.as_dvec3();
+            let i = self.scene.sun.direction.as_dvec3();
+            let (pdf, t) = self.scene.surface.beam_transmission_density(i, o, z_norm)?;
+            return Some((t * pdf / -o.z, pdf));
+        }
         let up_a = refract(next.as_dvec3(), DVec3::NEG_Z, n, 1.0)?;
         let to_sun = -self.scene.sun.direction.as_dvec3();
         if up_a.dot(to_sun) < SUN_HALF_ANGLE_RAD.cos() {
@@ -359,7 +394,7 @@ impl<'a> PathTracer<'a> {
                 // Floor or target: the sun directly, then a Lambertian bounce.
                 pos = h.position;
                 let n = h.normal;
-                if let Some(SunSample { dir: s_w, g, .. }) = self.sample_sun(rng) {
+                for SunSample { dir: s_w, g, .. } in self.sample_sun(rng).into_iter().flatten() {
                     let cos_n = (-s_w).dot(n) as f64;
                     if cos_n > 0.0 {
                         self.transmittance(pos + n * 1e-3, -s_w, rng, tmp, tr);
@@ -470,7 +505,7 @@ impl<'a> PathTracer<'a> {
             // The sun scattered toward the viewer: light sampling, weighed
             // (balance heuristic) against finding the disc by the direction
             // drawn below.
-            if let Some(sun) = self.sample_sun(rng) {
+            for sun in self.sample_sun(rng).into_iter().flatten() {
                 let s_w = sun.dir;
                 self.transmittance(pos, -s_w, rng, tmp, tr);
                 let mis = if sun.pdf.is_finite() {
@@ -491,6 +526,13 @@ impl<'a> PathTracer<'a> {
                             * tr[b];
                     }
                 }
+            }
+            // Roulette after the vertex's own estimate and before the
+            // continuation: a path drawn toward the sun with a small weight
+            // keeps that weight for the estimate it was drawn for.
+            events += 1;
+            if !Self::survive(w, events, rng) {
+                return;
             }
             let sample_around = |axis: Vec3, rng: &mut Pcg32| -> Vec3 {
                 let u = rng.uniform_f64();
@@ -530,10 +572,6 @@ impl<'a> PathTracer<'a> {
                 }
             }
             dir = next;
-            events += 1;
-            if !Self::survive(w, events, rng) {
-                return;
-            }
         }
     }
 }

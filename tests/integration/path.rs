@@ -127,8 +127,8 @@ fn floor_under_absorbing_water_matches_the_closed_form() {
 /// crossing the depth within 10 degrees of straight up, an independent
 /// Monte Carlo reading of the same radiance). Tolerance: three combined
 /// standard errors plus 3 % for averaging Lu over the 10-degree cone (with
-/// 2 M paths the radiance 10 degrees off nadir read 3.7 % above nadir here,
-/// the cone average about 2 %).
+/// 2 M paths the radiance 5 and 10 degrees off nadir read within 2 % of
+/// nadir here).
 #[test]
 fn deep_water_nadir_radiance_matches_the_lu_tally() {
     let text = r#"
