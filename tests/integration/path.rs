@@ -339,3 +339,51 @@ fn command_line_selects_the_path_integrator() {
     let msg = String::from_utf8_lossy(&bad.stderr);
     assert!(msg.contains("photon-map") && msg.contains("path"), "{msg}");
 }
+
+/// A wind-roughened surface (U = 10 m/s) and a low sun (60 degrees): the
+/// floor under purely absorbing water, seen from 1 cm above it, reads
+/// rho / pi times the downwelling irradiance there that the emission's
+/// tally counts (photons through the same facet model; the internal
+/// reflections of the floor's own light included). Tolerance: three
+/// combined standard errors plus 0.5 % for the 1 cm of water and the tally
+/// sitting 1 cm above the floor.
+#[test]
+fn rough_surface_floor_matches_the_irradiance_tally() {
+    let text = floor_scene()
+        .replace(
+            "[surface]\n",
+            "[surface]\nkind = \"cox-munk\"\nwind_speed = 10.0\n",
+        )
+        .replace(
+            &format!("zenith_deg = {SUN_ZENITH_DEG}"),
+            "zenith_deg = 60.0",
+        )
+        .replace("count = 1000", "count = 400000\n[tally]\ndepths_m = [2.99]")
+        .replace("depth_m = 0.01\n", &format!("depth_m = {}\n", H - 0.01));
+    let s = scene(&text, 16);
+    let r = &path_radiometers(&s)[0];
+    let totals = littoral::emit::Emitter::new(&s)
+        .unwrap()
+        .trace_all(0)
+        .unwrap();
+    let power: Vec<f64> = (0..3)
+        .map(|b| littoral::emit::Emitter::new(&s).unwrap().photon_power(b))
+        .collect();
+    let report = littoral::emit::report::EmissionReport::new(&s, &totals, &power);
+    let t = &report.tally[0];
+    for b in 0..3 {
+        let truth = RHO / std::f64::consts::PI * t.Ed[b];
+        let truth_se = RHO / std::f64::consts::PI * t.Ed_stderr[b];
+        let tol = 3.0 * (truth_se.powi(2) + r.stderr[b].powi(2)).sqrt() + 0.005 * truth;
+        eprintln!(
+            "band {b}: path {} +- {}, tally {truth} +- {truth_se}",
+            r.L[b], r.stderr[b]
+        );
+        assert!(
+            (r.L[b] - truth).abs() <= tol,
+            "band {b}: {} against {truth}",
+            r.L[b]
+        );
+        assert!(r.stderr[b] < 0.01 * truth && truth_se < 0.01 * truth);
+    }
+}
