@@ -24,7 +24,10 @@
 use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
-use crate::estimate::spectral::{combine, combine_with_coarse, BandSums, SpectralMode};
+use crate::estimate::shape::BandShapeGrid;
+use crate::estimate::spectral::{
+    combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
+};
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
 use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
@@ -49,6 +52,7 @@ pub struct Scratch {
     local: BandSums,
     expanded: BandSums,
     coarse: BandSums,
+    shape: Vec<f64>,
 }
 
 impl Scratch {
@@ -62,6 +66,7 @@ impl Scratch {
             local: BandSums::new(bands),
             expanded: BandSums::new(bands),
             coarse: BandSums::new(bands),
+            shape: vec![0.0; bands],
         }
     }
 }
@@ -79,7 +84,14 @@ pub struct Estimator<'a> {
     phases: [[TruncatedPhase; 2]; 2],
     /// Precomputed axial distances, when the scene asks for them.
     grid: Option<BoundaryGrid>,
+    /// Band shapes of the `grid` spectral mode.
+    shapes: Option<BandShapeGrid>,
 }
+
+/// Most voxels of a band-shape grid, and most bytes (the budget charges
+/// [`Estimator::shape_grid_bytes`]).
+const MAX_SHAPE_VOXELS: usize = 32_768;
+const MAX_SHAPE_BYTES: u64 = 32 << 20;
 
 /// Distances the boundary grid stores (m): far enough that the field stays
 /// linear next to a gently sloping floor (see `BoundaryGrid::build`).
@@ -96,12 +108,13 @@ impl<'a> Estimator<'a> {
                 Self::grid_max_distance(scene),
             )?),
         };
-        Ok(Estimator {
+        let mut est = Estimator {
             scene,
             map,
             boundary,
             spectral,
             grid,
+            shapes: None,
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -112,7 +125,64 @@ impl<'a> Estimator<'a> {
                     TruncatedPhase::new(&scene.particle_phase, deg),
                 ]
             }),
-        })
+        };
+        if spectral == SpectralMode::Grid {
+            let voxels = Self::shape_voxels(scene, map.layer_photons(LAYER_VOLUME));
+            let shapes = BandShapeGrid::build(
+                map,
+                scene.domain.size_m,
+                voxels,
+                &|p: &crate::photon::Photon, up: bool| est.shape_weight(p, up),
+            )?;
+            est.shapes = Some(shapes);
+        }
+        Ok(est)
+    }
+
+    /// The phase weight of photon `p` toward a viewer straight above
+    /// (`up`: light travelling up) or below, as a volume estimate there
+    /// weighs it: the local mixture of the truncated phase functions.
+    fn shape_weight(&self, p: &crate::photon::Photon, up: bool) -> f64 {
+        let toward_viewer = if up { Vec3::Z } else { -Vec3::Z };
+        let iop = self.scene.water.iop(p.position, p.band as usize);
+        let b = iop.b();
+        let fw = if b > 0.0 { iop.b_w / b } else { 0.0 };
+        let [pw, pp] = self.phases_for(toward_viewer);
+        let cos = p.direction.dot(toward_viewer) as f64;
+        fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)
+    }
+
+    /// Voxels of the band-shape grid over `volume_photons` photons: about
+    /// `shape_photons_per_band` photons per band and voxel at
+    /// `POLICY_PHOTONS` traced photons, that count growing as the square
+    /// root of the photons traced, so that both the voxels' size and their
+    /// noise shrink as photons are added.
+    fn shape_voxels(scene: &Scene, volume_photons: u64) -> usize {
+        let nb = scene.bands.len();
+        let by_bytes = (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb)) as usize;
+        let growth = (scene.photons as f64 / crate::scene::settings::POLICY_PHOTONS)
+            .sqrt()
+            .max(1.0);
+        let per_band = (scene.estimate.shape_photons_per_band as f64 * growth).round() as usize;
+        BandShapeGrid::planned_voxels(volume_photons, nb, per_band, MAX_SHAPE_VOXELS.min(by_bytes))
+    }
+
+    /// Bytes of the band-shape grid `Estimator::new` builds for `scene` over
+    /// a map of `volume_photons` volume photons (0 unless `spectral =
+    /// "grid"`), for the memory budget.
+    pub fn shape_grid_bytes(scene: &Scene, volume_photons: u64) -> u64 {
+        match scene.estimate.spectral {
+            SpectralMode::Grid => {
+                BandShapeGrid::bytes(Self::shape_voxels(scene, volume_photons), scene.bands.len())
+            }
+            _ => 0,
+        }
+    }
+
+    /// The band-shape grid's cells along x, y and layers along z, when the
+    /// `grid` mode built one.
+    pub fn shape_grid_dims(&self) -> Option<[usize; 3]> {
+        self.shapes.as_ref().map(|g| g.dims())
     }
 
     fn grid_max_distance(scene: &Scene) -> f32 {
@@ -320,7 +390,8 @@ impl<'a> Estimator<'a> {
             let w = (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64;
             (w, cos > 0.0)
         };
-        let r = self.estimate(x, LAYER_VOLUME, &weight, None, scratch, out);
+        let view_up = Some(toward_viewer.z > 0.0);
+        let r = self.estimate(x, LAYER_VOLUME, &weight, None, view_up, scratch, out);
         scratch.mix = mix;
         r
     }
@@ -353,6 +424,7 @@ impl<'a> Estimator<'a> {
             LAYER_SURFACE,
             &weight,
             Some((normal, surface)),
+            None,
             scratch,
             out,
         )
@@ -367,12 +439,14 @@ impl<'a> Estimator<'a> {
     /// most of the in-scatter (upwelling light seen looking down rests on
     /// the few photons travelling up), and a local search of k holds too
     /// few of them for a steady estimate.
+    #[allow(clippy::too_many_arguments)]
     fn estimate(
         &self,
         x: Vec3,
         layer: u16,
         weight: &dyn Fn(&Neighbour) -> (f64, bool),
         surface: Option<(Vec3, SurfaceId)>,
+        view_up: Option<bool>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -382,9 +456,10 @@ impl<'a> Estimator<'a> {
             local,
             expanded,
             coarse,
+            shape,
             ..
         } = scratch;
-        let compensated = self.spectral == SpectralMode::Compensated;
+        let compensated = self.spectral != SpectralMode::Naive;
         let split = surface.is_none();
         let two_sizes = compensated || split;
         let k = self.scene.estimate.k;
@@ -461,7 +536,18 @@ impl<'a> Estimator<'a> {
         } else {
             0.0
         };
-        if split {
+        if let (Some(grid), Some(up)) = (&self.shapes, view_up) {
+            let has = grid.shape_at(x, up, shape);
+            combine_with_shape(
+                local,
+                v_local,
+                coarse,
+                expanded,
+                v_big,
+                has.then_some(&shape[..]),
+                out,
+            );
+        } else if split {
             combine_with_coarse(self.spectral, local, v_local, coarse, expanded, v_big, out);
         } else {
             combine(self.spectral, local, v_local, expanded, v_big, out);

@@ -8,6 +8,8 @@
 //! - [`boundary`]: search volumes and discs cut by boundaries ([`BoundaryMode`]).
 //! - [`spectral`]: band sums and their combination ([`SpectralMode`]).
 //! - [`peak`]: phase functions with the forward peak as a delta ([`peak::TruncatedPhase`]).
+//! - [`shape`]: band shapes of the light travelling up and down on a coarse
+//!   grid over every volume photon ([`shape::BandShapeGrid`]).
 //!
 //! Not for: finding photons (`store::query`), marching rays or direct
 //! light (`render`).
@@ -15,6 +17,7 @@
 pub mod boundary;
 pub mod estimator;
 pub mod peak;
+pub mod shape;
 pub mod spectral;
 
 pub use boundary::BoundaryMode;

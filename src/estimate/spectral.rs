@@ -61,7 +61,7 @@ impl SpectralMode {
     /// Whether [`combine`] reads the expanded search; callers can skip that
     /// search (the costlier of the two) when it does not.
     pub fn needs_expanded(self) -> bool {
-        self == SpectralMode::Compensated
+        self != SpectralMode::Naive
     }
 }
 
@@ -197,7 +197,7 @@ pub fn combine_with_coarse(
                 }
             }
         }
-        SpectralMode::Compensated => {
+        SpectralMode::Compensated | SpectralMode::Grid => {
             let expanded_total = expanded.total();
             let mut density = 0.0;
             if valid_volume(v_local) {
@@ -216,6 +216,40 @@ pub fn combine_with_coarse(
                 *o = scale * e;
             }
         }
+    }
+}
+
+/// The `grid` combination: the level of [`combine_with_coarse`] (local
+/// photons at the local scale, heavy ones at the expanded scale, all
+/// bands) times the band shares `shape` from the band-shape grid (sum 1).
+/// Without a shape (`None`: no weight near) this is the compensated
+/// combination. The band sum is the level, as in the compensated mode.
+pub fn combine_with_shape(
+    local: &BandSums,
+    v_local: f64,
+    coarse: &BandSums,
+    expanded: &BandSums,
+    v_expanded: f64,
+    shape: Option<&[f64]>,
+    out: &mut [f64],
+) {
+    let Some(shape) = shape else {
+        combine_with_coarse(
+            SpectralMode::Compensated,
+            local,
+            v_local,
+            coarse,
+            expanded,
+            v_expanded,
+            out,
+        );
+        return;
+    };
+    let density = |total: f64, v: f64| if valid_volume(v) { total / v } else { 0.0 };
+    let level = density(local.total(), v_local) + density(coarse.total(), v_expanded);
+    let level = if level.is_finite() { level } else { 0.0 };
+    for (o, s) in out.iter_mut().zip(shape) {
+        *o = level * s;
     }
 }
 
@@ -238,7 +272,7 @@ pub fn combine(
 ) {
     match mode {
         SpectralMode::Naive => local.estimates(v_local, out),
-        SpectralMode::Compensated => {
+        SpectralMode::Compensated | SpectralMode::Grid => {
             debug_assert_eq!(out.len(), expanded.bands(), "output sized to the band grid");
             debug_assert_eq!(local.bands(), expanded.bands(), "searches share one grid");
             let expanded_total = expanded.total();

@@ -62,8 +62,29 @@ pub struct RenderShares {
     pub reserve_bytes: u64,
     /// The boundary-distance grid (0 without one).
     pub boundary_grid_bytes: u64,
+    /// The band-shape grid of `spectral = "grid"` (0 without one; sized
+    /// once the map's photon count is known, and taken from the tile cache).
+    #[serde(default)]
+    pub band_shape_grid_bytes: u64,
     /// The tile cache: everything left.
     pub tile_cache_bytes: u64,
+}
+
+impl RenderShares {
+    /// Take `bytes` for the band-shape grid from the tile cache's share.
+    pub fn take_band_shape_grid(&mut self, bytes: u64) -> Result<()> {
+        if bytes >= self.tile_cache_bytes {
+            return Err(Error::Budget {
+                budget: self.budget_bytes,
+                what: format!(
+                    "the band-shape grid ([estimate] spectral = \"grid\") needs {bytes} bytes, leaving nothing for the tile cache"
+                ),
+            });
+        }
+        self.band_shape_grid_bytes = bytes;
+        self.tile_cache_bytes -= bytes;
+        Ok(())
+    }
 }
 
 impl MemoryBudget {
@@ -133,6 +154,7 @@ impl MemoryBudget {
             budget_bytes: self.total,
             reserve_bytes: reserve,
             boundary_grid_bytes: grid,
+            band_shape_grid_bytes: 0,
             tile_cache_bytes: self.total - fixed,
         })
     }

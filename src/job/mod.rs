@@ -118,12 +118,12 @@ impl RenderJob<'_> {
         let sampler = crate::mem::PeakSampler::start();
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.
-        let shares = self.budget.render(scene, self.threads)?;
+        let mut shares = self.budget.render(scene, self.threads)?;
         create_dir(&self.out_dir)?;
         let integrator = scene.render.integrator;
         let (rendered, stage, t_emit) = match integrator {
             IntegratorMode::PhotonMap => {
-                let (rendered, stage, t_emit) = self.photon_map(&shares, start, progress)?;
+                let (rendered, stage, t_emit) = self.photon_map(&mut shares, start, progress)?;
                 (rendered, Some(stage), t_emit)
             }
             IntegratorMode::Path => (
@@ -197,7 +197,7 @@ impl RenderJob<'_> {
     /// of emission.
     fn photon_map(
         &self,
-        shares: &RenderShares,
+        shares: &mut RenderShares,
         start: Instant,
         progress: &dyn Progress,
     ) -> Result<(crate::render::Rendered, MapStage, f64)> {
@@ -238,6 +238,11 @@ impl RenderJob<'_> {
         let t_emit = start.elapsed().as_secs_f64();
         crate::mem::release_free_memory();
 
+        let volume_photons = file.layer_photons(crate::photon::LAYER_VOLUME);
+        shares.take_band_shape_grid(crate::estimate::Estimator::shape_grid_bytes(
+            scene,
+            volume_photons,
+        ))?;
         let map = PhotonMap::new(file, shares.tile_cache_bytes)?;
         let rendered = crate::render::render(scene, &map, &self.out_dir, self.threads, progress)?;
         drop(map);

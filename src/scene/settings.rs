@@ -8,14 +8,34 @@
 
 use std::fmt;
 
-/// Photons in the local search.
-pub const DEFAULT_K: usize = 64;
-/// The expanded search of the spectral compensation, in multiples of `k`.
-pub const DEFAULT_K_EXPANDED_PER_K: usize = 8;
+/// Photons in the local search at [`POLICY_PHOTONS`] traced photons (see
+/// [`policy_k`]).
+pub const DEFAULT_K: usize = 200;
+/// The expanded search, in multiples of `k`, when not set.
+pub const DEFAULT_K_EXPANDED_PER_K: usize = 10;
+/// The traced photon count at which the search-size policy gives
+/// [`DEFAULT_K`].
+pub const POLICY_PHOTONS: f64 = 4.0e6;
+
+/// The search-size policy: photons in the local search for `photons`
+/// traced photons when `[estimate] k` is not given,
+/// `k = DEFAULT_K (photons / POLICY_PHOTONS)^(4/7)`, within 16..=100000.
+/// A k-nearest estimate's bias grows with its radius (as h^2) and its
+/// variance falls with its count (as 1 / k, k ~ N h^3): balancing the two
+/// gives h ~ N^(-1/7), so k ~ N^(4/7) photons. Both errors then fall as
+/// photons are added; a fixed k would leave the variance where it is.
+pub fn policy_k(photons: u64) -> usize {
+    let k = DEFAULT_K as f64 * (photons as f64 / POLICY_PHOTONS).powf(4.0 / 7.0);
+    (k.round() as usize).clamp(16, 100_000)
+}
 /// Largest radius of a k-nearest search (m).
 pub const DEFAULT_MAX_RADIUS_M: f64 = 2.0;
 /// Ray-marching step in water (m).
 pub const DEFAULT_STEP_M: f64 = 0.5;
+/// Photons per band in a band-shape voxel at [`POLICY_PHOTONS`] traced
+/// photons (`spectral = "grid"`; see `estimate::shape`, which grows it
+/// with the photon count).
+pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 400;
 /// Half-angle of the truncated forward peak (degrees) along rays looking up
 /// or sideways, into the downwelling light and the sun's aureole (see
 /// `estimate::peak` for the measurements behind it).
@@ -74,7 +94,7 @@ impl std::fmt::Display for BoundaryMode {
 }
 
 /// How per-band radiance is formed from band-tagged photons. Named in scene
-/// files and on the command line as `naive` or `compensated`.
+/// files and on the command line as `naive`, `compensated` or `grid`.
 #[derive(
     Clone,
     Copy,
@@ -93,19 +113,28 @@ pub enum SpectralMode {
     Naive,
     /// The poster's compensation: level from the local search, spectral shape
     /// from the expanded one.
-    #[default]
     Compensated,
+    /// Level from the local search, band shape of the in-scatter from a
+    /// grid over every volume photon (`estimate::shape`; the default);
+    /// surfaces as `compensated`.
+    #[default]
+    Grid,
 }
 
 impl SpectralMode {
     /// Every mode, in the order help text lists them.
-    pub const ALL: [SpectralMode; 2] = [SpectralMode::Naive, SpectralMode::Compensated];
+    pub const ALL: [SpectralMode; 3] = [
+        SpectralMode::Naive,
+        SpectralMode::Compensated,
+        SpectralMode::Grid,
+    ];
 
     /// The name used in scene files and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             SpectralMode::Naive => "naive",
             SpectralMode::Compensated => "compensated",
+            SpectralMode::Grid => "grid",
         }
     }
 }
@@ -196,6 +225,13 @@ pub struct EstimateSettings {
     /// Node spacing (m) of a precomputed boundary-distance grid for volume
     /// estimates, or None to trace six rays per estimate.
     pub boundary_grid_m: Option<f64>,
+    /// Photons per band in a band-shape voxel (`spectral = "grid"`).
+    #[serde(default = "default_shape_photons_per_band")]
+    pub shape_photons_per_band: usize,
+}
+
+fn default_shape_photons_per_band() -> usize {
+    DEFAULT_SHAPE_PHOTONS_PER_BAND
 }
 
 impl EstimateSettings {

@@ -126,6 +126,15 @@ impl InMemoryMap {
 }
 
 impl PhotonQuery for InMemoryMap {
+    fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()> {
+        if let Some(l) = self.layers.get(layer as usize) {
+            for p in &l.photons {
+                f(&p.unpack());
+            }
+        }
+        Ok(())
+    }
+
     fn query_into(
         &self,
         at: Vec3,

@@ -112,6 +112,11 @@ pub trait PhotonQuery: Sync {
         CacheStats::default()
     }
 
+    /// Every photon of `layer`, once, in a deterministic order, passed to
+    /// `f`: one streaming pass (a tiled map decodes one tile at a time,
+    /// outside its cache).
+    fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()>;
+
     /// Photons of every layer matching `search` around `at`, nearest first.
     fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
         let mut out = Vec::new();
@@ -365,5 +370,21 @@ impl PhotonQuery for PhotonMap {
 
     fn cache_stats(&self) -> CacheStats {
         self.cache.stats()
+    }
+
+    fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()> {
+        let mut decoder = super::codec::TileDecoder::default();
+        let mut tile = Vec::new();
+        for (t, e) in self.file.tiles().iter().enumerate() {
+            if e.layer != layer as u32 {
+                continue;
+            }
+            tile.clear();
+            self.file.decode_tile(t as u32, &mut decoder, &mut tile)?;
+            for p in &tile {
+                f(&p.unpack());
+            }
+        }
+        Ok(())
     }
 }

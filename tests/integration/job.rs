@@ -232,10 +232,12 @@ fn typed_report_round_trips() {
     );
     let m = r.memory;
     assert_eq!(
-        m.reserve_bytes + m.boundary_grid_bytes + m.tile_cache_bytes,
+        m.reserve_bytes + m.boundary_grid_bytes + m.band_shape_grid_bytes + m.tile_cache_bytes,
         64 * MIB
     );
     assert!(r.cache.peak_resident_bytes <= m.tile_cache_bytes);
+    // The default spectral mode builds the band-shape grid, charged to the budget.
+    assert!(m.band_shape_grid_bytes > 0);
     for f in [
         &r.outputs.hdr,
         &r.outputs.bsq,

@@ -3,8 +3,8 @@
 
 use super::*;
 use crate::scene::settings::{
-    DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_K, DEFAULT_K_EXPANDED_PER_K,
-    DEFAULT_MAX_RADIUS_M, DEFAULT_STEP_M,
+    policy_k, DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_K_EXPANDED_PER_K,
+    DEFAULT_MAX_RADIUS_M, DEFAULT_SHAPE_PHOTONS_PER_BAND, DEFAULT_STEP_M,
 };
 
 pub(super) fn render_settings(
@@ -131,7 +131,7 @@ pub(super) fn render_settings(
 
     let e = &f.estimate;
     let ek = |k| [K("estimate"), K(k)];
-    let k = e.k.unwrap_or(DEFAULT_K);
+    let k = e.k.unwrap_or_else(|| policy_k(f.photons.count));
     if k == 0 || k > 100_000 {
         return Err(ctx.err(&ek("k"), "must be between 1 and 100000"));
     }
@@ -183,6 +183,15 @@ pub(super) fn render_settings(
             ));
         }
     }
+    let shape_photons_per_band = e
+        .shape_photons_per_band
+        .unwrap_or(DEFAULT_SHAPE_PHOTONS_PER_BAND);
+    if !(1..=1_000_000).contains(&shape_photons_per_band) {
+        return Err(ctx.err(
+            &ek("shape_photons_per_band"),
+            "must be between 1 and 1000000",
+        ));
+    }
     let estimate = EstimateSettings {
         k,
         radius_m: e.radius_m,
@@ -194,6 +203,7 @@ pub(super) fn render_settings(
         forward_peak_deg,
         forward_peak_down_deg,
         boundary_grid_m: e.boundary_grid_m,
+        shape_photons_per_band,
     };
     let render = RenderSettings {
         integrator: ov.integrator.or(f.render.integrator).unwrap_or_default(),

@@ -1,0 +1,125 @@
+use super::*;
+use crate::bounds::Aabb;
+use crate::photon::Photon;
+use crate::rng::Pcg32;
+use crate::spectral::BandGrid;
+use crate::store::InMemoryMap;
+
+/// Band shares of photons travelling up and down above and below 4 m.
+const UP_SHALLOW: [f64; 4] = [0.4, 0.3, 0.2, 0.1];
+const DOWN_SHALLOW: [f64; 4] = [0.1, 0.2, 0.3, 0.4];
+const UP_DEEP: [f64; 4] = [0.25, 0.25, 0.25, 0.25];
+const DOWN_DEEP: [f64; 4] = [0.7, 0.1, 0.1, 0.1];
+
+/// Weight 1 for photons travelling toward the viewer's side, else 0: the
+/// grid then holds each hemisphere's band shares.
+fn hemisphere(p: &Photon, up: bool) -> f64 {
+    f64::from(u8::from((p.direction.z > 0.0) == up))
+}
+
+fn pick(shares: &[f64; 4], u: f64) -> u16 {
+    let mut acc = 0.0;
+    for (i, s) in shares.iter().enumerate() {
+        acc += s;
+        if u < acc {
+            return i as u16;
+        }
+    }
+    3
+}
+
+/// `n` photons uniform in a 10 x 10 x 8 m box, half travelling up, with
+/// the band shares above per hemisphere and depth.
+fn map(n: u64) -> InMemoryMap {
+    let photons = (0..n).map(|i| {
+        let mut rng = Pcg32::new(5, i);
+        let p = Vec3::new(
+            10.0 * rng.uniform_f32(),
+            10.0 * rng.uniform_f32(),
+            -8.0 * rng.uniform_f32(),
+        );
+        let up = rng.uniform_f64() < 0.5;
+        let shares = match (up, p.z > -4.0) {
+            (true, true) => &UP_SHALLOW,
+            (false, true) => &DOWN_SHALLOW,
+            (true, false) => &UP_DEEP,
+            (false, false) => &DOWN_DEEP,
+        };
+        let photon = Photon {
+            position: p,
+            direction: if up { Vec3::Z } else { -Vec3::Z },
+            band: pick(shares, rng.uniform_f64()),
+            power: 1.0,
+        };
+        (photon, LAYER_VOLUME)
+    });
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -8.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap()
+}
+
+/// Away from the 4 m change (more than a layer's height), the grid reads
+/// each viewing direction's band shares (weighted here by hemisphere) within four standard errors of a
+/// multinomial share over the photons of the voxels it interpolates (a
+/// lower bound on that count: one voxel's).
+#[test]
+fn grid_reads_the_band_shares_of_each_hemisphere() {
+    let n = 400_000;
+    let m = map(n);
+    let voxels = 64;
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, &hemisphere).unwrap();
+    let [nx, ny, nz] = g.dims();
+    assert!(nx * ny * nz >= 32 && nz >= 3, "{:?}", g.dims());
+    let per_voxel_hemisphere = n as f64 / (nx * ny * nz) as f64 / 2.0;
+    let mut out = [0.0; 4];
+    for (x, up, want) in [
+        (Vec3::new(5.0, 5.0, -0.5), true, UP_SHALLOW),
+        (Vec3::new(2.0, 7.0, -0.8), false, DOWN_SHALLOW),
+        (Vec3::new(8.0, 3.0, -7.5), true, UP_DEEP),
+        (Vec3::new(5.0, 5.0, -7.2), false, DOWN_DEEP),
+    ] {
+        assert!(g.shape_at(x, up, &mut out));
+        assert!((out.iter().sum::<f64>() - 1.0).abs() < 1e-6);
+        for (o, w) in out.iter().zip(want) {
+            let se = (w * (1.0 - w) / per_voxel_hemisphere).sqrt();
+            assert!(
+                (o - w).abs() < 4.0 * se,
+                "{x} up {up}: {out:?} against {want:?}"
+            );
+        }
+    }
+}
+
+/// The grid refines as photons are added (its smoothing shrinks), within
+/// its bound; a direction with no weight has no shape.
+#[test]
+fn voxels_follow_the_photon_count() {
+    let a = BandShapeGrid::planned_voxels(512_000, 128, 400, 1 << 20);
+    let b = BandShapeGrid::planned_voxels(4_096_000, 128, 400, 1 << 20);
+    assert_eq!(b, 8 * a);
+    assert_eq!(
+        BandShapeGrid::planned_voxels(u64::MAX / 2, 128, 400, 500),
+        500
+    );
+    assert_eq!(BandShapeGrid::planned_voxels(10, 128, 400, 500), 1);
+    let photons = (0..1000).map(|i| {
+        let p = Photon {
+            position: Vec3::new(i as f32 % 10.0, 5.0, -1.0 - (i % 7) as f32),
+            direction: -Vec3::Z,
+            band: (i % 4) as u16,
+            power: 1.0,
+        };
+        (p, LAYER_VOLUME)
+    });
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -8.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, &hemisphere).unwrap();
+    let mut out = [0.0; 4];
+    assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
+    assert!(g.shape_at(Vec3::new(5.0, 5.0, -3.0), false, &mut out));
+}
