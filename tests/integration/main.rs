@@ -4,6 +4,7 @@ mod common;
 
 mod cache;
 mod cli;
+mod convergence;
 mod corruption;
 mod cube_tool;
 mod determinism;
