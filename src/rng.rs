@@ -60,6 +60,17 @@ impl Pcg32 {
         ((hi << 26) | lo) as f64 * (1.0 / 9_007_199_254_740_992.0)
     }
 
+    /// An exponential free path of rate `rate` (1/m): -ln(1 - u) / rate, or
+    /// infinity (drawing nothing) when the rate is not positive.
+    #[inline]
+    pub fn exponential(&mut self, rate: f64) -> f64 {
+        if rate > 0.0 {
+            -(1.0 - self.uniform_f64()).ln() / rate
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// Uniform integer in [0, n) without modulo bias (Lemire's method).
     #[inline]
     pub fn below(&mut self, n: u32) -> u32 {

@@ -108,16 +108,8 @@ pub fn trace(
             result.truncated = true;
             return result;
         }
-        let t_flight = if c_max > 0.0 {
-            -(1.0 - rng.uniform_f64()).ln() / c_max
-        } else {
-            f64::INFINITY
-        };
-        let t_surface = if dir.z > 0.0 {
-            (-pos.z / dir.z) as f64
-        } else {
-            f64::INFINITY
-        };
+        let t_flight = rng.exponential(c_max);
+        let t_surface = crate::scene::Domain::surface_distance(pos, dir);
         let t_edge = scene.domain.edge_distance(pos, dir);
         let t_limit = t_flight.min(t_surface).min(t_edge);
         let hit = scene

@@ -212,6 +212,24 @@ impl Geometry {
         self.closest(origin, dir, t_max, false)
     }
 
+    /// Closest hit with t in [0, t_max] for a ray from a point that is not on
+    /// a surface (an instrument, a scattering event in the water): unlike
+    /// [`Geometry::intersect`], a surface closer than the self-intersection
+    /// epsilon is found. The ray starts twice the epsilon behind `origin`
+    /// (`dir` unit length), and a hit behind `origin` sends the search on
+    /// from the plain origin.
+    pub fn intersect_from_point(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        let back = 2.0 * self.epsilon_m.max(EPSILON_MIN_M);
+        match self.closest(origin - dir * back, dir, t_max + back, false) {
+            Some(mut h) if h.t >= back => {
+                h.t = (h.t - back).max(0.0);
+                Some(h)
+            }
+            Some(_) => self.intersect(origin, dir, t_max),
+            None => None,
+        }
+    }
+
     /// True when something lies on the ray with t in (epsilon, t_max) — the
     /// shadow-ray test, exclusive at t_max so a light or surface point at
     /// exactly t_max does not shadow itself. Invalid rays are not occluded.

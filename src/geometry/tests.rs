@@ -777,3 +777,35 @@ impl GeometryBuilder {
         &self.tris
     }
 }
+
+/// From a point nearer a surface than the self-intersection epsilon (an
+/// instrument 0.1 mm above the floor), `intersect` misses the floor but
+/// `intersect_from_point` finds it at the right distance; a surface behind
+/// the point is not reported, and farther hits agree with `intersect`.
+#[test]
+fn intersect_from_point_finds_a_surface_inside_the_epsilon() {
+    let mut b = GeometryBuilder::new([100.0, 80.0]);
+    b.flat_floor(3.0, FLOOR);
+    b.add_panel(Vec3::new(50.0, 40.0, -1.0), [4.0, 4.0], 1);
+    let g = b.build();
+    assert!(g.epsilon_m() > 1e-4);
+    let p = Vec3::new(20.0, 20.0, -3.0 + 1e-4);
+    assert!(g.intersect(p, -Vec3::Z, 10.0).is_none());
+    let h = g
+        .intersect_from_point(p, -Vec3::Z, 10.0)
+        .expect("the floor");
+    assert_eq!(h.surface, FLOOR);
+    assert!((h.t - 1e-4).abs() < 5e-5, "t {}", h.t);
+    // Just below the panel, looking down: the panel is behind, the floor ahead.
+    let q = Vec3::new(50.0, 40.0, -1.0 - 1e-4);
+    let h = g
+        .intersect_from_point(q, -Vec3::Z, 10.0)
+        .expect("the floor");
+    assert_eq!(h.surface, FLOOR);
+    let far = Vec3::new(30.0, 30.0, -1.5);
+    let (a, b) = (
+        g.intersect(far, -Vec3::Z, 10.0).unwrap(),
+        g.intersect_from_point(far, -Vec3::Z, 10.0).unwrap(),
+    );
+    assert!((a.t - b.t).abs() < 1e-5 && a.surface == b.surface);
+}

@@ -126,7 +126,8 @@ impl<'a> RayMarcher<'a> {
             f32::INFINITY
         };
         let limit = t_surface.min(MAX_MARCH_M);
-        let hit = scene.geometry.intersect(p0, dir, limit);
+        // An instrument may sit closer to the floor than the self-intersection epsilon.
+        let hit = scene.geometry.intersect_from_point(p0, dir, limit);
         let t_end = hit.map_or(limit, |h| h.t);
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);

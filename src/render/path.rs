@@ -307,7 +307,7 @@ impl<'a> PathTracer<'a> {
                 // Ratio tracking: the product of null-collision probabilities.
                 let mut t = 0.0;
                 loop {
-                    t += -(1.0 - rng.uniform_f64()).ln() / self.c_bar;
+                    t += rng.exponential(self.c_bar);
                     if t >= seg {
                         break;
                     }
@@ -374,23 +374,27 @@ impl<'a> PathTracer<'a> {
         w.iter_mut().for_each(|x| *x = 1.0);
         let mut dir = dir;
         let mut events = 0u32;
+        let mut on_surface = false;
         loop {
-            let t_flight = if c_bar > 0.0 {
-                -(1.0 - rng.uniform_f64()).ln() / c_bar
-            } else {
-                f64::INFINITY
-            };
-            let t_surface = if dir.z > 0.0 {
-                (-pos.z / dir.z) as f64
-            } else {
-                f64::INFINITY
-            };
+            let t_flight = rng.exponential(c_bar);
+            let t_surface = crate::scene::Domain::surface_distance(pos, dir);
             let t_edge = domain.edge_distance(pos, dir);
             let t_limit = t_flight.min(t_surface).min(t_edge);
             if !t_limit.is_finite() {
                 return;
             }
-            if let Some(h) = scene.geometry.intersect(pos, dir, t_limit as f32) {
+            // From a point in the water (the start, a scattering or a null
+            // collision) a surface nearer than the self-intersection epsilon
+            // still counts; from a surface, the epsilon keeps the ray off it.
+            let hit = if on_surface {
+                scene.geometry.intersect(pos, dir, t_limit as f32)
+            } else {
+                scene
+                    .geometry
+                    .intersect_from_point(pos, dir, t_limit as f32)
+            };
+            on_surface = false;
+            if let Some(h) = hit {
                 // Floor or target: the sun directly, then a Lambertian bounce.
                 pos = h.position;
                 let n = h.normal;
@@ -409,6 +413,7 @@ impl<'a> PathTracer<'a> {
                 }
                 dir = cosine_hemisphere(n, rng);
                 pos += n * 1e-4;
+                on_surface = true;
                 events += 1;
                 if !Self::survive(w, events, rng) {
                     return;

@@ -86,6 +86,16 @@ impl Domain {
             .max(0.0)
     }
 
+    /// Distance along `dir` from `p` (in the water) up to the mean surface
+    /// z = 0 (infinite for a ray not going up).
+    pub fn surface_distance(p: Vec3, dir: Vec3) -> f64 {
+        if dir.z > 0.0 {
+            (-p.z / dir.z) as f64
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// Move a point that reached a side wall, travelling along `dir`, to the
     /// opposite wall.
     pub fn wrap(&self, p: Vec3, dir: Vec3) -> Vec3 {

@@ -63,6 +63,9 @@ view = "nadir"
 [[radiometer]]
 depth_m = 1.5
 view = [0.5, 0.0, -0.8660254]
+[[radiometer]]
+depth_m = 2.9999
+view = "nadir"
 "#
     )
 }
@@ -91,7 +94,8 @@ fn floor_radiance() -> f64 {
 
 /// Beer–Lambert, Fresnel, the n^2 law and a Lambertian floor under clear
 /// water: radiometers looking at the floor from just below the surface,
-/// from the air, and obliquely from mid-depth read the closed form within
+/// from the air, obliquely from mid-depth and from 0.1 mm above it read
+/// the closed form within
 /// three standard errors (their own, from independent paths) plus 1e-3
 /// for the quadrature and the sun's finite disc.
 #[test]
@@ -103,7 +107,10 @@ fn floor_under_absorbing_water_matches_the_closed_form() {
     let above = below * (1.0 - fresnel_reflectance(1.0, 1.0, N_WATER)) / (N_WATER * N_WATER);
     // 30 degrees off nadir from 1.5 m above the floor: a path of 1.5 / cos 30.
     let oblique = l_f * (-A * (H - 1.5) / (30f64).to_radians().cos()).exp();
-    for (reading, truth) in r.iter().zip([below, above, oblique]) {
+    // A tenth of a millimetre above the floor, nearer than the geometry's
+    // self-intersection epsilon.
+    let touching = l_f * (-A * 1e-4).exp();
+    for (reading, truth) in r.iter().zip([below, above, oblique, touching]) {
         for (l, se) in reading.L.iter().zip(&reading.stderr) {
             let tol = 3.0 * se + 1e-3 * truth;
             eprintln!(
@@ -385,5 +392,36 @@ fn rough_surface_floor_matches_the_irradiance_tally() {
             r.L[b]
         );
         assert!(r.stderr[b] < 0.01 * truth && truth_se < 0.01 * truth);
+    }
+}
+
+/// The photon map's radiometers read the floor from 0.1 mm above it too
+/// (they read under 1 % of it when the floor lay inside the geometry's
+/// self-intersection epsilon): in the absorbing-water floor scene the
+/// direct sun on the floor is exact and the internally reflected light
+/// comes from the surface photons, so the reading is the closed form within
+/// 2 % (the surface estimate carries about a tenth of the radiance).
+#[test]
+fn photon_map_radiometer_touching_the_floor_reads_it() {
+    let text = floor_scene().replace("count = 1000", "count = 300000");
+    let o = Overrides::default();
+    let s = Scene::parse(&text, Path::new("floor.toml"), &o).unwrap();
+    let dir = tempdir();
+    let r = RenderJob {
+        scene: &s,
+        out_dir: dir.path().join("out"),
+        map: None,
+        threads: 0,
+        budget: MemoryBudget::new(256 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&Silent)
+    .unwrap();
+    let truth = floor_radiance() * (-A * 1e-4).exp();
+    let touching = &r.radiometers[3];
+    assert_eq!(touching.depth_m, 2.9999);
+    for l in &touching.L {
+        eprintln!("photon map 0.1 mm above the floor: {l} against {truth}");
+        assert!((l / truth - 1.0).abs() < 0.02, "{l} against {truth}");
     }
 }
