@@ -501,3 +501,53 @@ fn estimator_weights_and_reuses() {
     assert_eq!(out, [1.0, 0.0, 0.0]);
     assert_eq!(comp.dropped(), 0);
 }
+
+/// The grid combination: the band sum is the level of the compensated
+/// combination (local at its scale, coarse at the expanded scale), each
+/// band gets the level times its share, and without a shape it is the
+/// compensated combination exactly.
+#[test]
+fn shape_combination_keeps_the_level_and_falls_back() {
+    let mut rng = Pcg32::new(29, 0);
+    for trial in 0..200 {
+        let bands = 1 + rng.below(200) as usize;
+        let (mut local, mut coarse, mut expanded) = (
+            BandSums::new(bands),
+            BandSums::new(bands),
+            BandSums::new(bands),
+        );
+        for _ in 0..1 + rng.below(200) {
+            local.add(rng.below(bands as u32) as u16, rng.uniform_f64());
+        }
+        for _ in 0..1 + rng.below(50) {
+            let (b, c) = (rng.below(bands as u32) as u16, 10.0 * rng.uniform_f64());
+            coarse.add(b, c);
+            expanded.add(b, c);
+        }
+        let v = 0.1 + rng.uniform_f64();
+        let v2 = v * (1.0 + 10.0 * rng.uniform_f64());
+        let level = local.total() / v + coarse.total() / v2;
+        let mut shape: Vec<f64> = (0..bands).map(|_| rng.uniform_f64()).collect();
+        let t: f64 = shape.iter().sum();
+        shape.iter_mut().for_each(|s| *s /= t);
+        let mut out = vec![f64::NAN; bands];
+        combine_with_shape(&local, v, &coarse, &expanded, v2, Some(&shape), &mut out);
+        let sum: f64 = out.iter().sum();
+        assert!((sum - level).abs() <= 1e-12 * level, "trial {trial}");
+        for (o, s) in out.iter().zip(&shape) {
+            assert!((o - level * s).abs() <= 1e-15 * level.max(1.0));
+        }
+        let mut fallback = vec![f64::NAN; bands];
+        combine_with_shape(&local, v, &coarse, &expanded, v2, None, &mut out);
+        combine_with_coarse(
+            SpectralMode::Compensated,
+            &local,
+            v,
+            &coarse,
+            &expanded,
+            v2,
+            &mut fallback,
+        );
+        assert_eq!(out, fallback);
+    }
+}
