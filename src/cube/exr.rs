@@ -8,6 +8,10 @@
 //! byte order of their names, which is wavelength order while every centre
 //! has the same number of digits; the mapping is computed, not assumed.
 //!
+//! A file may carry several such cubes as named layers (parts of a
+//! multi-part file): the renderer adds the standard error ("stderr") to
+//! the radiance ("radiance") when it has one.
+//!
 //! The file is tiled (64 x 64 pixels, uncompressed: noisy float radiance
 //! barely compresses) and written tile by tile from the ENVI cube with
 //! positioned reads, so memory holds one tile of all bands (2 MiB at 128
@@ -35,8 +39,13 @@ pub fn channel_name(nm: f64) -> String {
     format!("S0.{}nm", format!("{nm:.6}").replace('.', ","))
 }
 
-/// Write `cube` as a spectral OpenEXR file at `path`.
+/// Write `cube` as a spectral OpenEXR file at `path` (one layer, "radiance").
 pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
+    write_spectral_exr_layers(&[("radiance", cube)], path)
+}
+
+/// One layer's header and the bands of its channels, in channel order.
+fn layer_header(name: &str, cube: &EnviCube) -> Result<(exr::meta::header::Header, Vec<usize>)> {
     let (w, h, nb) = (cube.samples(), cube.lines(), cube.bands());
     let invalid = |what: String| Error::invalid("spectral EXR", what);
     if w == 0 || h == 0 || nb == 0 {
@@ -62,7 +71,7 @@ pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
         .iter()
         .map(|(name, _)| Ok(ChannelDescription::new(text(name)?, SampleType::F32, false)))
         .collect::<Result<_>>()?;
-    let mut header = exr::meta::header::Header::new(text("radiance")?, Vec2(w, h), channels)
+    let mut header = exr::meta::header::Header::new(text(name)?, Vec2(w, h), channels)
         .with_encoding(
             Compression::Uncompressed,
             BlockDescription::Tiles(TileDescription {
@@ -83,6 +92,35 @@ pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
         AttributeValue::Text(text("1.0")?),
     );
     attrs.insert(text("emissiveUnits")?, AttributeValue::Text(text(&units)?));
+    Ok((header, order))
+}
+
+/// Write cubes of the same size as the named layers (parts) of one
+/// spectral OpenEXR file at `path`, e.g. the radiance and its standard
+/// error.
+pub fn write_spectral_exr_layers(layers: &[(&str, &EnviCube)], path: &Path) -> Result<()> {
+    let invalid = |what: String| Error::invalid("spectral EXR", what);
+    let Some((_, first)) = layers.first() else {
+        return Err(invalid("no layers to write".into()));
+    };
+    let (w, h) = (first.samples(), first.lines());
+    if layers
+        .iter()
+        .any(|(_, c)| (c.samples(), c.lines()) != (w, h))
+    {
+        return Err(invalid("layers of different sizes".into()));
+    }
+    let mut headers: SmallVec<[exr::meta::header::Header; 3]> = SmallVec::new();
+    let mut orders = Vec::new();
+    for (name, cube) in layers {
+        let (header, order) = layer_header(name, cube)?;
+        headers.push(header);
+        orders.push(order);
+    }
+    let tiles: Vec<Vec<_>> = headers
+        .iter()
+        .map(|h| h.blocks_increasing_y_order().collect())
+        .collect();
 
     let tmp = temp_beside(path)?;
     let exr_error =
@@ -90,47 +128,47 @@ pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
     let mut failure: Option<Error> = None;
     {
         let out = std::io::BufWriter::new(tmp.as_file());
-        let tiles: Vec<_> = header.blocks_increasing_y_order().collect();
-        let headers: SmallVec<[exr::meta::header::Header; 3]> = SmallVec::from_elem(header, 1);
         exr::block::write(out, headers, true, |meta, writer| {
             use exr::block::writer::ChunksWriter;
             let mut compressor = writer.sequential_blocks_compressor(&meta);
-            for (index, tile) in tiles.iter().enumerate() {
-                let (x0, y0) = (
-                    tile.location.tile_index.x() * TILE,
-                    tile.location.tile_index.y() * TILE,
-                );
-                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
-                let bands: Vec<Vec<f32>> = match order
-                    .iter()
-                    .map(|&b| cube.window(b, x0, y0, tw, th))
-                    .collect::<Result<_>>()
-                {
-                    Ok(v) => v,
-                    Err(e) => {
-                        failure = Some(e);
-                        return Err(exr::error::Error::Aborted);
-                    }
-                };
-                // Per line, per channel, the line's samples (native endian).
-                let mut data = Vec::with_capacity(tw * th * bands.len() * 4);
-                for row in 0..th {
-                    for band in &bands {
-                        for v in &band[row * tw..(row + 1) * tw] {
-                            data.extend_from_slice(&v.to_ne_bytes());
+            for (layer, ((_, cube), order)) in layers.iter().zip(&orders).enumerate() {
+                for (index, tile) in tiles[layer].iter().enumerate() {
+                    let (x0, y0) = (
+                        tile.location.tile_index.x() * TILE,
+                        tile.location.tile_index.y() * TILE,
+                    );
+                    let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+                    let bands: Vec<Vec<f32>> = match order
+                        .iter()
+                        .map(|&b| cube.window(b, x0, y0, tw, th))
+                        .collect::<Result<_>>()
+                    {
+                        Ok(v) => v,
+                        Err(e) => {
+                            failure = Some(e);
+                            return Err(exr::error::Error::Aborted);
+                        }
+                    };
+                    // Per line, per channel, the line's samples (native endian).
+                    let mut data = Vec::with_capacity(tw * th * bands.len() * 4);
+                    for row in 0..th {
+                        for band in &bands {
+                            for v in &band[row * tw..(row + 1) * tw] {
+                                data.extend_from_slice(&v.to_ne_bytes());
+                            }
                         }
                     }
+                    let block = UncompressedBlock {
+                        index: exr::block::BlockIndex {
+                            layer,
+                            pixel_position: Vec2(x0, y0),
+                            pixel_size: Vec2(tw, th),
+                            level: Vec2(0, 0),
+                        },
+                        data,
+                    };
+                    compressor.compress_block(index, block)?;
                 }
-                let block = UncompressedBlock {
-                    index: exr::block::BlockIndex {
-                        layer: 0,
-                        pixel_position: Vec2(x0, y0),
-                        pixel_size: Vec2(tw, th),
-                        level: Vec2(0, 0),
-                    },
-                    data,
-                };
-                compressor.compress_block(index, block)?;
             }
             Ok(())
         })

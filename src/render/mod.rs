@@ -10,7 +10,8 @@
 //! stream (seed, pixel, sample), so the cube is bit-identical for any
 //! thread count. With two or more samples per pixel the path integrator
 //! also writes a standard-error cube (`NAME.stderr.hdr`): the standard
-//! error of the mean over a pixel's independent paths. The photon map's
+//! error of the mean over a pixel's independent paths, also the EXR's
+//! second layer. The photon map's
 //! samples share one map, so their spread is not its error, and no such
 //! cube is written for it.
 //!
@@ -296,7 +297,17 @@ pub fn render_with(
     let stderr = se_writer.map(|s| s.finish()).transpose()?;
     // The spectral OpenEXR copy, tile by tile from the finished cube.
     let exr = dir.join(format!("{}.exr", scene.name));
-    crate::cube::exr::write_spectral_exr(&crate::cube::EnviCube::open(&hdr)?, &exr)?;
+    let radiance = crate::cube::EnviCube::open(&hdr)?;
+    match &stderr {
+        Some(se) => crate::cube::exr::write_spectral_exr_layers(
+            &[
+                ("radiance", &radiance),
+                ("stderr", &crate::cube::EnviCube::open(&se.hdr)?),
+            ],
+            &exr,
+        )?,
+        None => crate::cube::exr::write_spectral_exr(&radiance, &exr)?,
+    }
     let radiometers = pool.install(|| {
         scene
             .radiometers

@@ -97,3 +97,53 @@ fn unwritable_destination_is_an_error() {
     std::fs::create_dir(&as_dir).unwrap();
     assert!(write_spectral_exr(&cube, &as_dir).is_err());
 }
+
+/// Two cubes as two named layers of one file: each reads back under its
+/// layer name with its own values; cubes of different sizes are refused.
+#[test]
+fn layers_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let bands = BandGrid::explicit(vec![500.0, 600.0], vec![10.0; 2]).unwrap();
+    let (w, h) = (67usize, 3usize);
+    let cube = |name: &str, scale: f32, w: usize| {
+        let spec = CubeSpec {
+            samples: w,
+            lines: h,
+            bands: bands.clone(),
+            description: "test".into(),
+            data_units: "W m-2 sr-1 nm-1".into(),
+        };
+        let writer = EnviWriter::create(dir.path(), name, spec).unwrap();
+        let tile: Vec<f32> = (0..w * h * 2).map(|i| scale * i as f32).collect();
+        writer.write_tile(0, 0, w, h, &tile).unwrap();
+        EnviCube::open(&writer.finish().unwrap().hdr).unwrap()
+    };
+    let (a, b) = (cube("a", 1.0, w), cube("b", -2.0, w));
+    let path = dir.path().join("two.exr");
+    write_spectral_exr_layers(&[("radiance", &a), ("stderr", &b)], &path).unwrap();
+    let image = read_all_flat_layers_from_file(&path).unwrap();
+    assert_eq!(image.layer_data.len(), 2);
+    for (layer, (name, scale)) in image
+        .layer_data
+        .iter()
+        .zip([("radiance", 1.0f32), ("stderr", -2.0)])
+    {
+        assert_eq!(
+            layer.attributes.layer_name,
+            Some(Text::new_or_none(name).unwrap())
+        );
+        let channel = &layer.channel_data.list[1]; // S0.600,000000nm: band 1
+        let FlatSamples::F32(samples) = &channel.sample_data else {
+            panic!("not f32");
+        };
+        for y in 0..h {
+            for x in 0..w {
+                // BSQ tile order above: index (y * w + x) * 2 + band.
+                let want = scale * ((y * w + x) * 2 + 1) as f32;
+                assert_eq!(samples[y * w + x], want, "{name} at ({x}, {y})");
+            }
+        }
+    }
+    let c = cube("c", 1.0, w + 1);
+    assert!(write_spectral_exr_layers(&[("radiance", &a), ("stderr", &c)], &path).is_err());
+}
