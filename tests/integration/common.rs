@@ -107,3 +107,31 @@ iop = { a = 0.1, b = 0.2 }
 [photons]
 count = 1000
 "#;
+
+/// Render `scene` through the library into `out` on `threads` threads
+/// (0 = all) within 256 MiB, with a scratch map; the typed report.
+pub fn render_job(
+    scene: &littoral::scene::Scene,
+    out: &Path,
+    threads: usize,
+) -> littoral::job::report::RunReport {
+    littoral::job::RenderJob {
+        scene,
+        out_dir: out.to_path_buf(),
+        map: None,
+        threads,
+        budget: littoral::job::MemoryBudget::new(256 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&littoral::progress::Silent)
+    .unwrap()
+}
+
+/// The little-endian float32 values of a cube's data file.
+pub fn f32s(path: impl AsRef<Path>) -> Vec<f32> {
+    std::fs::read(path)
+        .unwrap()
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}

@@ -1,8 +1,6 @@
 //! The photon map's per-band noise falls as photons are added.
 
-use crate::common::{tempdir, MIB};
-use littoral::job::{MemoryBudget, RenderJob};
-use littoral::progress::Silent;
+use crate::common::{f32s, render_job, tempdir};
 use littoral::scene::{Overrides, Scene, SpectralMode};
 use std::path::Path;
 
@@ -42,21 +40,8 @@ fn spread(dir: &Path, photons: u64, mode: SpectralMode) -> f64 {
         ..Overrides::default()
     };
     let scene = Scene::parse(IDENTICAL_BANDS, Path::new("ident.toml"), &o).unwrap();
-    let r = RenderJob {
-        scene: &scene,
-        out_dir: dir.join(format!("{photons}-{mode}")),
-        map: None,
-        threads: 0,
-        budget: MemoryBudget::new(256 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&Silent)
-    .unwrap();
-    let v: Vec<f64> = std::fs::read(&r.outputs.bsq)
-        .unwrap()
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
-        .collect();
+    let r = render_job(&scene, &dir.join(format!("{photons}-{mode}")), 0);
+    let v: Vec<f64> = f32s(&r.outputs.bsq).into_iter().map(f64::from).collect();
     let n = v.len() as f64;
     let mean = v.iter().sum::<f64>() / n;
     let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);

@@ -1,10 +1,8 @@
 //! The path integrator against closed forms and independent Monte Carlo
 //! readings, and its determinism.
 
-use crate::common::{tempdir, MIB};
-use littoral::job::{MemoryBudget, RenderJob};
+use crate::common::{f32s, render_job, tempdir};
 use littoral::optics::surface::fresnel_reflectance;
-use littoral::progress::Silent;
 use littoral::render::RadiometerReading;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
 use std::path::Path;
@@ -215,16 +213,7 @@ fn path_render_is_identical_for_any_thread_count() {
     let mut cubes = Vec::new();
     for threads in [1, 2] {
         let out = dir.path().join(format!("t{threads}"));
-        let r = RenderJob {
-            scene: &s,
-            out_dir: out.clone(),
-            map: None,
-            threads,
-            budget: MemoryBudget::new(256 * MIB),
-            scene_seconds: 0.0,
-        }
-        .run(&Silent)
-        .unwrap();
+        let r = render_job(&s, &out, threads);
         assert_eq!(r.integrator, IntegratorMode::Path);
         assert!(r.emission.is_none() && r.map.is_none());
         assert_eq!(r.Ed_above_surface.len(), 3);
@@ -266,26 +255,10 @@ fn standard_error_cube_matches_the_spread_between_seeds() {
         };
         let s = Scene::parse(&text, Path::new("se.toml"), &o).unwrap();
         let out = dir.path().join(format!("s{seed}"));
-        let r = RenderJob {
-            scene: &s,
-            out_dir: out.clone(),
-            map: None,
-            threads: 0,
-            budget: MemoryBudget::new(256 * MIB),
-            scene_seconds: 0.0,
-        }
-        .run(&Silent)
-        .unwrap();
-        let floats = |p: &str| -> Vec<f32> {
-            std::fs::read(p)
-                .unwrap()
-                .chunks_exact(4)
-                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect()
-        };
+        let r = render_job(&s, &out, 0);
         cubes.push((
-            floats(&r.outputs.bsq),
-            floats(r.outputs.stderr_bsq.as_deref().unwrap()),
+            f32s(&r.outputs.bsq),
+            f32s(r.outputs.stderr_bsq.as_deref().unwrap()),
         ));
     }
     // Band 0 only: the bands share their paths.
@@ -407,16 +380,7 @@ fn photon_map_radiometer_touching_the_floor_reads_it() {
     let o = Overrides::default();
     let s = Scene::parse(&text, Path::new("floor.toml"), &o).unwrap();
     let dir = tempdir();
-    let r = RenderJob {
-        scene: &s,
-        out_dir: dir.path().join("out"),
-        map: None,
-        threads: 0,
-        budget: MemoryBudget::new(256 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&Silent)
-    .unwrap();
+    let r = render_job(&s, &dir.path().join("out"), 0);
     let truth = floor_radiance() * (-A * 1e-4).exp();
     let touching = &r.radiometers[3];
     assert_eq!(touching.depth_m, 2.9999);
