@@ -12,6 +12,28 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
         .map_err(|e| Error::invalid("threads", e.to_string()))
 }
 
+/// Per-thread buffers sized by a band count (see [`with_band_scratch`]).
+pub trait BandScratch: Sized {
+    fn for_bands(bands: usize) -> Self;
+    fn bands(&self) -> usize;
+}
+
+/// Run `f` with this thread's buffers in `key`, made (again) for `bands`
+/// bands when there are none or they are for another band count.
+pub fn with_band_scratch<T: BandScratch + 'static, R>(
+    key: &'static std::thread::LocalKey<std::cell::RefCell<Option<T>>>,
+    bands: usize,
+    f: impl FnOnce(&mut T) -> R,
+) -> R {
+    key.with(|s| {
+        let mut s = s.borrow_mut();
+        if s.as_ref().is_none_or(|sc| sc.bands() != bands) {
+            *s = Some(T::for_bands(bands));
+        }
+        f(s.as_mut().expect("just set"))
+    })
+}
+
 /// The number of workers a pool of `threads` (0 = one per core) has.
 pub fn workers(threads: usize) -> usize {
     if threads == 0 {

@@ -147,9 +147,8 @@ impl<'a> Estimator<'a> {
         let iop = self.scene.water.iop(p.position, p.band as usize);
         let b = iop.b();
         let fw = if b > 0.0 { iop.b_w / b } else { 0.0 };
-        let [pw, pp] = self.phases_for(toward_viewer);
         let cos = p.direction.dot(toward_viewer) as f64;
-        fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)
+        mixture(self.phases_for(toward_viewer), fw, cos)
     }
 
     /// Voxels of the band-shape grid over `volume_photons` photons: about
@@ -383,12 +382,11 @@ impl<'a> Estimator<'a> {
             }
         }));
         let mix = std::mem::take(&mut scratch.mix);
-        let [pw, pp] = self.phases_for(toward_viewer);
+        let phases = self.phases_for(toward_viewer);
         let weight = |n: &Neighbour| -> (f64, bool) {
             let fw = mix[n.photon.band as usize] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
-            let w = (fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)) * n.photon.power as f64;
-            (w, cos > 0.0)
+            (mixture(phases, fw, cos) * n.photon.power as f64, cos > 0.0)
         };
         let view_up = Some(toward_viewer.z > 0.0);
         let r = self.estimate(x, LAYER_VOLUME, &weight, None, view_up, scratch, out);
@@ -556,6 +554,13 @@ impl<'a> Estimator<'a> {
     }
 }
 
+/// The local phase function for a photon: the truncated [water, particle]
+/// phase functions mixed by the pure-water share `fw` of scattering,
+/// at scattering cosine `cos`.
+fn mixture([pw, pp]: &[TruncatedPhase; 2], fw: f64, cos: f64) -> f64 {
+    fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)
+}
+
 /// The search region of an estimate: a sphere or a disc with its boundary
 /// distances.
 #[derive(Clone, Copy)]
@@ -593,13 +598,16 @@ thread_local! {
     static SCRATCH: RefCell<Option<Scratch>> = const { RefCell::new(None) };
 }
 
+impl crate::parallel::BandScratch for Scratch {
+    fn for_bands(bands: usize) -> Self {
+        Scratch::new(bands)
+    }
+    fn bands(&self) -> usize {
+        self.bands
+    }
+}
+
 /// Run `f` with this thread's scratch for `bands` bands.
 pub fn with_scratch<R>(bands: usize, f: impl FnOnce(&mut Scratch) -> R) -> R {
-    SCRATCH.with(|s| {
-        let mut s = s.borrow_mut();
-        if s.as_ref().is_none_or(|sc| sc.bands != bands) {
-            *s = Some(Scratch::new(bands));
-        }
-        f(s.as_mut().expect("just set"))
-    })
+    crate::parallel::with_band_scratch(&SCRATCH, bands, f)
 }

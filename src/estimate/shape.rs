@@ -84,10 +84,10 @@ impl BandShapeGrid {
         weight: &(dyn Fn(&crate::photon::Photon, bool) -> f64 + Sync),
     ) -> Result<BandShapeGrid> {
         let bands = map.bands().len();
-        // Pass 1: the depth distribution of the photons.
-        let mut z_min = 0.0f32;
-        map.for_each_photon(LAYER_VOLUME, &mut |p| z_min = z_min.min(p.position.z))?;
-        let depth = (-z_min).max(1e-3);
+        // Pass 1: the depth distribution of the photons, below the surface
+        // down to the deepest (from the map's index).
+        let z_min = map.layer_bounds(LAYER_VOLUME).min.z;
+        let depth = if z_min.is_finite() { -z_min } else { 0.0 }.max(1e-3);
         let mut hist = vec![0u64; Z_BINS];
         let bin = |z: f32| (((-z / depth) * Z_BINS as f32) as usize).min(Z_BINS - 1);
         map.for_each_photon(LAYER_VOLUME, &mut |p| hist[bin(p.position.z)] += 1)?;

@@ -108,13 +108,7 @@ thread_local! {
 
 /// Run `f` with this thread's path buffers for `bands` bands.
 fn with_path_scratch<R>(bands: usize, f: impl FnOnce(&mut PathScratch) -> R) -> R {
-    PATH_SCRATCH.with(|s| {
-        let mut s = s.borrow_mut();
-        if s.as_ref().is_none_or(|sc| sc.bands() != bands) {
-            *s = Some(PathScratch::new(bands));
-        }
-        f(s.as_mut().expect("just set"))
-    })
+    crate::parallel::with_band_scratch(&PATH_SCRATCH, bands, f)
 }
 
 impl Integrator for PathTracer<'_> {

@@ -123,12 +123,16 @@ pub struct PathScratch {
     tr: Vec<f64>,
 }
 
-impl PathScratch {
-    /// Bands the buffers hold.
-    pub fn bands(&self) -> usize {
+impl crate::parallel::BandScratch for PathScratch {
+    fn for_bands(bands: usize) -> Self {
+        PathScratch::new(bands)
+    }
+    fn bands(&self) -> usize {
         self.w.len()
     }
+}
 
+impl PathScratch {
     pub fn new(bands: usize) -> Self {
         PathScratch {
             w: vec![0.0; bands],

@@ -126,6 +126,16 @@ impl InMemoryMap {
 }
 
 impl PhotonQuery for InMemoryMap {
+    fn layer_bounds(&self, layer: u16) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        if let Some(l) = self.layers.get(layer as usize) {
+            for p in &l.photons {
+                b.grow(p.pos());
+            }
+        }
+        b
+    }
+
     fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()> {
         if let Some(l) = self.layers.get(layer as usize) {
             for p in &l.photons {

@@ -117,6 +117,9 @@ pub trait PhotonQuery: Sync {
     /// outside its cache).
     fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()>;
 
+    /// Bounds of the photons of `layer` (empty for none).
+    fn layer_bounds(&self, layer: u16) -> Aabb;
+
     /// Photons of every layer matching `search` around `at`, nearest first.
     fn query(&self, at: Vec3, search: Search) -> Result<Vec<Neighbour>> {
         let mut out = Vec::new();
@@ -370,6 +373,15 @@ impl PhotonQuery for PhotonMap {
 
     fn cache_stats(&self) -> CacheStats {
         self.cache.stats()
+    }
+
+    /// From the index: every tile records its decoded photons' bounds.
+    fn layer_bounds(&self, layer: u16) -> Aabb {
+        self.file
+            .tiles()
+            .iter()
+            .filter(|e| e.layer == layer as u32)
+            .fold(Aabb::EMPTY, |b, e| b.union(&e.bounds))
     }
 
     fn for_each_photon(&self, layer: u16, f: &mut dyn FnMut(&Photon)) -> Result<()> {
