@@ -4,8 +4,14 @@
 //! (unit vector, pointing along the flight, i.e. *incoming* to the site), a
 //! band index and a power (W per photon in its band). On disk a photon is a
 //! 16-byte record: position quantised to 16 bits per axis inside its tile's
-//! box, direction octahedral-encoded in 2 x 16 bits, band as u16, power as
-//! f32. See `store::codec` for the tile layout.
+//! box, direction octahedral-encoded in 2 x 16 bits, band and photon group
+//! in one u16 (band in the low [`BAND_BITS`] bits), power as f32. See
+//! `store::codec` for the tile layout.
+//!
+//! The group ([`GROUPS`] of them) is drawn per emitted path, so that the
+//! photons of one path share it: the groups are independent subsets of the
+//! map, from which the renderer estimates its own photon noise
+//! (`estimate::groups`).
 //!
 //! Quantisation error (tested in this module and in the round-trip tests):
 //! - position: at most half a quantum per axis, `extent / (2 * 65535)`, plus
@@ -26,6 +32,30 @@ pub struct Photon {
     pub band: u16,
     /// Power carried, W (spectral power integrated over the band).
     pub power: f32,
+    /// The independent photon subset the photon's path belongs to, below [`GROUPS`].
+    pub group: u8,
+}
+
+/// Bits of the packed band field that hold the band index.
+pub const BAND_BITS: u32 = 12;
+/// Photon groups: independent subsets of a map (one per emitted path).
+pub const GROUPS: usize = 16;
+const _: () = assert!(GROUPS <= 1 << (16 - BAND_BITS));
+/// Most bands a map can hold.
+pub const MAX_BANDS: usize = 1 << BAND_BITS;
+
+/// The group of emitted path `index`: the top bits of a hash of the index,
+/// so that groups are independent of how paths were numbered.
+#[inline]
+pub fn group_of_path(index: u64) -> u8 {
+    (crate::rng::mix64(index ^ 0x6772_6f75_7073) >> 60) as u8 & (GROUPS as u8 - 1)
+}
+
+/// Band and group packed into one u16 (band low).
+#[inline]
+pub fn pack_band_group(band: u16, group: u8) -> u16 {
+    debug_assert!((band as usize) < MAX_BANDS && (group as usize) < GROUPS);
+    band | (group as u16) << BAND_BITS
 }
 
 /// A photon as held in memory by the tile cache: position decoded, direction
@@ -37,7 +67,8 @@ pub struct Photon {
 pub struct PackedPhoton {
     pub position: [f32; 3],
     pub oct: [u16; 2],
-    pub band: u16,
+    /// Band and group ([`pack_band_group`]), as stored on disk.
+    pub band_group: u16,
     /// The map layer the photon belongs to ([`LAYER_VOLUME`] or [`LAYER_SURFACE`]).
     pub layer: u16,
     pub power: f32,
@@ -58,7 +89,7 @@ impl PackedPhoton {
         PackedPhoton {
             position: p.position.to_array(),
             oct: oct_encode(p.direction),
-            band: p.band,
+            band_group: pack_band_group(p.band, p.group),
             layer,
             power: p.power,
         }
@@ -70,9 +101,22 @@ impl PackedPhoton {
         Photon {
             position: self.pos(),
             direction: oct_decode(self.oct),
-            band: self.band,
+            band: self.band(),
             power: self.power,
+            group: self.group(),
         }
+    }
+
+    /// The band index.
+    #[inline]
+    pub fn band(&self) -> u16 {
+        self.band_group & (MAX_BANDS as u16 - 1)
+    }
+
+    /// The photon group.
+    #[inline]
+    pub fn group(&self) -> u8 {
+        (self.band_group >> BAND_BITS) as u8
     }
 
     /// Position as a vector.

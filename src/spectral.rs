@@ -12,8 +12,9 @@ pub struct BandGrid {
     fwhm_nm: Vec<f32>,
 }
 
-/// The most bands a grid may hold (band indices are stored as u16).
-pub const MAX_BANDS: usize = u16::MAX as usize;
+/// The most bands a grid may hold (band indices are stored in 12 bits of
+/// a photon record, beside its group).
+pub const MAX_BANDS: usize = crate::photon::MAX_BANDS;
 
 impl BandGrid {
     /// `count` evenly spaced band centres from `start_nm` to `end_nm` inclusive,

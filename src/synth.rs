@@ -78,6 +78,7 @@ impl SynthSource {
         let y = d.min.y + ext.y * rng.uniform_f32();
         let band = rng.below(self.bands.len() as u32) as u16;
         let nb = self.bands.len() as f32 / self.photons.max(1) as f32;
+        let group = crate::photon::group_of_path(i);
         match self.distribution {
             Distribution::Uniform => (
                 Photon {
@@ -85,6 +86,7 @@ impl SynthSource {
                     direction: uniform_sphere(&mut rng),
                     band,
                     power: nb,
+                    group,
                 },
                 LAYER_VOLUME,
             ),
@@ -114,6 +116,7 @@ impl SynthSource {
                         direction: dir,
                         band,
                         power: if from_sky { 0.4 * nb } else { nb },
+                        group,
                     },
                     layer,
                 )

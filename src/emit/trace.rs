@@ -58,6 +58,7 @@ pub fn trace(
     let d = &scene.domain;
     let (sx, sy) = (d.size_m[0], d.size_m[1]);
     let mut events: u32 = 0;
+    let group = crate::photon::group_of_path(index);
     let mut result = Traced {
         fate: Fate::Escaped,
         truncated: false,
@@ -73,6 +74,7 @@ pub fn trace(
                     direction: dir,
                     band: band as u16,
                     power,
+                    group,
                 },
                 layer,
                 (index << 20) | (*events as u64),

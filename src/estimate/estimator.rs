@@ -24,6 +24,7 @@
 use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
+use crate::estimate::groups::{GroupSums, CHANNELS, GROUPS};
 use crate::estimate::shape::BandShapeGrid;
 use crate::estimate::spectral::{
     combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
@@ -53,6 +54,10 @@ pub struct Scratch {
     expanded: BandSums,
     coarse: BandSums,
     shape: Vec<f64>,
+    group_local: GroupSums,
+    group_coarse: GroupSums,
+    group_expanded: GroupSums,
+    shape_groups: Vec<f64>,
 }
 
 impl Scratch {
@@ -67,6 +72,10 @@ impl Scratch {
             expanded: BandSums::new(bands),
             coarse: BandSums::new(bands),
             shape: vec![0.0; bands],
+            group_local: GroupSums::new(bands),
+            group_coarse: GroupSums::new(bands),
+            group_expanded: GroupSums::new(bands),
+            shape_groups: vec![0.0; GROUPS * bands],
         }
     }
 }
@@ -346,7 +355,9 @@ impl<'a> Estimator<'a> {
 
     /// In-scattered radiance per band at `x` toward the viewer, for light
     /// leaving x along `toward_viewer` (W m^-3 sr^-1 nm^-1; integrate along
-    /// the ray). `out` has one entry per band.
+    /// the ray). `out` has one entry per band, or [`CHANNELS`] runs of
+    /// bands: the radiance, then each photon group's part of it
+    /// (`estimate::groups`).
     pub fn volume(
         &self,
         x: Vec3,
@@ -455,8 +466,17 @@ impl<'a> Estimator<'a> {
             expanded,
             coarse,
             shape,
+            group_local,
+            group_coarse,
+            group_expanded,
+            shape_groups,
             ..
         } = scratch;
+        let nb = self.scene.bands.len();
+        debug_assert!(out.len() == nb || out.len() == CHANNELS * nb);
+        let with_groups = out.len() == CHANNELS * nb;
+        let (out, out_groups) = out.split_at_mut(nb);
+        out_groups.iter_mut().for_each(|o| *o = 0.0);
         let compensated = self.spectral != SpectralMode::Naive;
         let split = surface.is_none();
         let two_sizes = compensated || split;
@@ -495,6 +515,20 @@ impl<'a> Estimator<'a> {
             }),
         };
         let small = big.capped(r_local);
+        // The band shape from the grid, where the grid mode has one here.
+        let has_shape = match (&self.shapes, view_up) {
+            (Some(grid), Some(up)) => {
+                grid.shape_and_groups_at(x, up, shape, with_groups.then_some(&mut shape_groups[..]))
+            }
+            _ => false,
+        };
+        // Group sums: totals always, per band where the combination reads
+        // bands (naive: local and coarse; compensated: expanded).
+        if with_groups {
+            group_local.clear(!compensated);
+            group_coarse.clear(!compensated);
+            group_expanded.clear(compensated && !has_shape);
+        }
         // Photons on other surfaces (a target's side, the far side of a thin
         // panel) are not on this one; they still bound the search, whose
         // radius comes from every photon found.
@@ -514,13 +548,23 @@ impl<'a> Estimator<'a> {
             }
             let (w, heavy) = weight(n);
             let heavy = split && heavy;
+            let (band, group) = (n.photon.band, n.photon.group);
             if in_local && !heavy {
-                local.add(n.photon.band, w);
+                local.add(band, w);
+                if with_groups {
+                    group_local.add(group, band, w);
+                }
             }
             if in_big {
-                expanded.add(n.photon.band, w);
+                expanded.add(band, w);
+                if with_groups {
+                    group_expanded.add(group, band, w);
+                }
                 if heavy {
-                    coarse.add(n.photon.band, w);
+                    coarse.add(band, w);
+                    if with_groups {
+                        group_coarse.add(group, band, w);
+                    }
                 }
             }
         }
@@ -534,23 +578,127 @@ impl<'a> Estimator<'a> {
         } else {
             0.0
         };
-        if let (Some(grid), Some(up)) = (&self.shapes, view_up) {
-            let has = grid.shape_at(x, up, shape);
+        let groups = with_groups.then_some(Groups {
+            local: group_local,
+            coarse: group_coarse,
+            expanded: group_expanded,
+            out: out_groups,
+        });
+        if has_shape {
             combine_with_shape(
                 local,
                 v_local,
                 coarse,
                 expanded,
                 v_big,
-                has.then_some(&shape[..]),
+                Some(&shape[..]),
                 out,
             );
+            if let Some(g) = groups {
+                g.shape(v_local, v_big, shape, shape_groups, out);
+            }
         } else if split {
-            combine_with_coarse(self.spectral, local, v_local, coarse, expanded, v_big, out);
+            let mode = match self.spectral {
+                SpectralMode::Grid => SpectralMode::Compensated,
+                m => m,
+            };
+            combine_with_coarse(mode, local, v_local, coarse, expanded, v_big, out);
+            if let Some(g) = groups {
+                g.ratio(mode, v_local, v_big, true, expanded, out);
+            }
         } else {
             combine(self.spectral, local, v_local, expanded, v_big, out);
+            if let Some(g) = groups {
+                g.ratio(self.spectral, v_local, v_big, false, expanded, out);
+            }
         }
         Ok(())
+    }
+}
+
+/// The group sums of one estimate and where their parts go.
+struct Groups<'s> {
+    local: &'s GroupSums,
+    coarse: &'s GroupSums,
+    expanded: &'s GroupSums,
+    /// `GROUPS` runs of bands.
+    out: &'s mut [f64],
+}
+
+fn density(total: f64, v: f64) -> f64 {
+    if v > 0.0 && v.is_finite() {
+        total / v
+    } else {
+        0.0
+    }
+}
+
+impl Groups<'_> {
+    /// Group g's level, D_g = local_g / V + coarse_g / V'.
+    fn level(&self, g: usize, v_local: f64, v_big: f64) -> f64 {
+        density(self.local.totals()[g], v_local) + density(self.coarse.totals()[g], v_big)
+    }
+
+    /// The grid combination L_b = D s_b: D_g s_b + D s_{g,b}, with s_{g,b}
+    /// the group's part of the grid's shares.
+    fn shape(self, v_local: f64, v_big: f64, shape: &[f64], shape_groups: &[f64], out: &[f64]) {
+        let nb = shape.len();
+        let level: f64 = out.iter().sum();
+        for g in 0..GROUPS {
+            let d_g = self.level(g, v_local, v_big);
+            let dev = &shape_groups[g * nb..(g + 1) * nb];
+            for ((o, s), d) in self.out[g * nb..(g + 1) * nb]
+                .iter_mut()
+                .zip(shape)
+                .zip(dev)
+            {
+                *o = d_g * s + level * d;
+            }
+        }
+    }
+
+    /// The naive and compensated combinations (`coarse`: the volume split
+    /// of `combine_with_coarse`), linearised per group.
+    fn ratio(
+        self,
+        mode: SpectralMode,
+        v_local: f64,
+        v_big: f64,
+        coarse: bool,
+        expanded: &BandSums,
+        out: &[f64],
+    ) {
+        let nb = out.len();
+        let v_coarse = if coarse { v_big } else { 0.0 };
+        match mode {
+            SpectralMode::Naive => {
+                for g in 0..GROUPS {
+                    let o = &mut self.out[g * nb..(g + 1) * nb];
+                    for (b, o) in o.iter_mut().enumerate() {
+                        *o = density(self.local.bands_of(g)[b], v_local)
+                            + density(self.coarse.bands_of(g)[b], v_coarse);
+                    }
+                }
+            }
+            SpectralMode::Compensated | SpectralMode::Grid => {
+                let e_total = expanded.total();
+                let level: f64 = out.iter().sum();
+                if !(e_total > 0.0 && level > 0.0 && level.is_finite()) {
+                    return;
+                }
+                for g in 0..GROUPS {
+                    let d_g = density(self.local.totals()[g], v_local)
+                        + density(self.coarse.totals()[g], v_coarse);
+                    let e_g = self.expanded.totals()[g];
+                    let e_gb = self.expanded.bands_of(g);
+                    let o = &mut self.out[g * nb..(g + 1) * nb];
+                    for (b, (o, e_b)) in o.iter_mut().zip(expanded.sums()).enumerate() {
+                        let share = e_b / e_total;
+                        *o = d_g * share + level * (e_gb[b] - share * e_g) / e_total;
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -7,6 +7,8 @@
 //!   volume or disc, the phase weights, the band combination.
 //! - [`boundary`]: search volumes and discs cut by boundaries ([`BoundaryMode`]).
 //! - [`spectral`]: band sums and their combination ([`SpectralMode`]).
+//! - [`groups`]: the photon noise of an estimate from independent photon
+//!   groups, carried along a ray ([`groups::CHANNELS`]).
 //! - [`peak`]: phase functions with the forward peak as a delta ([`peak::TruncatedPhase`]).
 //! - [`shape`]: band shapes of the light travelling up and down on a coarse
 //!   grid over every volume photon ([`shape::BandShapeGrid`]).
@@ -16,6 +18,7 @@
 
 pub mod boundary;
 pub mod estimator;
+pub mod groups;
 pub mod peak;
 pub mod shape;
 pub mod spectral;

@@ -27,6 +27,11 @@
 //! its noise falls as photons are added, which keeps the estimate
 //! consistent. Bounded by `max_voxels` (a fixed share of memory).
 //!
+//! **Noise.** Each voxel also keeps the linearised part of each photon
+//! group in its shares, (S_{g,i} - s_i S_g) / S (see `estimate::groups`),
+//! so that the shape's own photon noise enters the standard error of an
+//! estimate, correlated as it is over the voxel.
+//!
 //! Not for: the level of an estimate (the k-nearest search), surface
 //! estimates (the floor's band shape is the reflectance times the
 //! incident light, which the expanded search gives well).
@@ -53,7 +58,12 @@ pub struct BandShapeGrid {
     /// travelling up, down): the band shares (sum 1), or all zero where no
     /// photon fell.
     shapes: Vec<f32>,
+    /// Per voxel, viewing direction, group and band: the group's part of
+    /// the shares.
+    deviations: Vec<f32>,
 }
+
+use crate::photon::GROUPS;
 
 impl BandShapeGrid {
     /// Voxels (both hemispheres) a grid over `volume_photons` photons of
@@ -68,9 +78,12 @@ impl BandShapeGrid {
         ((volume_photons / per_voxel.max(1)) as usize).clamp(1, max_voxels.max(1))
     }
 
-    /// Bytes of a grid of `voxels` voxels over `bands` bands.
+    /// Bytes of a grid of `voxels` voxels over `bands` bands, at its peak
+    /// while building (f64 sums per group, then the f32 shares and group
+    /// parts).
     pub fn bytes(voxels: usize, bands: usize) -> u64 {
-        (voxels * 2 * bands * std::mem::size_of::<f32>()) as u64
+        let per = GROUPS * std::mem::size_of::<f64>() + (1 + GROUPS) * std::mem::size_of::<f32>();
+        (voxels * 2 * bands * per) as u64
     }
 
     /// Build the grid from the volume photons of `map` over a domain of
@@ -120,27 +133,46 @@ impl BandShapeGrid {
             z_edges,
             z_centres,
             shapes: Vec::new(),
+            deviations: Vec::new(),
         };
-        // Pass 2: weighted power per voxel, viewing direction and band.
+        // Pass 2: weighted power per voxel, viewing direction, group and band.
         let cells = nxy * nxy * nz;
-        let mut sums = vec![0f64; cells * 2 * bands];
+        let per_voxel = GROUPS * bands;
+        let mut sums = vec![0f64; cells * 2 * per_voxel];
         map.for_each_photon(LAYER_VOLUME, &mut |p| {
             let v = grid.voxel_of(p.position);
+            let g = p.group as usize % GROUPS;
             for (h, up) in [(0, true), (1, false)] {
                 let w = weight(p, up) * p.power as f64;
                 if w.is_finite() {
-                    sums[(v * 2 + h) * bands + p.band as usize] += w;
+                    sums[(v * 2 + h) * per_voxel + g * bands + p.band as usize] += w;
                 }
             }
         })?;
-        grid.shapes = sums
-            .chunks(bands)
-            .flat_map(|c| {
-                let t: f64 = c.iter().sum();
-                c.iter()
-                    .map(move |s| if t > 0.0 { (s / t) as f32 } else { 0.0 })
-            })
-            .collect();
+        grid.shapes = vec![0.0; cells * 2 * bands];
+        grid.deviations = vec![0.0; cells * 2 * per_voxel];
+        let mut band_sums = vec![0f64; bands];
+        for (vh, by_group) in sums.chunks(per_voxel).enumerate() {
+            band_sums.iter_mut().for_each(|s| *s = 0.0);
+            for run in by_group.chunks(bands) {
+                band_sums.iter_mut().zip(run).for_each(|(s, r)| *s += r);
+            }
+            let t: f64 = band_sums.iter().sum();
+            if t <= 0.0 {
+                continue;
+            }
+            let shape = &mut grid.shapes[vh * bands..][..bands];
+            for (o, s) in shape.iter_mut().zip(&band_sums) {
+                *o = (s / t) as f32;
+            }
+            let dev = &mut grid.deviations[vh * per_voxel..][..per_voxel];
+            for (run, out) in by_group.chunks(bands).zip(dev.chunks_mut(bands)) {
+                let t_g: f64 = run.iter().sum();
+                for ((o, r), s) in out.iter_mut().zip(run).zip(&band_sums) {
+                    *o = ((r - s / t * t_g) / t) as f32;
+                }
+            }
+        }
         Ok(grid)
     }
 
@@ -151,7 +183,7 @@ impl BandShapeGrid {
 
     /// Bytes held.
     pub fn heap_bytes(&self) -> u64 {
-        (self.shapes.len() * std::mem::size_of::<f32>()) as u64
+        ((self.shapes.len() + self.deviations.len()) * std::mem::size_of::<f32>()) as u64
     }
 
     fn layer_of(&self, z: f32) -> usize {
@@ -173,6 +205,18 @@ impl BandShapeGrid {
     /// down, interpolated trilinearly between voxel centres (clamped at the
     /// edges), into `out`; false where the voxels around x hold no weight.
     pub fn shape_at(&self, x: Vec3, up: bool, out: &mut [f64]) -> bool {
+        self.shape_and_groups_at(x, up, out, None)
+    }
+
+    /// [`BandShapeGrid::shape_at`], and with `groups` (`GROUPS` runs of
+    /// bands) each photon group's part of the shares, interpolated alike.
+    pub fn shape_and_groups_at(
+        &self,
+        x: Vec3,
+        up: bool,
+        out: &mut [f64],
+        mut groups: Option<&mut [f64]>,
+    ) -> bool {
         let [nx, ny, nz] = self.n;
         let h = usize::from(!up);
         // Fractional cell coordinates of x relative to the centres.
@@ -196,6 +240,10 @@ impl BandShapeGrid {
             (k - 1, k, (za - x.z) / (za - zb))
         };
         out.iter_mut().for_each(|o| *o = 0.0);
+        if let Some(g) = groups.as_deref_mut() {
+            g.iter_mut().for_each(|o| *o = 0.0);
+        }
+        let per_voxel = GROUPS * self.bands;
         let mut weight = 0.0f64;
         for (zi, wz) in [(z0, 1.0 - fz), (z1, fz)] {
             for (yi, wy) in [(y0, 1.0 - fy), (y1, fy)] {
@@ -213,6 +261,12 @@ impl BandShapeGrid {
                     for (o, &si) in out.iter_mut().zip(s) {
                         *o += w * si as f64;
                     }
+                    if let Some(g) = groups.as_deref_mut() {
+                        let d = &self.deviations[(v * 2 + h) * per_voxel..][..per_voxel];
+                        for (o, &di) in g.iter_mut().zip(d) {
+                            *o += w * di as f64;
+                        }
+                    }
                 }
             }
         }
@@ -220,6 +274,9 @@ impl BandShapeGrid {
             return false;
         }
         out.iter_mut().for_each(|o| *o /= weight);
+        if let Some(g) = groups {
+            g.iter_mut().for_each(|o| *o /= weight);
+        }
         true
     }
 }

@@ -35,6 +35,10 @@ pub fn sky_radiance(scene: &Scene) -> Vec<f64> {
 
 /// Radiance per band reaching a sensor along `ray` (in air), into `out`;
 /// `sky_l` is the sky radiance, `in_water` the light below the surface.
+/// `out` may be longer than the bands: runs after the first carry parts of
+/// the in-water radiance (the photon groups of `estimate::groups`), which
+/// the surface transfers as it transfers that radiance; the sky and the
+/// glint add to the first run only.
 pub fn from_air(
     scene: &Scene,
     sky_l: &[f64],
@@ -45,7 +49,7 @@ pub fn from_air(
 ) -> Result<()> {
     let d = ray.direction;
     if d.z >= 0.0 {
-        out.copy_from_slice(sky_l);
+        set_sky(sky_l, out);
         return Ok(());
     }
     let p = ray.origin + d * (-ray.origin.z / d.z);
@@ -96,9 +100,16 @@ fn leave_surface(
         in_water(p + dir * 1e-4, dir, rng, out)?;
         out.iter_mut().for_each(|o| *o /= n2);
     } else {
-        out.copy_from_slice(sky_l);
+        set_sky(sky_l, out);
     }
     Ok(())
+}
+
+/// The sky radiance into the first run of `out`, zero in the others.
+fn set_sky(sky_l: &[f64], out: &mut [f64]) {
+    let (l, rest) = out.split_at_mut(sky_l.len());
+    l.copy_from_slice(sky_l);
+    rest.iter_mut().for_each(|o| *o = 0.0);
 }
 
 /// Sun glint on a Cox–Munk surface seen from direction `v` (up), added to

@@ -19,6 +19,7 @@ use super::camera::CameraRay;
 use super::interface::{from_air, sky_radiance};
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
+use crate::estimate::groups::CHANNELS;
 use crate::optics::iop::Iop;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
@@ -103,7 +104,10 @@ impl<'a> RayMarcher<'a> {
     }
 
     /// Radiance per band arriving at `p0` (in water) travelling along `-dir`,
-    /// i.e. what an instrument at p0 looking along `dir` sees.
+    /// i.e. what an instrument at p0 looking along `dir` sees. `out` holds
+    /// one value per band, or [`CHANNELS`] runs of bands: the radiance and
+    /// each photon group's part of it (`estimate::groups`), which the march
+    /// carries as it carries the photon estimates.
     pub fn march(
         &self,
         p0: Vec3,
@@ -113,10 +117,12 @@ impl<'a> RayMarcher<'a> {
         out: &mut [f64],
     ) -> Result<()> {
         let nb = self.bands();
+        let channels = out.len() / nb;
+        debug_assert!(channels == 1 || channels == CHANNELS);
         let scene = self.scene;
         out.iter_mut().for_each(|o| *o = 0.0);
         let mut tr = vec![1.0f64; nb];
-        let mut est = vec![0.0f64; nb];
+        let mut est = vec![0.0f64; out.len()];
         let mut sun_t = vec![0.0f64; nb];
         let mut iops = vec![Iop::default(); nb];
         let mut tmp = vec![Iop::default(); nb];
@@ -153,7 +159,11 @@ impl<'a> RayMarcher<'a> {
                 // The forward delta of the truncated phase functions puts
                 // its share of scattering back into the ray (see `peak`).
                 let c = iop.c() - fw * iop.b_w - fp * iop.b_p;
-                out[b] += tr[b] * (-c * s as f64).exp() * (est[b] + single) * dt as f64;
+                let f = tr[b] * (-c * s as f64).exp() * dt as f64;
+                out[b] += f * (est[b] + single);
+                for k in (nb + b..out.len()).step_by(nb) {
+                    out[k] += f * est[k];
+                }
                 tr[b] *= (-c * dt as f64).exp();
                 alive |= tr[b] > MIN_TRANSMITTANCE;
             }
@@ -175,6 +185,9 @@ impl<'a> RayMarcher<'a> {
                 let r = scene.reflectance(h.surface, h.position, b);
                 let direct = self.e_w[b] * sun_t[b] * cos_n * r / std::f64::consts::PI;
                 out[b] += tr[b] * (direct + est[b]);
+                for k in (nb + b..out.len()).step_by(nb) {
+                    out[k] += tr[b] * est[k];
+                }
             }
         } else if t_surface <= MAX_MARCH_M {
             // Looking up through the surface: the transmitted sky, n^2 brighter.

@@ -8,12 +8,16 @@
 //! the tile cache warm) and written to the ENVI cube as they finish, so the
 //! whole cube is never in memory. Every pixel sample draws from the random
 //! stream (seed, pixel, sample), so the cube is bit-identical for any
-//! thread count. With two or more samples per pixel the path integrator
-//! also writes a standard-error cube (`NAME.stderr.hdr`): the standard
-//! error of the mean over a pixel's independent paths, also the EXR's
-//! second layer. The photon map's
-//! samples share one map, so their spread is not its error, and no such
-//! cube is written for it.
+//! thread count.
+//!
+//! **Standard-error cube** (`NAME.stderr.hdr`, also the EXR's second
+//! layer). For the path integrator, with two or more samples per pixel:
+//! the standard error of the mean over a pixel's independent paths. For
+//! the photon map, always: its photon noise from independent photon
+//! groups carried along every ray (`estimate::groups`), plus, with two or
+//! more samples per pixel, the sampling error given the map (the samples'
+//! spread over their count); at one sample per pixel the renderer's own
+//! sampling noise (march jitter, rough-surface facets) is not in it.
 //!
 //! Not for: emission (see `emit`) or file formats (see `cube`).
 
@@ -26,6 +30,7 @@ use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
 use crate::error::Result;
 use crate::estimate::estimator::{with_scratch, Estimator};
+use crate::estimate::groups::{self, CHANNELS, GROUPS};
 use crate::morton::morton3;
 use crate::progress::Progress;
 use crate::rng::{mix64, Pcg32};
@@ -57,12 +62,10 @@ pub struct RadiometerReading {
     /// Radiance per band (W m^-2 sr^-1 nm^-1).
     #[serde(deserialize_with = "crate::json::f64s")]
     pub L: Vec<f64>,
-    /// Standard error per band of the mean over the jittered samples. For
-    /// the path integrator it is the whole error (independent paths); for
-    /// the photon map it is the march's sampling error only: photon-map
-    /// noise is correlated over the search radius, so it is not in this
-    /// figure (in deep water at 8 M photons and k = 800 it was 3-7 %
-    /// between distant positions).
+    /// Standard error per band: for the path integrator the spread of its
+    /// independent paths; for the photon map the photon noise from
+    /// independent photon groups (`estimate::groups`) together with the
+    /// spread of the jittered samples given the map.
     #[serde(deserialize_with = "crate::json::f64s")]
     pub stderr: Vec<f64>,
 }
@@ -72,6 +75,10 @@ pub struct RadiometerReading {
 pub trait Integrator: Sync {
     /// Bands of every radiance vector.
     fn bands(&self) -> usize;
+    /// Runs of bands in the vectors `camera` and `in_water` write: 1 (the
+    /// radiance), or [`CHANNELS`] (the radiance, then the photon groups'
+    /// parts of it).
+    fn channels(&self) -> usize;
     /// Radiance per band reaching a sensor along `ray` (in air).
     fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
     /// Radiance per band arriving at `p` (in water) along `-dir`.
@@ -87,6 +94,9 @@ pub trait Integrator: Sync {
 impl Integrator for RayMarcher<'_> {
     fn bands(&self) -> usize {
         self.scene.bands.len()
+    }
+    fn channels(&self) -> usize {
+        CHANNELS
     }
     fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
         with_scratch(self.bands(), |s| RayMarcher::camera(self, ray, rng, s, out))
@@ -114,6 +124,9 @@ fn with_path_scratch<R>(bands: usize, f: impl FnOnce(&mut PathScratch) -> R) -> 
 impl Integrator for PathTracer<'_> {
     fn bands(&self) -> usize {
         self.scene.bands.len()
+    }
+    fn channels(&self) -> usize {
+        1
     }
     fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
         with_path_scratch(out.len(), |s| PathTracer::camera(self, ray, rng, s, out))
@@ -199,13 +212,19 @@ pub fn render_with(
         &scene.name,
         spec(format!("littoral radiance cube of scene '{}'", scene.name)),
     )?;
-    let se_writer = if light.independent_samples() && spp >= 2 {
+    let channels = light.channels();
+    let se_writer = if (light.independent_samples() && spp >= 2) || channels > 1 {
+        let what = if channels > 1 {
+            format!("photon noise from {GROUPS} photon groups, {spp} samples per pixel")
+        } else {
+            format!("{spp} independent paths per pixel")
+        };
         Some(EnviWriter::create(
             dir,
             &format!("{}.stderr", scene.name),
             spec(format!(
-                "littoral standard error of the radiance cube of scene '{}' ({} independent paths per pixel)",
-                scene.name, spp
+                "littoral standard error of the radiance cube of scene '{}' ({what})",
+                scene.name
             )),
         )?)
     } else {
@@ -227,15 +246,14 @@ pub fn render_with(
                 let mut values = vec![0f32; tw * th * nb];
                 let mut errors = vec![0f32; if se_writer.is_some() { tw * th * nb } else { 0 }];
                 let mut rgb = vec![0f32; tw * th * 3];
-                let mut acc = vec![0f64; nb];
-                let mut acc_sq = vec![0f64; nb];
-                let mut sample = vec![0f64; nb];
+                let mut acc = Moments::new(nb, channels);
+                let mut sample = vec![0f64; nb * channels];
+                let mut se = vec![0f64; nb];
                 for py in 0..th {
                     for px in 0..tw {
                         let (gx, gy) = (x0 + px, y0 + py);
                         let pixel = (gy * w + gx) as u64;
-                        acc.iter_mut().for_each(|a| *a = 0.0);
-                        acc_sq.iter_mut().for_each(|a| *a = 0.0);
+                        acc.clear();
                         for s in 0..spp {
                             let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
                             let (u, v) = if spp == 1 {
@@ -245,21 +263,16 @@ pub fn render_with(
                             };
                             let ray = camera::ray(&scene.sensor, gx, gy, u, v);
                             light.camera(ray, &mut rng, &mut sample)?;
-                            for b in 0..nb {
-                                acc[b] += sample[b];
-                                acc_sq[b] += sample[b] * sample[b];
-                            }
+                            acc.add(&sample);
                         }
                         let base = (py * tw + px) * nb;
-                        for b in 0..nb {
-                            values[base + b] = (acc[b] / spp as f64) as f32;
+                        for (v, m) in values[base..base + nb].iter_mut().zip(acc.mean()) {
+                            *v = m as f32;
                         }
                         if !errors.is_empty() {
-                            let n = spp as f64;
-                            for b in 0..nb {
-                                let m = acc[b] / n;
-                                let var = (acc_sq[b] / n - m * m).max(0.0) * n / (n - 1.0);
-                                errors[base + b] = (var / n).sqrt() as f32;
+                            acc.standard_error(&mut se);
+                            for (e, s) in errors[base..base + nb].iter_mut().zip(&se) {
+                                *e = *s as f32;
                             }
                         }
                         let c = quicklook.rgb(&values[base..base + nb]);
@@ -346,6 +359,77 @@ pub fn radiometers_path(scene: &Scene, threads: usize) -> Result<Vec<RadiometerR
     })
 }
 
+/// Running sums over the samples of a pixel or radiometer: the radiance's
+/// first two moments, and the mean of the photon-group channels.
+struct Moments {
+    n: u64,
+    bands: usize,
+    sum: Vec<f64>,
+    sum_sq: Vec<f64>,
+    /// Sums of the group channels (empty for a one-channel integrator).
+    groups: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+impl Moments {
+    fn new(bands: usize, channels: usize) -> Self {
+        Moments {
+            n: 0,
+            bands,
+            sum: vec![0.0; bands],
+            sum_sq: vec![0.0; bands],
+            groups: vec![0.0; bands * (channels - 1)],
+            scratch: vec![0.0; bands],
+        }
+    }
+
+    fn clear(&mut self) {
+        self.n = 0;
+        self.sum.iter_mut().for_each(|v| *v = 0.0);
+        self.sum_sq.iter_mut().for_each(|v| *v = 0.0);
+        self.groups.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// Add one sample (its channels, radiance first).
+    fn add(&mut self, sample: &[f64]) {
+        self.n += 1;
+        let (l, g) = sample.split_at(self.bands);
+        for ((s, s2), v) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(l) {
+            *s += v;
+            *s2 += v * v;
+        }
+        for (a, v) in self.groups.iter_mut().zip(g) {
+            *a += v;
+        }
+    }
+
+    fn mean(&self) -> impl Iterator<Item = f64> + '_ {
+        let n = self.n.max(1) as f64;
+        self.sum.iter().map(move |s| s / n)
+    }
+
+    /// Standard error per band of the mean: the samples' spread over their
+    /// count (two or more samples), plus the photon noise of the mean group
+    /// channels.
+    fn standard_error(&mut self, out: &mut [f64]) {
+        let n = self.n as f64;
+        for ((o, s), s2) in out.iter_mut().zip(&self.sum).zip(&self.sum_sq) {
+            *o = if self.n >= 2 {
+                let m = s / n;
+                (s2 / n - m * m).max(0.0) / (n - 1.0)
+            } else {
+                0.0
+            };
+        }
+        if !self.groups.is_empty() {
+            let mean: Vec<f64> = self.groups.iter().map(|g| g / n).collect();
+            groups::variance(&mean, &mut self.scratch);
+            out.iter_mut().zip(&self.scratch).for_each(|(o, v)| *o += v);
+        }
+        out.iter_mut().for_each(|o| *o = o.sqrt());
+    }
+}
+
 fn read_radiometer(
     scene: &Scene,
     light: &dyn Integrator,
@@ -354,9 +438,8 @@ fn read_radiometer(
 ) -> Result<RadiometerReading> {
     let nb = scene.bands.len();
     let samples = light.radiometer_samples();
-    let mut sum = vec![0f64; nb];
-    let mut sum_sq = vec![0f64; nb];
-    let mut one = vec![0f64; nb];
+    let mut acc = Moments::new(nb, light.channels());
+    let mut one = vec![0f64; nb * light.channels()];
     for s in 0..samples {
         let mut rng = Pcg32::new(scene.seed ^ RADIOMETER_STREAM, mix64(index) ^ s);
         // Jitter within a 0.5 m footprint: the spread gives the error.
@@ -379,18 +462,11 @@ fn read_radiometer(
                 &mut one,
             )?;
         }
-        for b in 0..nb {
-            sum[b] += one[b];
-            sum_sq[b] += one[b] * one[b];
-        }
+        acc.add(&one);
     }
-    let n = samples as f64;
-    let l: Vec<f64> = sum.iter().map(|s| s / n).collect();
-    let se = sum_sq
-        .iter()
-        .zip(&l)
-        .map(|(s2, m)| ((s2 / n - m * m).max(0.0) / (n - 1.0)).sqrt())
-        .collect();
+    let l: Vec<f64> = acc.mean().collect();
+    let mut se = vec![0f64; nb];
+    acc.standard_error(&mut se);
     Ok(RadiometerReading {
         depth_m: r.depth_m,
         view: r.view_name.clone(),

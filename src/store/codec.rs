@@ -9,7 +9,7 @@
 //! |---|---|
 //! | 0..6  | Morton code delta from the previous record (48 bits) |
 //! | 6..10 | octahedral direction (2 x u16) |
-//! | 10..12 | band index (u16) |
+//! | 10..12 | band index (low 12 bits) and photon group (high 4 bits), u16 |
 //! | 12..16 | power (f32 bits) |
 //!
 //! The records are then byte-shuffled (byte k of every record forms plane k)
@@ -161,7 +161,7 @@ impl TileEncoder {
             prev = m;
             rec[6..8].copy_from_slice(&p.oct[0].to_le_bytes());
             rec[8..10].copy_from_slice(&p.oct[1].to_le_bytes());
-            rec[10..12].copy_from_slice(&p.band.to_le_bytes());
+            rec[10..12].copy_from_slice(&p.band_group.to_le_bytes());
             rec[12..16].copy_from_slice(&p.power.to_le_bytes());
             for (k, &b) in rec.iter().enumerate() {
                 self.raw[k * n + i] = b;
@@ -287,7 +287,7 @@ impl TileDecoder {
                         u16::from_le_bytes([r[6], r[7]]),
                         u16::from_le_bytes([r[8], r[9]]),
                     ],
-                    band: u16::from_le_bytes([r[10], r[11]]),
+                    band_group: u16::from_le_bytes([r[10], r[11]]),
                     layer,
                     power: f32::from_le_bytes([r[12], r[13], r[14], r[15]]),
                 }

@@ -36,7 +36,7 @@ pub const HEADER_MAGIC: [u8; 8] = *b"LTRLMAP\0";
 /// Magic at the end of a map file.
 pub const FOOTER_MAGIC: [u8; 8] = *b"LTRLEND\0";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Size of the footer in bytes.
 pub const FOOTER_LEN: usize = 40;
 /// Size of one index entry in bytes.
@@ -276,7 +276,7 @@ impl Header {
             return Err(Error::format(
                 path,
                 format!(
-                    "format version {version} records no provenance; this build reads version {FORMAT_VERSION}: emit the map again"
+                    "format version {version} records no photon groups (version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
                 ),
             ));
         }

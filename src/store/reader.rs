@@ -207,11 +207,11 @@ impl MapFile {
             .decode(self.blob(t), e, out)
             .map_err(|err| Error::tile(&self.path, t, err.to_string()))?;
         let nbands = self.header.bands.len();
-        if let Some(p) = out.iter().find(|p| p.band as usize >= nbands) {
+        if let Some(p) = out.iter().find(|p| p.band() as usize >= nbands) {
             return Err(Error::tile(
                 &self.path,
                 t,
-                format!("photon band {} outside the {nbands}-band grid", p.band),
+                format!("photon band {} outside the {nbands}-band grid", p.band()),
             ));
         }
         Ok(())

@@ -43,6 +43,7 @@ impl PhotonSource for UniformBox {
                 direction: Vec3::new(s * phi.cos(), s * phi.sin(), z),
                 band: 0,
                 power: 1.0,
+                group: littoral::photon::group_of_path(i),
             };
             out.push(StagedPhoton::new(&photon, LAYER_VOLUME, i));
         }
@@ -182,6 +183,7 @@ impl PhotonSource for FloorPhotons {
                 direction,
                 band: 0,
                 power: 1.0,
+                group: littoral::photon::group_of_path(i),
             };
             out.push(StagedPhoton::new(&photon, LAYER_SURFACE, i));
         }
@@ -524,16 +526,18 @@ fn zenith_radiometers_match_the_ld_tally() {
     }
 }
 
-/// The cube is bit-identical for 1 and 2 threads.
+/// The cube, its standard-error cube and the EXR holding both are
+/// bit-identical for 1 and 2 threads.
 #[test]
 fn cube_is_identical_for_any_thread_count() {
     let mut cubes = Vec::new();
     for threads in [1, 2] {
         let dir = tempdir();
         render_report(dir.path(), &deep_scene(2, ""), 50_000, threads);
-        cubes.push(std::fs::read(dir.path().join("out/deep.bsq")).unwrap());
+        let read = |f: &str| std::fs::read(dir.path().join("out").join(f)).unwrap();
+        cubes.push([read("deep.bsq"), read("deep.stderr.bsq"), read("deep.exr")]);
     }
-    assert!(!cubes[0].is_empty() && cubes[0] == cubes[1]);
+    assert!(cubes[0].iter().all(|c| !c.is_empty()) && cubes[0] == cubes[1]);
 }
 
 /// `render` writes the cube, header, quicklook and report; bad inputs fail cleanly.

@@ -50,6 +50,7 @@ fn map(n: u64) -> InMemoryMap {
             direction: if up { Vec3::Z } else { -Vec3::Z },
             band: pick(shares, rng.uniform_f64()),
             power: 1.0,
+            group: 0,
         };
         (photon, LAYER_VOLUME)
     });
@@ -110,6 +111,7 @@ fn voxels_follow_the_photon_count() {
             direction: -Vec3::Z,
             band: (i % 4) as u16,
             power: 1.0,
+            group: 0,
         };
         (p, LAYER_VOLUME)
     });

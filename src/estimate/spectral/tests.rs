@@ -209,6 +209,7 @@ fn compensated_beats_naive_against_known_spectrum() {
                     direction: Vec3::Z,
                     band: band_of[i as usize],
                     power: power as f32,
+                    group: 0,
                 },
                 distance_sq,
             }));
@@ -473,6 +474,7 @@ fn estimator_weights_and_reuses() {
             direction: Vec3::Z,
             band,
             power,
+            group: 0,
         },
         distance_sq: 0.0,
     };

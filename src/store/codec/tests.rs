@@ -14,6 +14,7 @@ fn staged(n: usize, seed: u64) -> Vec<StagedPhoton> {
                 direction: Vec3::new(r.uniform_f32() - 0.5, 0.3, -1.0).normalize(),
                 band: r.below(128) as u16,
                 power: 0.25,
+                group: (i % 16) as u8,
             };
             StagedPhoton::new(&p, 0, i as u64)
         })
@@ -35,7 +36,7 @@ fn tile_round_trips_within_quantisation_error() {
     for d in out.iter().map(|p| p.unpack()) {
         assert!(t.bounds.distance_sq(d.position) == 0.0);
         let j = (0..photons.len())
-            .filter(|&j| !used[j] && photons[j].photon.band == d.band)
+            .filter(|&j| !used[j] && photons[j].photon.band() == d.band)
             .min_by(|&a, &b| {
                 let da = photons[a].pos().distance_squared(d.position);
                 let db = photons[b].pos().distance_squared(d.position);
@@ -47,6 +48,7 @@ fn tile_round_trips_within_quantisation_error() {
         assert!(err.cmple(step * 0.5 + Vec3::splat(1e-5)).all(), "{err}");
         assert_eq!(photons[j].photon.unpack().direction, d.direction);
         assert_eq!(d.power, photons[j].photon.power);
+        assert_eq!(d.group, photons[j].photon.group());
     }
 }
 
