@@ -86,12 +86,17 @@ fn layer_header(name: &str, cube: &EnviCube) -> Result<(exr::meta::header::Heade
         None | Some("W m-2 sr-1 nm-1") => "W.m^-2.sr^-1.nm^-1".to_string(),
         Some(other) => other.to_string(),
     };
-    let attrs = &mut header.own_attributes.other;
-    attrs.insert(
+    // One custom attribute per map: the exr crate keeps them in hash maps
+    // and writes each map in its (per-process random) order, own then
+    // shared, so two in one map would make the bytes differ between runs.
+    header.shared_attributes.other.insert(
         text("spectralLayoutVersion")?,
         AttributeValue::Text(text("1.0")?),
     );
-    attrs.insert(text("emissiveUnits")?, AttributeValue::Text(text(&units)?));
+    header
+        .own_attributes
+        .other
+        .insert(text("emissiveUnits")?, AttributeValue::Text(text(&units)?));
     Ok((header, order))
 }
 

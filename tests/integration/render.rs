@@ -537,7 +537,13 @@ fn cube_is_identical_for_any_thread_count() {
         let read = |f: &str| std::fs::read(dir.path().join("out").join(f)).unwrap();
         cubes.push([read("deep.bsq"), read("deep.stderr.bsq"), read("deep.exr")]);
     }
-    assert!(cubes[0].iter().all(|c| !c.is_empty()) && cubes[0] == cubes[1]);
+    for (i, name) in ["cube", "standard-error cube", "EXR"].iter().enumerate() {
+        assert!(!cubes[0][i].is_empty(), "{name} empty");
+        assert!(
+            cubes[0][i] == cubes[1][i],
+            "{name} differs between 1 and 2 threads"
+        );
+    }
 }
 
 /// `render` writes the cube, header, quicklook and report; bad inputs fail cleanly.
