@@ -100,6 +100,11 @@ for a, b in zip(pm["radiometers"], pa["radiometers"]):
     l = sum(b["L"]) / len(b["L"]); se = (sum(s * s for s in b["stderr"]) ** 0.5) / len(b["L"])
     m = sum(a["L"]) / len(a["L"])
     worst = max(abs(x / y - 1) for x, y in zip(a["L"], b["L"]))
-    print(f"| {name} | {a['depth_m']} | {l:.5g} ± {se / l * 100:.1f} % | {m / l - 1:+.3f} | {worst:.3f} |")
+    # Per band: the photon map's relative error, and the largest
+    # difference in combined standard errors.
+    pse = max(s / x for s, x in zip(a["stderr"], a["L"]))
+    z = max(abs(x - y) / (sa * sa + sb * sb) ** 0.5
+            for x, y, sa, sb in zip(a["L"], b["L"], a["stderr"], b["stderr"]))
+    print(f"| {name} | {a['depth_m']} | {l:.5g} ± {se / l * 100:.1f} % | {m / l - 1:+.3f} | {worst:.3f} | {pse * 100:.1f} % | {z:.1f} |")
 PY
 done

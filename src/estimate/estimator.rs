@@ -95,6 +95,9 @@ pub struct Estimator<'a> {
     grid: Option<BoundaryGrid>,
     /// Band shapes of the `grid` spectral mode.
     shapes: Option<BandShapeGrid>,
+    /// The IOPs jump at depth boundaries (layers): volume photons are
+    /// weighted by the ratio of scattering at the site to theirs.
+    layered: bool,
 }
 
 /// Most voxels of a band-shape grid, and most bytes (the budget charges
@@ -124,6 +127,7 @@ impl<'a> Estimator<'a> {
             spectral,
             grid,
             shapes: None,
+            layered: !scene.water.depth_boundaries().is_empty(),
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -141,6 +145,7 @@ impl<'a> Estimator<'a> {
                 map,
                 scene.domain.size_m,
                 voxels,
+                &scene.water.depth_boundaries(),
                 &|p: &crate::photon::Photon, up: bool| est.shape_weight(p, up),
             )?;
             est.shapes = Some(shapes);
@@ -394,10 +399,28 @@ impl<'a> Estimator<'a> {
         }));
         let mix = std::mem::take(&mut scratch.mix);
         let phases = self.phases_for(toward_viewer);
+        // Where the IOPs jump (depth layers), a photon stored at a
+        // scattering event counts at x as the light field there, not as
+        // its own water's scattering: weighted by b(x) / b(x_p), the
+        // density of scattering events becomes a density of light, which
+        // is continuous across the jump, and the search no longer carries
+        // one layer's scattering into the other.
+        let jumps = self.layered;
+        let water = &self.scene.water;
         let weight = |n: &Neighbour| -> (f64, bool) {
-            let fw = mix[n.photon.band as usize] as f64;
+            let band = n.photon.band as usize;
+            let fw = mix[band] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
-            (mixture(phases, fw, cos) * n.photon.power as f64, cos > 0.0)
+            let mut w = mixture(phases, fw, cos) * n.photon.power as f64;
+            if jumps {
+                let there = water.scattering(n.photon.position, band);
+                w *= if there > 0.0 {
+                    iops[band].b() / there
+                } else {
+                    0.0
+                };
+            }
+            (w, cos > 0.0)
         };
         let view_up = Some(toward_viewer.z > 0.0);
         let r = self.estimate(x, LAYER_VOLUME, &weight, None, view_up, scratch, out);

@@ -54,6 +54,8 @@ pub struct BandShapeGrid {
     z_edges: Vec<f32>,
     /// Layer centres, top down.
     z_centres: Vec<f32>,
+    /// Depths where the IOPs jump (z, negative), never interpolated across.
+    jumps: Vec<f32>,
     /// Per voxel (x fastest, then y, then z) and viewing direction (light
     /// travelling up, down): the band shares (sum 1), or all zero where no
     /// photon fell.
@@ -94,6 +96,7 @@ impl BandShapeGrid {
         map: &dyn PhotonQuery,
         size_m: [f64; 2],
         voxels: usize,
+        boundaries_m: &[f64],
         weight: &(dyn Fn(&crate::photon::Photon, bool) -> f64 + Sync),
     ) -> Result<BandShapeGrid> {
         let bands = map.bands().len();
@@ -122,6 +125,15 @@ impl BandShapeGrid {
             z_edges.push(-depth);
         }
         z_edges.push(-depth);
+        // Layers also end where the IOPs jump, and shapes are not blended
+        // across such a depth (see `shape_and_groups_at`).
+        let jumps: Vec<f32> = boundaries_m
+            .iter()
+            .map(|&d| -d as f32)
+            .filter(|&z| z < 0.0 && z > -depth)
+            .collect();
+        z_edges.extend(&jumps);
+        z_edges.sort_by(|a, b| b.total_cmp(a));
         z_edges.dedup();
         let nz = z_edges.len() - 1;
         let z_centres = z_edges.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
@@ -132,6 +144,7 @@ impl BandShapeGrid {
             size_m: size,
             z_edges,
             z_centres,
+            jumps,
             shapes: Vec::new(),
             deviations: Vec::new(),
         };
@@ -237,7 +250,16 @@ impl BandShapeGrid {
         } else {
             let k = zc.iter().position(|&c| c < x.z).unwrap_or(nz - 1);
             let (za, zb) = (zc[k - 1], zc[k]);
-            (k - 1, k, (za - x.z) / (za - zb))
+            // A jump in the IOPs between x and a centre: only the layer on
+            // x's side of it describes x.
+            let between = |hi: f32, lo: f32| self.jumps.iter().any(|&j| j < hi && j >= lo);
+            if between(za, x.z) {
+                (k, k, 0.0)
+            } else if between(x.z, zb) {
+                (k - 1, k - 1, 0.0)
+            } else {
+                (k - 1, k, (za - x.z) / (za - zb))
+            }
         };
         out.iter_mut().for_each(|o| *o = 0.0);
         if let Some(g) = groups.as_deref_mut() {

@@ -300,6 +300,99 @@ impl WaterModel {
         }
     }
 
+    /// Optical depth per band (c integrated, into `out`) along the segment
+    /// from `x` along unit `dir` for `len` m, exactly, when the IOPs are
+    /// piecewise constant in depth (uniform water or depth layers): the
+    /// segment is cut at every layer boundary. False (and `out` untouched)
+    /// for other fields. `tmp` holds one entry per band.
+    pub fn layered_optical_depth(
+        &self,
+        x: Vec3,
+        dir: Vec3,
+        len: f32,
+        tmp: &mut [Iop],
+        out: &mut [f64],
+    ) -> bool {
+        let layers = match self {
+            WaterModel::Explicit { .. } => &[][..],
+            WaterModel::Constituents { field, .. } => match field {
+                ConstituentField::Uniform(_) => &[][..],
+                ConstituentField::Layers { layers, .. } => &layers[..],
+                _ => return false,
+            },
+        };
+        let (d0, d1) = (-(x.z as f64), -((x + dir * len).z as f64));
+        let (lo, hi) = (d0.min(d1), d0.max(d1));
+        let mut cuts = vec![lo, hi];
+        for &(top, bottom, _) in layers {
+            cuts.extend([top, bottom].into_iter().filter(|&d| d > lo && d < hi));
+        }
+        cuts.sort_by(f64::total_cmp);
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let per_depth = if hi > lo { len as f64 / (hi - lo) } else { 0.0 };
+        for w in cuts.windows(2) {
+            let mid = 0.5 * (w[0] + w[1]);
+            self.iops(Vec3::new(x.x, x.y, -mid as f32), tmp);
+            let length = if hi > lo {
+                (w[1] - w[0]) * per_depth
+            } else {
+                len as f64
+            };
+            for (o, iop) in out.iter_mut().zip(tmp.iter()) {
+                *o += iop.c() * length;
+            }
+        }
+        if hi <= lo {
+            // A level segment stays at one depth.
+            self.iops(x, tmp);
+            for (o, iop) in out.iter_mut().zip(tmp.iter()) {
+                *o = iop.c() * len as f64;
+            }
+        }
+        true
+    }
+
+    /// Depths (m, positive down) where the IOPs jump: the tops and bottoms
+    /// of depth layers; empty for every other field.
+    pub fn depth_boundaries(&self) -> Vec<f64> {
+        match self {
+            WaterModel::Constituents {
+                field: ConstituentField::Layers { layers, .. },
+                ..
+            } => {
+                let mut d: Vec<f64> = layers.iter().flat_map(|l| [l.0, l.1]).collect();
+                d.sort_by(f64::total_cmp);
+                d.dedup();
+                d
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// The scattering coefficient b at `p` in `band` (one power law, not
+    /// the whole IOP set).
+    #[inline]
+    pub fn scattering(&self, p: Vec3, band: usize) -> f64 {
+        match self {
+            WaterModel::Explicit { b, .. } => *b,
+            WaterModel::Constituents {
+                spectra,
+                field,
+                bp_550,
+            } => {
+                let bp550 = bp_550.unwrap_or_else(|| {
+                    let chl = field.at(p).chl;
+                    if chl > 0.0 {
+                        0.30 * chl.powf(0.62)
+                    } else {
+                        0.0
+                    }
+                });
+                spectra.b_w[band] + bp550 * spectra.bp_shape[band]
+            }
+        }
+    }
+
     /// True when the IOPs do not depend on position.
     pub fn is_uniform(&self) -> bool {
         match self {

@@ -2,6 +2,7 @@
 
 mod common;
 
+mod against_path;
 mod cache;
 mod cli;
 mod convergence;

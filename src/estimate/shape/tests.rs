@@ -70,7 +70,7 @@ fn grid_reads_the_band_shares_of_each_hemisphere() {
     let n = 400_000;
     let m = map(n);
     let voxels = 64;
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, &[], &hemisphere).unwrap();
     let [nx, ny, nz] = g.dims();
     assert!(nx * ny * nz >= 32 && nz >= 3, "{:?}", g.dims());
     let per_voxel_hemisphere = n as f64 / (nx * ny * nz) as f64 / 2.0;
@@ -120,8 +120,43 @@ fn voxels_follow_the_photon_count() {
         max: Vec3::new(10.0, 10.0, 0.0),
     };
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, &[], &hemisphere).unwrap();
     let mut out = [0.0; 4];
     assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
     assert!(g.shape_at(Vec3::new(5.0, 5.0, -3.0), false, &mut out));
+}
+
+/// Where the IOPs jump at a depth, a layer ends there and shapes are not
+/// blended across it: above a jump at 2 m every photon is band 0, below it
+/// band 1, and a site just above (or below) the jump gets its own side's
+/// shape exactly, where interpolation between the layer centres would mix
+/// the two.
+#[test]
+fn shapes_are_not_blended_across_an_iop_jump() {
+    let photons = (0..4000).map(|i| {
+        let z = -0.001 - 3.998 * ((i as f32 + 0.5) / 4000.0);
+        let p = Photon {
+            position: Vec3::new((i % 10) as f32 + 0.5, 5.0, z),
+            direction: -Vec3::Z,
+            band: u16::from(z < -2.0),
+            power: 1.0,
+            group: (i % 16) as u8,
+        };
+        (p, LAYER_VOLUME)
+    });
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -4.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
+    let mut out = [0.0; 2];
+    for (x_z, want) in [(-1.95, [1.0, 0.0]), (-2.05, [0.0, 1.0])] {
+        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, &[2.0], &hemisphere).unwrap();
+        assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
+        assert_eq!(out, want, "at z = {x_z}");
+        // Without the jump the site is between two centres and mixes them.
+        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, &[], &hemisphere).unwrap();
+        assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
+        assert!(out[0] > 0.0 && out[1] > 0.0, "{out:?}");
+    }
 }

@@ -122,3 +122,55 @@ fn layers_override_the_base() {
     assert_eq!(f.at(Vec3::new(0.0, 0.0, -3.0)).chl, 3.0);
     assert_eq!(f.max().chl, 3.0);
 }
+
+/// Through depth layers the optical depth is exact: it matches the sum of
+/// c times the slant length inside each layer, worked by hand, for a
+/// segment crossing a whole layer and ending inside another; fields that
+/// are not layered decline.
+#[test]
+fn layered_optical_depth_cuts_at_layer_boundaries() {
+    let conc = |chl: f64| Constituents {
+        chl,
+        cdom_440: 0.1,
+        nap_440: 0.0,
+    };
+    let w = WaterModel::Constituents {
+        spectra: Box::new(spectra()),
+        field: ConstituentField::Layers {
+            base: conc(0.5),
+            layers: vec![(2.0, 4.0, conc(8.0)), (5.0, 6.0, conc(3.0))],
+        },
+        bp_550: None,
+    };
+    let nb = spectra().a_w.len();
+    let (mut tmp, mut got) = (vec![Iop::default(); nb], vec![0.0; nb]);
+    // From 5.5 m up to the surface at 60 degrees from the vertical.
+    let dir = Vec3::new(0.8660254, 0.0, 0.5);
+    let x = Vec3::new(1.0, 1.0, -5.5);
+    let len = 5.5 / 0.5;
+    assert!(w.layered_optical_depth(x, dir, len, &mut tmp, &mut got));
+    let c = |chl: f64, b: usize| {
+        let probe = WaterModel::Constituents {
+            spectra: Box::new(spectra()),
+            field: ConstituentField::Uniform(conc(chl)),
+            bp_550: None,
+        };
+        probe.iop(Vec3::ZERO, b).c()
+    };
+    for (b, g) in got.iter().enumerate() {
+        // Vertical thicknesses: 0.5 m at chl 3, 1 + 2 m at chl 0.5, 2 m at chl 8.
+        let want = (0.5 * c(3.0, b) + 3.0 * c(0.5, b) + 2.0 * c(8.0, b)) / 0.5;
+        assert!((g - want).abs() <= 1e-6 * want, "band {b}: {g} vs {want}");
+    }
+    let gradient = WaterModel::Constituents {
+        spectra: Box::new(spectra()),
+        field: ConstituentField::Gradient {
+            axis: 0,
+            size_m: 10.0,
+            from: conc(0.5),
+            to: conc(8.0),
+        },
+        bp_550: None,
+    };
+    assert!(!gradient.layered_optical_depth(x, dir, len, &mut tmp, &mut got));
+}
