@@ -346,6 +346,17 @@ impl<'a> PathTracer<'a> {
         }
     }
 
+    /// The roulette importance of a path leaving along `dir` after a floor,
+    /// target or surface event: 4 pi times the larger of the two phase
+    /// functions toward the sun (the next vertex may scatter it in).
+    fn importance(&self, dir: Vec3) -> f64 {
+        self.guide.map_or(1.0, |axis| {
+            let m = 0.5 * (dir - axis).length_squared() as f64;
+            let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
+            4.0 * PI * pw.eval_one_minus_cos(m).max(pp.eval_one_minus_cos(m))
+        })
+    }
+
     /// Russian roulette after `ROULETTE_AFTER` events, surviving with the
     /// largest throughput times `importance` (at least 1: how much more
     /// than an isotropic scatterer the path's next sun estimates may
@@ -429,7 +440,7 @@ impl<'a> PathTracer<'a> {
                 pos += n * 1e-4;
                 on_surface = true;
                 events += 1;
-                if !Self::survive(w, events, 1.0, rng) {
+                if !Self::survive(w, events, self.importance(dir), rng) {
                     return;
                 }
                 continue;
@@ -458,7 +469,7 @@ impl<'a> PathTracer<'a> {
                     dir = ev.direction;
                 }
                 events += 1;
-                if !Self::survive(w, events, 1.0, rng) {
+                if !Self::survive(w, events, self.importance(dir), rng) {
                     return;
                 }
                 continue;
