@@ -175,6 +175,16 @@ impl RenderJob<'_> {
                     .stderr
                     .as_ref()
                     .map(|c| c.bsq.display().to_string()),
+                products: crate::render::PRODUCTS
+                    .iter()
+                    .zip(&rendered.products)
+                    .map(|(p, f)| report::ProductFiles {
+                        product: p.suffix.into(),
+                        units: p.units.into(),
+                        hdr: f.hdr.display().to_string(),
+                        bsq: f.bsq.display().to_string(),
+                    })
+                    .collect(),
             },
             timings_s: RenderTimings {
                 scene: self.scene_seconds,

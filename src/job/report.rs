@@ -105,6 +105,20 @@ pub struct Outputs {
     pub stderr_hdr: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stderr_bsq: Option<String>,
+    /// The product cubes (`render::PRODUCTS`: water-leaving radiance,
+    /// surface-reflected radiance, remote-sensing reflectance), by suffix.
+    #[serde(default)]
+    pub products: Vec<ProductFiles>,
+}
+
+/// One product cube's files.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ProductFiles {
+    /// `lw`, `surface` or `rrs`.
+    pub product: String,
+    pub units: String,
+    pub hdr: String,
+    pub bsq: String,
 }
 
 /// Seconds spent in each stage of `render`.

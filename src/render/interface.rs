@@ -47,7 +47,26 @@ pub fn from_air(
     out: &mut [f64],
     in_water: &mut InWater,
 ) -> Result<()> {
+    let mut water = vec![0.0; sky_l.len()];
+    from_air_parts(scene, sky_l, ray, rng, out, &mut water, in_water)
+}
+
+/// [`from_air`], also writing into `water` (one value per band) the part
+/// of the radiance that left the water: the water-leaving radiance L_w.
+/// The rest of the first run of `out` is the surface-reflected radiance
+/// (the sky seen in the facets and the sun's glint), so L_t = L_w +
+/// surface by construction, term by term.
+pub fn from_air_parts(
+    scene: &Scene,
+    sky_l: &[f64],
+    ray: CameraRay,
+    rng: &mut Pcg32,
+    out: &mut [f64],
+    water: &mut [f64],
+    in_water: &mut InWater,
+) -> Result<()> {
     let d = ray.direction;
+    water.iter_mut().for_each(|w| *w = 0.0);
     if d.z >= 0.0 {
         set_sky(sky_l, out);
         return Ok(());
@@ -56,8 +75,9 @@ pub fn from_air(
     let p = Vec3::new(p.x, p.y, 0.0);
     let split = scene.surface.split_from_above(d, rng);
     let mut part = vec![0.0; out.len()];
-    leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
-    leave_surface(
+    let reflected_from_water =
+        leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
+    let refracted_from_water = leave_surface(
         scene,
         sky_l,
         p,
@@ -68,6 +88,14 @@ pub fn from_air(
         in_water,
     )?;
     let r = split.reflectance;
+    for (b, w) in water.iter_mut().enumerate() {
+        if reflected_from_water {
+            *w += r * out[b];
+        }
+        if refracted_from_water {
+            *w += (1.0 - r) * part[b];
+        }
+    }
     for (o, t) in out.iter_mut().zip(&part) {
         *o = r * *o + (1.0 - r) * t;
     }
@@ -78,6 +106,7 @@ pub fn from_air(
 /// Radiance reaching the surface point `p` along `-dir`, for a ray leaving
 /// it along `dir` into the water (`in_water`) or the air; a ray heading back
 /// into the surface meets it again. Radiance leaving the water drops by n^2.
+/// True when the ray went into the water.
 #[allow(clippy::too_many_arguments)]
 fn leave_surface(
     scene: &Scene,
@@ -88,7 +117,7 @@ fn leave_surface(
     rng: &mut Pcg32,
     out: &mut [f64],
     in_water: &mut InWater,
-) -> Result<()> {
+) -> Result<bool> {
     let (dir, into_water) = if (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0) {
         (dir, into_water)
     } else {
@@ -102,7 +131,7 @@ fn leave_surface(
     } else {
         set_sky(sky_l, out);
     }
-    Ok(())
+    Ok(into_water)
 }
 
 /// The sky radiance into the first run of `out`, zero in the others.

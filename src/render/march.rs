@@ -18,7 +18,7 @@
 //! reflection of upwelling light there is not followed).
 
 use super::camera::CameraRay;
-use super::interface::{from_air, sky_radiance};
+use super::interface::{from_air_parts, sky_radiance};
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
 use crate::estimate::groups::CHANNELS;
@@ -211,20 +211,22 @@ impl<'a> RayMarcher<'a> {
 
     /// Radiance per band reaching a sensor along `ray` (in air, toward the
     /// water): the surface as `interface::from_air` treats it, the march
-    /// below it.
+    /// below it; the water-leaving part into `water`.
     pub fn camera(
         &self,
         ray: CameraRay,
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         out: &mut [f64],
+        water: &mut [f64],
     ) -> Result<()> {
-        from_air(
+        from_air_parts(
             self.scene,
             &self.sky_l,
             ray,
             rng,
             out,
+            water,
             &mut |p, dir, rng, out| self.march(p, dir, rng, scratch, out),
         )
     }

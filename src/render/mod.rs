@@ -79,8 +79,15 @@ pub trait Integrator: Sync {
     /// radiance), or [`CHANNELS`] (the radiance, then the photon groups'
     /// parts of it).
     fn channels(&self) -> usize;
-    /// Radiance per band reaching a sensor along `ray` (in air).
-    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
+    /// Radiance per band reaching a sensor along `ray` (in air), and the
+    /// part of it that left the water into `water` (one value per band).
+    fn camera(
+        &self,
+        ray: camera::CameraRay,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        water: &mut [f64],
+    ) -> Result<()>;
     /// Radiance per band arriving at `p` (in water) along `-dir`.
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
     /// Samples (jittered positions, each one path or march) per radiometer
@@ -98,8 +105,16 @@ impl Integrator for RayMarcher<'_> {
     fn channels(&self) -> usize {
         CHANNELS
     }
-    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
-        with_scratch(self.bands(), |s| RayMarcher::camera(self, ray, rng, s, out))
+    fn camera(
+        &self,
+        ray: camera::CameraRay,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        water: &mut [f64],
+    ) -> Result<()> {
+        with_scratch(self.bands(), |s| {
+            RayMarcher::camera(self, ray, rng, s, out, water)
+        })
     }
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
         with_scratch(self.bands(), |s| self.march(p, dir, rng, s, out))
@@ -128,8 +143,16 @@ impl Integrator for PathTracer<'_> {
     fn channels(&self) -> usize {
         1
     }
-    fn camera(&self, ray: camera::CameraRay, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
-        with_path_scratch(out.len(), |s| PathTracer::camera(self, ray, rng, s, out))
+    fn camera(
+        &self,
+        ray: camera::CameraRay,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        water: &mut [f64],
+    ) -> Result<()> {
+        with_path_scratch(out.len(), |s| {
+            PathTracer::camera(self, ray, rng, s, out, water)
+        })
     }
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
         with_path_scratch(out.len(), |s| {
@@ -145,6 +168,45 @@ impl Integrator for PathTracer<'_> {
     }
 }
 
+/// Units of the radiance cubes.
+pub const RADIANCE_UNITS: &str = "W m-2 sr-1 nm-1";
+
+/// A product cube written beside the total radiance.
+#[derive(Clone, Copy, Debug)]
+pub struct Product {
+    /// File name suffix: `NAME.SUFFIX.hdr`.
+    pub suffix: &'static str,
+    /// Its layer in the EXR.
+    pub layer: &'static str,
+    pub description: &'static str,
+    pub units: &'static str,
+}
+
+/// The products (Mobley 1999): L_w, the radiance that left the water
+/// through the surface; the surface-reflected radiance L_t - L_w (sky in
+/// the facets and sun glint); R_rs = L_w / E_d(0+), with E_d(0+) the sun's
+/// horizontal irradiance plus the sky's.
+pub const PRODUCTS: [Product; 3] = [
+    Product {
+        suffix: "lw",
+        layer: "lw",
+        description: "water-leaving radiance (L_w)",
+        units: RADIANCE_UNITS,
+    },
+    Product {
+        suffix: "surface",
+        layer: "surface",
+        description: "surface-reflected radiance, sky and sun glint (L_t - L_w)",
+        units: RADIANCE_UNITS,
+    },
+    Product {
+        suffix: "rrs",
+        layer: "rrs",
+        description: "remote-sensing reflectance (R_rs = L_w / E_d(0+))",
+        units: "sr-1",
+    },
+];
+
 /// What a render wrote.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -155,6 +217,8 @@ pub struct Rendered {
     /// The standard-error cube, when one was written (path integrator, two
     /// or more samples per pixel).
     pub stderr: Option<crate::cube::envi::CubeFiles>,
+    /// The product cubes, in the order of [`PRODUCTS`].
+    pub products: Vec<crate::cube::envi::CubeFiles>,
     pub radiometers: Vec<RadiometerReading>,
     /// Tile-cache counters after the render (zero without a photon map).
     pub cache: crate::store::cache::CacheStats,
@@ -200,18 +264,39 @@ pub fn render_with(
     let nb = scene.bands.len();
     let [w, h] = scene.sensor.pixels;
     let spp = scene.sensor.samples_per_pixel as u64;
-    let spec = |description: String| CubeSpec {
+    let spec_in = |description: String, units: &str| CubeSpec {
         samples: w,
         lines: h,
         bands: scene.bands.clone(),
         description,
-        data_units: "W m-2 sr-1 nm-1".into(),
+        data_units: units.into(),
     };
+    let spec = |description: String| spec_in(description, RADIANCE_UNITS);
     let writer = EnviWriter::create(
         dir,
         &scene.name,
-        spec(format!("littoral radiance cube of scene '{}'", scene.name)),
+        spec(format!(
+            "littoral total radiance at the sensor (L_t) of scene '{}'",
+            scene.name
+        )),
     )?;
+    // The products: water-leaving radiance, surface-reflected radiance,
+    // remote-sensing reflectance.
+    let product_writers = PRODUCTS
+        .iter()
+        .map(|p| {
+            EnviWriter::create(
+                dir,
+                &format!("{}.{}", scene.name, p.suffix),
+                spec_in(
+                    format!("littoral {} of scene '{}'", p.description, scene.name),
+                    p.units,
+                ),
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // E_d(0+): the sun's horizontal irradiance plus the sky's.
+    let ed: Vec<f64> = (0..nb).map(|b| scene.incident_irradiance(b)).collect();
     let channels = light.channels();
     let se_writer = if (light.independent_samples() && spp >= 2) || channels > 1 {
         let what = if channels > 1 {
@@ -246,14 +331,17 @@ pub fn render_with(
                 let mut values = vec![0f32; tw * th * nb];
                 let mut errors = vec![0f32; if se_writer.is_some() { tw * th * nb } else { 0 }];
                 let mut rgb = vec![0f32; tw * th * 3];
+                let mut products = vec![vec![0f32; tw * th * nb]; PRODUCTS.len()];
                 let mut acc = Moments::new(nb, channels);
                 let mut sample = vec![0f64; nb * channels];
+                let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
                 let mut se = vec![0f64; nb];
                 for py in 0..th {
                     for px in 0..tw {
                         let (gx, gy) = (x0 + px, y0 + py);
                         let pixel = (gy * w + gx) as u64;
                         acc.clear();
+                        water_sum.iter_mut().for_each(|v| *v = 0.0);
                         for s in 0..spp {
                             let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
                             let (u, v) = if spp == 1 {
@@ -262,12 +350,21 @@ pub fn render_with(
                                 (rng.uniform_f32(), rng.uniform_f32())
                             };
                             let ray = camera::ray(&scene.sensor, gx, gy, u, v);
-                            light.camera(ray, &mut rng, &mut sample)?;
+                            light.camera(ray, &mut rng, &mut sample, &mut water)?;
                             acc.add(&sample);
+                            water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
                         }
                         let base = (py * tw + px) * nb;
-                        for (v, m) in values[base..base + nb].iter_mut().zip(acc.mean()) {
-                            *v = m as f32;
+                        for (b, m) in acc.mean().enumerate() {
+                            let lw = water_sum[b] / spp as f64;
+                            values[base + b] = m as f32;
+                            products[0][base + b] = lw as f32;
+                            products[1][base + b] = (m - lw) as f32;
+                            products[2][base + b] = if ed[b] > 0.0 {
+                                (lw / ed[b]) as f32
+                            } else {
+                                0.0
+                            };
                         }
                         if !errors.is_empty() {
                             acc.standard_error(&mut se);
@@ -280,6 +377,9 @@ pub fn render_with(
                     }
                 }
                 writer.write_tile(x0, y0, tw, th, &values)?;
+                for (pw, v) in product_writers.iter().zip(&products) {
+                    pw.write_tile(x0, y0, tw, th, v)?;
+                }
                 if let Some(se) = &se_writer {
                     se.write_tile(x0, y0, tw, th, &errors)?;
                 }
@@ -302,19 +402,22 @@ pub fn render_with(
     write_png(&png, w, h, &image, None)?;
     let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
     let stderr = se_writer.map(|s| s.finish()).transpose()?;
-    // The spectral OpenEXR copy, tile by tile from the finished cube.
+    let products = product_writers
+        .into_iter()
+        .map(|p| p.finish())
+        .collect::<Result<Vec<_>>>()?;
+    // The spectral OpenEXR copy, tile by tile from the finished cubes:
+    // the radiance, its standard error, then the products.
     let exr = dir.join(format!("{}.exr", scene.name));
-    let radiance = crate::cube::EnviCube::open(&hdr)?;
-    match &stderr {
-        Some(se) => crate::cube::exr::write_spectral_exr_layers(
-            &[
-                ("radiance", &radiance),
-                ("stderr", &crate::cube::EnviCube::open(&se.hdr)?),
-            ],
-            &exr,
-        )?,
-        None => crate::cube::exr::write_spectral_exr(&radiance, &exr)?,
+    let mut layers = vec![("radiance", crate::cube::EnviCube::open(&hdr)?)];
+    if let Some(se) = &stderr {
+        layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
     }
+    for (p, files) in PRODUCTS.iter().zip(&products) {
+        layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
+    }
+    let named: Vec<(&str, &crate::cube::EnviCube)> = layers.iter().map(|(n, c)| (*n, c)).collect();
+    crate::cube::exr::write_spectral_exr_layers(&named, &exr)?;
     let radiometers = pool.install(|| {
         scene
             .radiometers
@@ -329,6 +432,7 @@ pub fn render_with(
         exr,
         png,
         stderr,
+        products,
         radiometers,
         cache: Default::default(),
     })
@@ -440,6 +544,7 @@ fn read_radiometer(
     let samples = light.radiometer_samples();
     let mut acc = Moments::new(nb, light.channels());
     let mut one = vec![0f64; nb * light.channels()];
+    let mut water = vec![0f64; nb];
     for s in 0..samples {
         let mut rng = Pcg32::new(scene.seed ^ RADIOMETER_STREAM, mix64(index) ^ s);
         // Jitter within a 0.5 m footprint: the spread gives the error.
@@ -460,6 +565,7 @@ fn read_radiometer(
                 },
                 &mut rng,
                 &mut one,
+                &mut water,
             )?;
         }
         acc.add(&one);

@@ -73,7 +73,7 @@
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
 use super::camera::CameraRay;
-use super::interface::{from_air, sky_radiance};
+use super::interface::{from_air_parts, sky_radiance};
 use crate::emit::trace::MAX_EVENTS;
 use crate::error::Result;
 use crate::optics::iop::Iop;
@@ -187,20 +187,23 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Radiance per band reaching a sensor along `ray` (in air).
+    /// Radiance per band reaching a sensor along `ray` (in air), and the
+    /// water-leaving part of it into `water`.
     pub fn camera(
         &self,
         ray: CameraRay,
         rng: &mut Pcg32,
         scratch: &mut PathScratch,
         out: &mut [f64],
+        water: &mut [f64],
     ) -> Result<()> {
-        from_air(
+        from_air_parts(
             self.scene,
             &self.sky_l,
             ray,
             rng,
             out,
+            water,
             &mut |p, dir, rng, out| {
                 self.in_water(p, dir, rng, scratch, out);
                 Ok(())

@@ -14,6 +14,7 @@ mod memory;
 mod oracle;
 mod path;
 mod physics;
+mod products;
 mod render;
 mod roundtrip;
 mod scenes;

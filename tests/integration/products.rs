@@ -1,0 +1,120 @@
+//! The products beside the total radiance: water-leaving radiance,
+//! surface-reflected radiance and remote-sensing reflectance.
+
+use crate::common::{f32s, render_job, tempdir};
+use littoral::optics::surface::fresnel_reflectance;
+use littoral::scene::{IntegratorMode, Overrides, Scene};
+use std::path::Path;
+
+const N_WATER: f64 = 1.34;
+const SKY: f64 = 0.05;
+const SUN_ZENITH_DEG: f64 = 30.0;
+
+/// Deep enough water over a black floor, flat surface, isotropic sky,
+/// three bands; `b` the scattering coefficient.
+fn scene(b: f64) -> String {
+    format!(
+        r#"
+name = "prod"
+[spectral]
+start_nm = 450.0
+end_nm = 650.0
+bands = 3
+[sun]
+zenith_deg = {SUN_ZENITH_DEG}
+irradiance = 1.0
+[sky]
+radiance = {SKY}
+[surface]
+refractive_index = {N_WATER}
+[domain]
+size_m = [20.0, 20.0]
+[water]
+iop = {{ a = 0.2, b = {b} }}
+[bottom]
+depth_m = 5.0
+reflectance = 0.0
+[photons]
+count = 200000
+[sensor]
+pixels = [6, 6]
+"#
+    )
+}
+
+/// L_t, L_w, surface-reflected and R_rs cubes of a render.
+fn render(text: &str, integrator: IntegratorMode, dir: &Path) -> [Vec<f64>; 4] {
+    let o = Overrides {
+        integrator: Some(integrator),
+        samples_per_pixel: Some(2),
+        ..Overrides::default()
+    };
+    let s = Scene::parse(text, Path::new("prod.toml"), &o).unwrap();
+    let r = render_job(&s, dir, 0);
+    let names: Vec<&str> = r
+        .outputs
+        .products
+        .iter()
+        .map(|p| p.product.as_str())
+        .collect();
+    assert_eq!(names, ["lw", "surface", "rrs"]);
+    assert_eq!(r.outputs.products[2].units, "sr-1");
+    let read = |f: &str| f32s(f).into_iter().map(f64::from).collect::<Vec<_>>();
+    let exr = exr::prelude::read_all_flat_layers_from_file(&r.outputs.exr).unwrap();
+    let layers: Vec<String> = exr
+        .layer_data
+        .iter()
+        .map(|l| l.attributes.layer_name.as_ref().unwrap().to_string())
+        .collect();
+    for want in ["radiance", "lw", "surface", "rrs"] {
+        assert!(layers.iter().any(|l| l == want), "EXR layers {layers:?}");
+    }
+    [
+        read(&r.outputs.bsq),
+        read(&r.outputs.products[0].bsq),
+        read(&r.outputs.products[1].bsq),
+        read(&r.outputs.products[2].bsq),
+    ]
+}
+
+/// With a flat surface the surface-reflected radiance is the sky times
+/// the Fresnel reflectance at the (near-nadir) view; with clear,
+/// non-scattering water over a black floor nothing leaves the water, and
+/// with scattering water L_t = L_w + surface to float rounding and R_rs =
+/// L_w / (E_sun cos(theta_s) + pi L_sky). Both integrators.
+#[test]
+fn total_radiance_is_water_leaving_plus_surface_reflected() {
+    let dir = tempdir();
+    let rho = fresnel_reflectance(1.0, 1.0, N_WATER);
+    let ed = SUN_ZENITH_DEG.to_radians().cos() + std::f64::consts::PI * SKY;
+    for integrator in [IntegratorMode::PhotonMap, IntegratorMode::Path] {
+        for b in [0.0, 0.5] {
+            let out = dir.path().join(format!("{integrator:?}-{b}"));
+            let [lt, lw, surface, rrs] = render(&scene(b), integrator, &out);
+            for i in 0..lt.len() {
+                let want = rho * SKY;
+                assert!(
+                    (surface[i] - want).abs() <= 1e-4 * want,
+                    "{integrator:?} b {b}: surface {} against rho L_sky {want}",
+                    surface[i]
+                );
+                assert!(
+                    (lt[i] - lw[i] - surface[i]).abs() <= 1e-6 * lt[i],
+                    "L_t {} != L_w {} + surface {}",
+                    lt[i],
+                    lw[i],
+                    surface[i]
+                );
+                assert!((rrs[i] - lw[i] / ed).abs() <= 1e-6 * rrs[i].abs().max(1e-12));
+                if b == 0.0 {
+                    assert_eq!(
+                        lw[i], 0.0,
+                        "{integrator:?}: no light leaves clear water over black"
+                    );
+                } else {
+                    assert!(lw[i] > 0.0);
+                }
+            }
+        }
+    }
+}
