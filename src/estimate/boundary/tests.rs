@@ -435,6 +435,10 @@ count = 1000
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// What f32 rounding can leave of an interpolation that is exact in exact
+/// arithmetic, in the 20 m box scene (see [`grid_matches_tracing`]).
+const ROUNDING_M: f32 = 1e-4;
+
 fn assert_close(got: AxialDistances, want: [f32; 6], what: &str) {
     for k in 0..6 {
         assert!(
@@ -505,10 +509,14 @@ fn traced_distances_in_a_box_scene() {
 /// spacing 0.25 m. A direction's field is discontinuous where its ray
 /// starts or stops meeting the box: across the box's faces parallel to
 /// the ray, and in cells reaching into the box. Away from those (2
-/// spacings) the field is linear or constant per cell, so interpolation
-/// is exact up to rounding; the bound asserted is the loose 2 x spacing.
-/// Next to the floor the below-floor extension must keep the -z distance
-/// exact (1 mm). A periodic grid must carry wrapped distances.
+/// spacings) the field is linear or constant per cell (the box's faces,
+/// the floor and the 4 m storage cap fall on nodes), so interpolation is
+/// exact up to f32 rounding, and so is the below-floor extension for the
+/// -z distance next to the floor. Rounding: site coordinates up to 20 m
+/// carry 1.9e-6 m, the trilinear sum of eight nodes of up to 4 m a few
+/// ulps of 4 m (4.8e-7 m each), and the fields' gradients are at most 1:
+/// [`ROUNDING_M`] = 1e-4 m is over 20 times that (measured 4.8e-7 m and
+/// 6e-8 m). A periodic grid must carry wrapped distances.
 #[test]
 fn grid_matches_tracing() {
     let s = box_scene("open");
@@ -572,8 +580,8 @@ fn grid_matches_tracing() {
         smooth_sum / smooth_n as f64,
     );
     assert!(floor_n > 100 && smooth_n > all_n / 2);
-    assert!(smooth_max < 2.0 * h, "{smooth_max}");
-    assert!(floor_max < 1e-3, "{floor_max}");
+    assert!(smooth_max < ROUNDING_M, "{smooth_max}");
+    assert!(floor_max < ROUNDING_M, "{floor_max}");
 
     let p = box_scene("periodic");
     let grid = BoundaryGrid::build(&p, h, 10.0).unwrap();
@@ -598,8 +606,12 @@ fn grid_matches_tracing() {
 /// slope). The periodic edge joins the 0.5 m shore to 15 m water: a -x
 /// ray near the shore either meets the slope or passes over the step
 /// into deep water, a discontinuity like a target's edge, so sites
-/// within 15 m of the edge are reported apart. Asserts the 30 m grid is
-/// within 1 cm away from the step.
+/// within 15 m of the edge are reported apart. Away from the step the 30 m
+/// grid is exact up to f32 rounding: site coordinates up to 200 m carry
+/// 1.5e-5 m (gradient 1 along x), depths up to 15 m 1e-6 m times the
+/// horizontal field's gradient of 14 per metre of height, and the
+/// eight-node sum a few ulps of 30 m (1.9e-6 m each): 3e-4 m is about
+/// eight times their sum (measured 1.7e-5 m).
 #[test]
 fn grid_on_a_sloping_floor() {
     let s = Scene::coastal(&Overrides::default()).unwrap();
@@ -655,7 +667,8 @@ fn grid_on_a_sloping_floor() {
         }
         worst_interior = max[0].iter().copied().fold(0.0, f32::max);
     }
-    assert!(worst_interior < 0.01, "{worst_interior}");
+    eprintln!("coastal grid stored up to 30 m: worst interior error {worst_interior:.2e} m");
+    assert!(worst_interior < 3e-4, "{worst_interior}");
 }
 
 #[test]

@@ -81,10 +81,11 @@ fn rough_surface_sends_rays_the_right_way() {
 }
 
 /// Facets met by a vertical ray follow the Cox–Munk slope density: the
-/// total slope variance is 0.003 + 0.00512 U (Cox & Munk 1954). Met by an
-/// oblique ray along (sin t, 0, -cos t), facets are weighted by their
-/// projected area cos t + sin t zx, so the mean slope toward the ray is
-/// tan t * sigma^2 / 2. Both within four standard errors of 200,000 draws.
+/// total slope variance is 0.003 + 0.00512 U (Cox & Munk 1954), half on
+/// each axis, the axes uncorrelated. Met by an oblique ray along (sin t,
+/// 0, -cos t), facets are weighted by their projected area cos t + sin t
+/// zx, so the mean slope toward the ray is tan t * sigma^2 / 2. All within
+/// four standard errors of 200,000 draws.
 #[test]
 fn facet_slopes_follow_cox_munk() {
     for u in [2.0, 10.0] {
@@ -116,6 +117,25 @@ fn facet_slopes_follow_cox_munk() {
         assert!(
             (var - sigma2).abs() < 4.0 * se,
             "U {u}: slope variance {var} +- {se}, Cox-Munk {sigma2}"
+        );
+        // Isotropic: each axis carries half the total, and the axes are
+        // uncorrelated (a sampler putting it all on one axis passes the sum).
+        for (axis, pick) in [("x", 0usize), ("y", 1)] {
+            let sq: Vec<f64> = vertical
+                .iter()
+                .map(|s| if pick == 0 { s.0 * s.0 } else { s.1 * s.1 })
+                .collect();
+            let (v, se) = mean_se(&sq);
+            assert!(
+                (v - sigma2 / 2.0).abs() < 4.0 * se,
+                "U {u}: {axis} slope variance {v} +- {se}, want {}",
+                sigma2 / 2.0
+            );
+        }
+        let (cross, se) = mean_se(&vertical.iter().map(|s| s.0 * s.1).collect::<Vec<_>>());
+        assert!(
+            cross.abs() < 4.0 * se,
+            "U {u}: zx zy covariance {cross} +- {se}"
         );
         let t = 60f64.to_radians();
         let oblique = slopes(DVec3::new(t.sin(), 0.0, -t.cos()), &mut rng);
