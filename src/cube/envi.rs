@@ -88,9 +88,13 @@ impl CubeSpec {
             ("description", &self.description),
             ("data units", &self.data_units),
         ] {
-            // A brace would end the header's `{...}` value early.
-            if text.contains(['{', '}']) {
-                return Err(Error::invalid(field, "must not contain '{' or '}'"));
+            // A brace would end the header's `{...}` value early, a line
+            // break the header line.
+            if text.contains(['{', '}', '\n', '\r']) {
+                return Err(Error::invalid(
+                    field,
+                    "must not contain '{', '}' or a line break",
+                ));
             }
         }
         self.values().map(|_| ())
@@ -103,6 +107,27 @@ impl CubeSpec {
                 .map(|x| x.to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
+        };
+        let names = self
+            .bands
+            .centers_nm()
+            .iter()
+            .map(|nm| format!("{nm} nm"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        // Red, green and blue for viewers (1-based), when the grid spans them.
+        let nearest = |target: f32| {
+            let c = self.bands.centers_nm();
+            let (i, d) = c
+                .iter()
+                .enumerate()
+                .map(|(i, nm)| (i, (nm - target).abs()))
+                .fold((0, f32::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+            (d <= 20.0).then_some(i + 1)
+        };
+        let default_bands = match (nearest(640.0), nearest(550.0), nearest(460.0)) {
+            (Some(r), Some(g), Some(b)) => format!("default bands = {{{r}, {g}, {b}}}\n"),
+            _ => String::new(),
         };
         format!(
             "ENVI\n\
@@ -118,13 +143,18 @@ impl CubeSpec {
              wavelength units = Nanometers\n\
              wavelength = {{{}}}\n\
              fwhm = {{{}}}\n\
-             data units = {{{}}}\n",
+             band names = {{{}}}\n\
+             {}\
+             sensor type = littoral simulation\n\
+             data units = {}\n",
             self.description,
             self.samples,
             self.lines,
             self.bands.len(),
             list(self.bands.centers_nm()),
             list(self.bands.fwhm_nm()),
+            names,
+            default_bands,
             self.data_units,
         )
     }

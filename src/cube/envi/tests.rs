@@ -182,7 +182,9 @@ fn header_parses_back() {
         "\nwavelength units = Nanometers\n",
         "\nwavelength = {412.5, 443, 490.25}\n",
         "\nfwhm = {10, 12.5, 7.75}\n",
-        "\ndata units = {W m-2 sr-1 nm-1}\n",
+        "\ndata units = W m-2 sr-1 nm-1\n",
+        "\nband names = {412.5 nm, 443 nm, 490.25 nm}\n",
+        "\nsensor type = littoral simulation\n",
         "\ndescription = {coastal radiance}\n",
     ] {
         assert!(text.contains(line), "{line:?} not in:\n{text}");
@@ -297,7 +299,7 @@ fn open_edited(
 /// (an empty first text replaces the whole header; an empty second deletes).
 #[test]
 fn bad_headers_name_the_file_and_the_field() {
-    const END: &str = "data units = {W m-2 sr-1 nm-1}\n";
+    const END: &str = "data units = W m-2 sr-1 nm-1\n";
     let cases = [
         ("ENVI", "NOPE", "header: does not start with 'ENVI'"),
         ("", "", "header: does not start"),
@@ -323,7 +325,11 @@ fn bad_headers_name_the_file_and_the_field() {
         ),
         ("{400, 700}", "{400, x}", "wavelength[1]: expected a number"),
         ("{400, 700}", "{400, 700", "wavelength: '{' is never closed"),
-        (END, "data units = {W", "data units: '{' is never closed"),
+        (
+            "data units = W",
+            "data units = {W",
+            "data units: '{' is never closed",
+        ),
         ("wavelength = {400, 700}\n", "", "wavelength: missing"),
         (
             "= Nanometers",
