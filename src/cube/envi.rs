@@ -191,6 +191,26 @@ impl EnviWriter {
     /// sparse) to the whole cube, ready for tiles. `name` is a plain file
     /// name without extension.
     pub fn create(dir: &Path, name: &str, spec: CubeSpec) -> Result<EnviWriter> {
+        Self::create_with(dir, name, spec, &[])
+    }
+
+    /// [`EnviWriter::create`] with `extra` header lines (`key = value`,
+    /// e.g. `map info`) after the standard ones.
+    pub fn create_with(
+        dir: &Path,
+        name: &str,
+        spec: CubeSpec,
+        extra: &[String],
+    ) -> Result<EnviWriter> {
+        if let Some(bad) = extra
+            .iter()
+            .find(|l| !l.contains(" = ") || l.contains(['\n', '\r']))
+        {
+            return Err(Error::invalid(
+                "header line",
+                format!("'{bad}' is not one 'key = value' line"),
+            ));
+        }
         if name.is_empty()
             || name == "."
             || name == ".."
@@ -217,7 +237,12 @@ impl EnviWriter {
         bsq.as_file()
             .set_len(spec.values()? * VALUE_BYTES)
             .map_err(|e| Error::io(&bsq_path, "pre-size", e))?;
-        std::io::Write::write_all(&mut hdr, spec.header_text().as_bytes())
+        let mut text = spec.header_text();
+        for line in extra {
+            text.push_str(line);
+            text.push('\n');
+        }
+        std::io::Write::write_all(&mut hdr, text.as_bytes())
             .map_err(|e| Error::io(&hdr_path, "write", e))?;
         Ok(EnviWriter {
             spec,

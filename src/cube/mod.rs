@@ -16,6 +16,7 @@
 
 pub mod envi;
 pub mod exr;
+pub mod georef;
 pub mod ops;
 pub mod quicklook;
 

@@ -89,6 +89,20 @@ pub struct SensorSummary {
     pub samples_per_pixel: u32,
     /// Bands of the cube.
     pub bands: usize,
+    /// `[georef]`: map coordinates of the scene's origin and the CRS.
+    #[serde(default)]
+    pub georef: crate::scene::Georef,
+    /// The cube's map transform in GDAL's order (upper-left x, pixel width,
+    /// 0, upper-left y, 0, -pixel height; row 0 is the north edge); None
+    /// for a pinhole camera.
+    #[serde(default)]
+    pub geotransform: Option<[f64; 6]>,
+    /// Sun zenith and azimuth (degrees; azimuth toward the sun, clockwise
+    /// from north).
+    #[serde(default)]
+    pub sun_zenith_deg: f64,
+    #[serde(default)]
+    pub sun_azimuth_deg: f64,
 }
 
 /// The files a render wrote.

@@ -272,26 +272,29 @@ pub fn render_with(
         data_units: units.into(),
     };
     let spec = |description: String| spec_in(description, RADIANCE_UNITS);
-    let writer = EnviWriter::create(
+    let extra = crate::cube::georef::envi_header_lines(scene);
+    let writer = EnviWriter::create_with(
         dir,
         &scene.name,
         spec(format!(
             "littoral total radiance at the sensor (L_t) of scene '{}'",
             scene.name
         )),
+        &extra,
     )?;
     // The products: water-leaving radiance, surface-reflected radiance,
     // remote-sensing reflectance.
     let product_writers = PRODUCTS
         .iter()
         .map(|p| {
-            EnviWriter::create(
+            EnviWriter::create_with(
                 dir,
                 &format!("{}.{}", scene.name, p.suffix),
                 spec_in(
                     format!("littoral {} of scene '{}'", p.description, scene.name),
                     p.units,
                 ),
+                &extra,
             )
         })
         .collect::<Result<Vec<_>>>()?;
@@ -304,13 +307,14 @@ pub fn render_with(
         } else {
             format!("{spp} independent paths per pixel")
         };
-        Some(EnviWriter::create(
+        Some(EnviWriter::create_with(
             dir,
             &format!("{}.stderr", scene.name),
             spec(format!(
                 "littoral standard error of the radiance cube of scene '{}' ({what})",
                 scene.name
             )),
+            &extra,
         )?)
     } else {
         None

@@ -195,6 +195,19 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let target_reflectance = floor::targets(&ctx, &f.target, &mut geo)?;
     let geometry = geo.build();
     let (sensor, radiometers, estimate, render) = render_settings(&ctx, &f, &domain, ov)?;
+    let georef = Georef {
+        origin_m: f.georef.origin_m.unwrap_or([0.0, 0.0]),
+        epsg: f.georef.epsg,
+    };
+    if !georef.origin_m.iter().all(|v| v.is_finite()) {
+        return Err(ctx.err(&[K("georef"), K("origin_m")], "must be finite"));
+    }
+    if georef.epsg.is_some() && georef.utm_zone().is_none() {
+        return Err(ctx.err(
+            &[K("georef"), K("epsg")],
+            "must be a WGS 84 / UTM zone, 32601-32660 (north) or 32701-32760 (south); leave it out for a local metric frame",
+        ));
+    }
     let mut inputs = ctx.inputs.take();
     inputs.sort();
     inputs.dedup();
@@ -241,6 +254,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         radiometers,
         estimate,
         render,
+        georef,
         inputs,
     })
 }

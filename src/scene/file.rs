@@ -37,6 +37,19 @@ pub struct SceneFile {
     pub estimate: EstimateFile,
     #[serde(default)]
     pub render: RenderFile,
+    #[serde(default)]
+    pub georef: GeorefFile,
+}
+
+/// `[georef]`: where the scene's frame sits on a map.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GeorefFile {
+    /// Map coordinates (easting, northing, m) of the scene's origin (x = 0, y = 0).
+    pub origin_m: Option<[f64; 2]>,
+    /// EPSG code of the map's CRS: a WGS 84 / UTM zone (32601-32660 north,
+    /// 32701-32760 south). None: a local metric frame.
+    pub epsg: Option<u32>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -213,9 +213,32 @@ pub struct Scene {
     pub estimate: EstimateSettings,
     /// `[render]`: which integrator renders.
     pub render: RenderSettings,
+    /// `[georef]`: the scene's frame on a map.
+    pub georef: Georef,
     /// Every file the scene names (spectra, meshes, height fields, grids,
     /// phase tables), sorted: inputs of the emission's provenance.
     pub inputs: Vec<PathBuf>,
+}
+
+/// Where the scene's frame (x east, y north, m) sits on a map: the map
+/// coordinates of its origin, and the map's CRS.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Georef {
+    /// Easting and northing (m) of scene x = 0, y = 0.
+    pub origin_m: [f64; 2],
+    /// EPSG code of a WGS 84 / UTM zone, or None for a local metric frame.
+    pub epsg: Option<u32>,
+}
+
+impl Georef {
+    /// The UTM zone and hemisphere (true: north) of the EPSG code.
+    pub fn utm_zone(&self) -> Option<(u32, bool)> {
+        match self.epsg? {
+            c @ 32601..=32660 => Some((c - 32600, true)),
+            c @ 32701..=32760 => Some((c - 32700, false)),
+            _ => None,
+        }
+    }
 }
 
 /// Values the command line may override before validation.

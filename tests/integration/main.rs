@@ -9,6 +9,7 @@ mod convergence;
 mod corruption;
 mod cube_tool;
 mod determinism;
+mod georef;
 mod job;
 mod memory;
 mod oracle;

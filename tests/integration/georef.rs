@@ -1,0 +1,126 @@
+//! Georeferenced cubes, read by GDAL (installed by `.ci/run`): the map
+//! transform, the CRS, the wavelengths, and north-up orientation.
+
+use crate::common::{f32s, render_job, tempdir};
+use littoral::scene::{Overrides, Scene};
+use std::path::Path;
+use std::process::Command;
+
+/// 4 x 4 pixels of 5 m over a 20 m domain; a bright panel 1 m deep in the
+/// north half (y 12-18 m) over a dark floor.
+fn scene(georef: &str) -> String {
+    format!(
+        r#"
+name = "geo"
+[spectral]
+start_nm = 450.0
+end_nm = 600.0
+bands = 2
+[sun]
+zenith_deg = 20.0
+irradiance = 1.0
+[domain]
+size_m = [20.0, 20.0]
+[water]
+iop = {{ a = 0.1, b = 0.05 }}
+[bottom]
+depth_m = 3.0
+reflectance = 0.02
+[[target]]
+kind = "panel"
+center_m = [10.0, 15.0, -1.0]
+size_m = [16.0, 6.0]
+reflectance = 0.8
+[photons]
+count = 100000
+[sensor]
+pixels = [4, 4]
+gsd_m = 5.0
+{georef}
+"#
+    )
+}
+
+fn gdalinfo(path: &Path) -> serde_json::Value {
+    let out = Command::new("gdalinfo")
+        .arg("-json")
+        .arg(path)
+        .output()
+        .expect("gdalinfo (GDAL) is installed by .ci/run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// GDAL reads the UTM geotransform and EPSG code from the header, keeps
+/// them and the wavelengths through `gdal_translate -of COG`, and the
+/// report carries the same transform; a local frame has a transform and
+/// no EPSG code; row 0 is the north edge (the panel's rows are bright).
+#[test]
+fn gdal_reads_the_map_grid_and_row_0_is_north() {
+    let dir = tempdir();
+    let text = scene("[georef]\norigin_m = [500000.0, 4100000.0]\nepsg = 32617");
+    let s = Scene::parse(&text, Path::new("geo.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("utm"), 0);
+    let want = [500000.0, 5.0, 0.0, 4100020.0, 0.0, -5.0];
+    assert_eq!(r.sensor.geotransform, Some(want));
+    let info = gdalinfo(Path::new(&r.outputs.bsq));
+    let gt: Vec<f64> = serde_json::from_value(info["geoTransform"].clone()).unwrap();
+    assert_eq!(gt, want);
+    let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap();
+    assert!(wkt.contains("ID[\"EPSG\",32617]"), "{wkt}");
+    assert_eq!(info["bands"][1]["metadata"][""]["wavelength"], "600");
+
+    let cog = dir.path().join("geo.tif");
+    let st = Command::new("gdal_translate")
+        .args(["-q", "-of", "COG"])
+        .arg(&r.outputs.bsq)
+        .arg(&cog)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let info = gdalinfo(&cog);
+    let gt: Vec<f64> = serde_json::from_value(info["geoTransform"].clone()).unwrap();
+    assert_eq!(gt, want);
+    assert!(info["coordinateSystem"]["wkt"]
+        .as_str()
+        .unwrap()
+        .contains("32617"));
+    assert_eq!(info["bands"][0]["metadata"][""]["wavelength"], "450");
+
+    // North up: rows 0-1 (y 10-20 m) see the panel, rows 2-3 the dark floor.
+    let v = f32s(&r.outputs.bsq);
+    let row = |j: usize| (0..4).map(|i| v[j * 4 + i] as f64).sum::<f64>();
+    assert!(
+        row(0) > 3.0 * row(3) && row(1) > 3.0 * row(2),
+        "rows {:?}",
+        [row(0), row(1), row(2), row(3)]
+    );
+
+    let s = Scene::parse(&scene(""), Path::new("geo.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("local"), 0);
+    let info = gdalinfo(Path::new(&r.outputs.bsq));
+    let gt: Vec<f64> = serde_json::from_value(info["geoTransform"].clone()).unwrap();
+    assert_eq!(gt, [0.0, 5.0, 0.0, 20.0, 0.0, -5.0]);
+    let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap_or("");
+    assert!(
+        !wkt.contains("EPSG"),
+        "a local frame has no EPSG code: {wkt}"
+    );
+}
+
+/// An EPSG code that is not a UTM zone is refused, naming the key.
+#[test]
+fn unsupported_crs_is_refused() {
+    let e = Scene::parse(
+        &scene("[georef]\nepsg = 4326"),
+        Path::new("geo.toml"),
+        &Overrides::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("georef.epsg") && e.contains("UTM"), "{e}");
+}
