@@ -120,6 +120,53 @@ pub struct EmissionReport {
 }
 
 impl EmissionReport {
+    /// The tallies as a CSV table, one row per depth and band, as
+    /// HydroLight users read profiles: irradiances in W m^-2 nm^-1,
+    /// radiances in W m^-2 sr^-1 nm^-1 (Lu, Ld: the 10-degree cones), each
+    /// with its standard error.
+    pub fn profiles_csv(&self) -> String {
+        let mut t = String::from(
+            "depth_m,wavelength_nm,Ed_W_m2_nm,Ed_stderr,Eu_W_m2_nm,Eu_stderr,Eod_W_m2_nm,Eod_stderr,\
+             Eou_W_m2_nm,Eou_stderr,Lu_W_m2_sr_nm,Lu_stderr,Ld_W_m2_sr_nm,Ld_stderr\n",
+        );
+        for d in &self.tally {
+            for (b, nm) in self.bands_nm.iter().enumerate() {
+                let v = [
+                    d.Ed[b],
+                    d.Ed_stderr[b],
+                    d.Eu[b],
+                    d.Eu_stderr[b],
+                    d.Eod[b],
+                    d.Eod_stderr[b],
+                    d.Eou[b],
+                    d.Eou_stderr[b],
+                    d.Lu[b],
+                    d.Lu_stderr[b],
+                    d.Ld[b],
+                    d.Ld_stderr[b],
+                ];
+                t.push_str(&format!("{},{nm}", d.depth_m));
+                for x in v {
+                    t.push_str(&format!(",{x}"));
+                }
+                t.push('\n');
+            }
+        }
+        t
+    }
+
+    /// The diffuse attenuation of downwelling irradiance between tally
+    /// depths as a CSV table (1/m), one row per layer and band.
+    pub fn kd_csv(&self) -> String {
+        let mut t = String::from("from_m,to_m,wavelength_nm,Kd_per_m\n");
+        for l in &self.kd {
+            for (nm, k) in self.bands_nm.iter().zip(&l.Kd) {
+                t.push_str(&format!("{},{},{nm},{k}\n", l.from_m, l.to_m));
+            }
+        }
+        t
+    }
+
     /// Turn run totals into absolute quantities.
     pub fn new(scene: &Scene, totals: &Totals, photon_power: &[f64]) -> Self {
         let nb = scene.bands.len();

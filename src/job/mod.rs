@@ -146,6 +146,15 @@ impl RenderJob<'_> {
             Some(s) => (Some(s.emission), Some(s.summary), s.reused),
             None => (None, None, false),
         };
+        // Depth profiles and Kd, as CSV, from the emission's tallies.
+        let mut profiles = None;
+        if let Some(e) = &emission {
+            let p = self.out_dir.join(format!("{}.profiles.csv", scene.name));
+            let k = self.out_dir.join(format!("{}.kd.csv", scene.name));
+            crate::output::write_atomic(&p, e.profiles_csv().as_bytes())?;
+            crate::output::write_atomic(&k, e.kd_csv().as_bytes())?;
+            profiles = Some((p.display().to_string(), k.display().to_string()));
+        }
         let report = RunReport {
             integrator,
             Ed_above_surface: ed_above,
@@ -179,6 +188,8 @@ impl RenderJob<'_> {
                     .stderr
                     .as_ref()
                     .map(|c| c.bsq.display().to_string()),
+                profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
+                kd_csv: profiles.map(|p| p.1),
                 products: crate::render::PRODUCTS
                     .iter()
                     .zip(&rendered.products)

@@ -119,6 +119,13 @@ pub struct Outputs {
     pub stderr_hdr: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stderr_bsq: Option<String>,
+    /// Depth profiles of Ed, Eu, Eod, Eou, Lu, Ld per band with standard
+    /// errors (`NAME.profiles.csv`) and Kd per layer and band
+    /// (`NAME.kd.csv`), from the emission's tallies (photon map only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profiles_csv: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd_csv: Option<String>,
     /// The product cubes (`render::PRODUCTS`: water-leaving radiance,
     /// surface-reflected radiance, remote-sensing reflectance), by suffix.
     #[serde(default)]

@@ -118,3 +118,52 @@ fn total_radiance_is_water_leaving_plus_surface_reflected() {
         }
     }
 }
+
+/// The depth profiles and Kd as CSV beside the report: one row per tally
+/// depth and band with the report's values, and Kd = ln(Ed(z1) / Ed(z2)) /
+/// (z2 - z1) from those rows.
+#[test]
+fn profiles_and_kd_are_written_as_csv() {
+    let dir = tempdir();
+    let text = scene(0.5).replace("[sensor]", "[tally]\ndepths_m = [0.0, 1.0, 2.5]\n[sensor]");
+    let s = Scene::parse(&text, Path::new("prod.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("out"), 0);
+    let emission = r.emission.as_ref().unwrap();
+    let table = |path: &str| -> Vec<Vec<f64>> {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        let cols = lines.next().unwrap().split(',').count();
+        lines
+            .map(|l| {
+                let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+                assert_eq!(v.len(), cols, "{l}");
+                v
+            })
+            .collect()
+    };
+    let rows = table(r.outputs.profiles_csv.as_deref().unwrap());
+    assert_eq!(rows.len(), 3 * 3);
+    for (d, t) in emission.tally.iter().enumerate() {
+        for b in 0..3 {
+            let row = &rows[d * 3 + b];
+            assert_eq!(row[0], t.depth_m);
+            assert_eq!(row[1], emission.bands_nm[b] as f64);
+            assert_eq!([row[2], row[6], row[10]], [t.Ed[b], t.Eod[b], t.Lu[b]]);
+        }
+    }
+    let kd = table(r.outputs.kd_csv.as_deref().unwrap());
+    assert_eq!(kd.len(), 2 * 3);
+    for row in &kd {
+        let ed = |z: f64, nm: f64| {
+            rows.iter()
+                .find(|r| r[0] == z && r[1] == nm)
+                .map(|r| r[2])
+                .unwrap()
+        };
+        let want = (ed(row[0], row[2]) / ed(row[1], row[2])).ln() / (row[1] - row[0]);
+        assert!(
+            (row[3] - want).abs() <= 1e-9 * want.abs().max(1e-9),
+            "{row:?} against {want}"
+        );
+    }
+}
