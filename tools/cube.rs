@@ -104,6 +104,9 @@ enum Command {
         /// EXR file to write.
         #[arg(long)]
         out: PathBuf,
+        /// Lossless compression of the EXR.
+        #[arg(long, value_enum, default_value_t = littoral::cube::exr::ExrCompression::Zip)]
+        compression: littoral::cube::exr::ExrCompression,
     },
 }
 
@@ -219,8 +222,16 @@ fn run(cli: Cli) -> AnyResult<()> {
                 _ => Ok(()),
             }
         }
-        Command::Exr { cube, out } => {
-            littoral::cube::exr::write_spectral_exr(&EnviCube::open(&cube)?, &out)?;
+        Command::Exr {
+            cube,
+            out,
+            compression,
+        } => {
+            littoral::cube::exr::write_spectral_exr_layers_with(
+                &[("radiance", &EnviCube::open(&cube)?)],
+                &out,
+                compression,
+            )?;
             Ok(())
         }
     }

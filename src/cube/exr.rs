@@ -39,13 +39,20 @@ pub fn channel_name(nm: f64) -> String {
     format!("S0.{}nm", format!("{nm:.6}").replace('.', ","))
 }
 
-/// Write `cube` as a spectral OpenEXR file at `path` (one layer, "radiance").
+pub use crate::scene::settings::ExrCompression;
+
+/// Write `cube` as a spectral OpenEXR file at `path` (one layer, "radiance"),
+/// ZIP-compressed.
 pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
     write_spectral_exr_layers(&[("radiance", cube)], path)
 }
 
 /// One layer's header and the bands of its channels, in channel order.
-fn layer_header(name: &str, cube: &EnviCube) -> Result<(exr::meta::header::Header, Vec<usize>)> {
+fn layer_header(
+    name: &str,
+    cube: &EnviCube,
+    compression: ExrCompression,
+) -> Result<(exr::meta::header::Header, Vec<usize>)> {
     let (w, h, nb) = (cube.samples(), cube.lines(), cube.bands());
     let invalid = |what: String| Error::invalid("spectral EXR", what);
     if w == 0 || h == 0 || nb == 0 {
@@ -73,7 +80,11 @@ fn layer_header(name: &str, cube: &EnviCube) -> Result<(exr::meta::header::Heade
         .collect::<Result<_>>()?;
     let mut header = exr::meta::header::Header::new(text(name)?, Vec2(w, h), channels)
         .with_encoding(
-            Compression::Uncompressed,
+            match compression {
+                ExrCompression::None => Compression::Uncompressed,
+                ExrCompression::Zip => Compression::ZIP16,
+                ExrCompression::Piz => Compression::PIZ,
+            },
             BlockDescription::Tiles(TileDescription {
                 tile_size: Vec2(TILE, TILE),
                 level_mode: LevelMode::Singular,
@@ -104,6 +115,16 @@ fn layer_header(name: &str, cube: &EnviCube) -> Result<(exr::meta::header::Heade
 /// spectral OpenEXR file at `path`, e.g. the radiance and its standard
 /// error.
 pub fn write_spectral_exr_layers(layers: &[(&str, &EnviCube)], path: &Path) -> Result<()> {
+    write_spectral_exr_layers_with(layers, path, ExrCompression::default())
+}
+
+/// [`write_spectral_exr_layers`] with the given (lossless) compression.
+/// The bytes are a pure function of the cubes and the compression.
+pub fn write_spectral_exr_layers_with(
+    layers: &[(&str, &EnviCube)],
+    path: &Path,
+    compression: ExrCompression,
+) -> Result<()> {
     let invalid = |what: String| Error::invalid("spectral EXR", what);
     let Some((_, first)) = layers.first() else {
         return Err(invalid("no layers to write".into()));
@@ -118,7 +139,7 @@ pub fn write_spectral_exr_layers(layers: &[(&str, &EnviCube)], path: &Path) -> R
     let mut headers: SmallVec<[exr::meta::header::Header; 3]> = SmallVec::new();
     let mut orders = Vec::new();
     for (name, cube) in layers {
-        let (header, order) = layer_header(name, cube)?;
+        let (header, order) = layer_header(name, cube, compression)?;
         headers.push(header);
         orders.push(order);
     }

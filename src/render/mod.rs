@@ -421,7 +421,7 @@ pub fn render_with(
         layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
     }
     let named: Vec<(&str, &crate::cube::EnviCube)> = layers.iter().map(|(n, c)| (*n, c)).collect();
-    crate::cube::exr::write_spectral_exr_layers(&named, &exr)?;
+    crate::cube::exr::write_spectral_exr_layers_with(&named, &exr, scene.render.exr_compression)?;
     let radiometers = pool.install(|| {
         scene
             .radiometers

@@ -56,6 +56,7 @@ pub struct GeorefFile {
 #[serde(deny_unknown_fields)]
 pub struct RenderFile {
     pub integrator: Option<IntegratorMode>,
+    pub exr_compression: Option<crate::scene::settings::ExrCompression>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -193,10 +193,37 @@ impl fmt::Display for IntegratorMode {
 /// pixel of the sensor (`[sensor] samples_per_pixel`).
 pub const PATH_RADIOMETER_PATHS_PER_SPP: u64 = 1024;
 
+/// Compression of the spectral OpenEXR files (all lossless).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExrCompression {
+    /// Uncompressed.
+    None,
+    /// zlib over 16 scanlines per block (the default; OpenEXR's ZIP).
+    #[default]
+    Zip,
+    /// Wavelet (OpenEXR's PIZ).
+    Piz,
+}
+
 /// The `[render]` settings of a scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct RenderSettings {
     pub integrator: IntegratorMode,
+    /// `[render] exr_compression`.
+    #[serde(default)]
+    pub exr_compression: ExrCompression,
 }
 
 /// Radiance-estimate settings.

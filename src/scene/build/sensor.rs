@@ -207,6 +207,7 @@ pub(super) fn render_settings(
     };
     let render = RenderSettings {
         integrator: ov.integrator.or(f.render.integrator).unwrap_or_default(),
+        exr_compression: f.render.exr_compression.unwrap_or_default(),
     };
     Ok((sensor, radiometers, estimate, render))
 }
