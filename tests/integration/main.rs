@@ -5,6 +5,7 @@ mod common;
 mod against_path;
 mod cache;
 mod cli;
+mod clients;
 mod convergence;
 mod corruption;
 mod cube_tool;

@@ -1,0 +1,92 @@
+//! The outputs opened by the clients users read them with: Spectral Python
+//! for the ENVI cubes and OpenEXR's Python binding for the multi-part EXR
+//! (both installed from PyPI by `.ci/run`), against littoral's own reader.
+
+use crate::common::{render_job, tempdir};
+use littoral::scene::{Overrides, Scene};
+use std::io::Write;
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+const SCENE: &str = r#"
+name = "cl"
+[spectral]
+start_nm = 450.0
+end_nm = 650.0
+bands = 5
+[sun]
+zenith_deg = 30.0
+irradiance = 1.0
+[sky]
+radiance = 0.02
+[domain]
+size_m = [20.0, 20.0]
+[water]
+iop = { a = 0.1, b = 0.3 }
+[bottom]
+depth_m = 4.0
+reflectance = 0.2
+[photons]
+count = 50000
+[sensor]
+pixels = [5, 3]
+"#;
+
+const SCRIPT: &str = r#"
+import sys, numpy as np, spectral, OpenEXR
+base, nb = sys.argv[1], int(sys.argv[2])
+cubes = {}
+for name, units in [("", "W m-2 sr-1 nm-1"), (".stderr", "W m-2 sr-1 nm-1"),
+                    (".lw", "W m-2 sr-1 nm-1"), (".surface", "W m-2 sr-1 nm-1"), (".rrs", "sr-1")]:
+    img = spectral.open_image(base + name + ".hdr")
+    assert img.shape == (3, 5, nb), img.shape
+    assert img.metadata["data units"] == units, img.metadata["data units"]
+    assert len(img.metadata["band names"]) == nb
+    assert np.allclose(img.bands.centers, np.linspace(450, 650, nb))
+    raw = np.fromfile(base + name + ".bsq", "<f4").reshape(nb, 3, 5).transpose(1, 2, 0)
+    a = img.load()
+    assert np.array_equal(np.asarray(a), raw), name
+    cubes[name] = raw
+f = OpenEXR.File(base + ".exr")
+parts = {p.name(): p for p in f.parts}
+for layer, name in [("radiance", ""), ("stderr", ".stderr"), ("lw", ".lw"),
+                    ("surface", ".surface"), ("rrs", ".rrs")]:
+    p = parts[layer]
+    chans = sorted(p.channels.keys(), key=lambda c: float(c[3:-2].replace(",", ".")))
+    assert len(chans) == nb, chans
+    for b, c in enumerate(chans):
+        assert np.array_equal(p.channels[c].pixels, cubes[name][:, :, b]), (layer, c)
+assert parts["radiance"].header["spectralLayoutVersion"] == "1.0"
+print("ok")
+"#;
+
+/// Spectral Python reads every cube (shape, wavelengths, units as a
+/// string, band names) with the same values as the data file, and the
+/// OpenEXR binding reads the EXR's five parts with the same values.
+#[test]
+fn spectral_python_and_openexr_read_the_outputs() {
+    let dir = tempdir();
+    let s = Scene::parse(SCENE, Path::new("cl.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("out"), 0);
+    let base = r.outputs.hdr.trim_end_matches(".hdr").to_string();
+    let mut child = Command::new("python3")
+        .args(["-", &base, "5"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(SCRIPT.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).trim() == "ok",
+        "clients failed (spectral and OpenEXR come from PyPI, installed by .ci/run):\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
