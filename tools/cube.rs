@@ -1,7 +1,8 @@
 //! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
 //! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
-//! a true-colour quicklook, a window cut into a new cube, the per-band
-//! difference of two cubes, and a spectral OpenEXR copy.
+//! a true-colour quicklook, a window or a band range cut into a new cube,
+//! per-band statistics, the per-band difference of two cubes, and a
+//! spectral OpenEXR copy.
 //!
 //! Thin, like `littoral`: arguments and exit codes here, the reading and
 //! image writing in the library (`littoral::cube`). Every command reads the
@@ -82,6 +83,24 @@ enum Command {
         /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Cut the bands FROM..=TO (numbered from 0) into a new cube.
+    Subset {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// First band kept (from 0).
+        from: usize,
+        /// Last band kept (inclusive).
+        to: usize,
+        /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Print per-band statistics as JSON: wavelength, min, max, mean,
+    /// standard deviation, finite and non-finite counts.
+    Stats {
+        /// The cube's header or data file.
+        cube: PathBuf,
     },
     /// Print how cube B differs from cube A as JSON: per band RMSE, largest
     /// difference and means, and the RMSE over the whole cube.
@@ -201,6 +220,24 @@ fn run(cli: Cli) -> AnyResult<()> {
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "samples": w, "lines": h });
             print(&format!("{summary}\n"))
         }
+        Command::Subset {
+            cube,
+            from,
+            to,
+            out,
+        } => {
+            let cube = EnviCube::open(&cube)?;
+            let name = hdr_name(&out)?;
+            let dir = littoral::output::parent_dir(&out);
+            let files = littoral::cube::ops::subset(&cube, (from, to), dir, &name)?;
+            let summary =
+                serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "bands": to - from + 1 });
+            print(&format!("{summary}\n"))
+        }
+        Command::Stats { cube } => {
+            let stats = littoral::cube::ops::stats(&EnviCube::open(&cube)?)?;
+            print(&format!("{}\n", serde_json::to_string_pretty(&stats)?))
+        }
         Command::Diff { a, b, tol } => {
             if tol.is_some_and(|t| t.is_nan() || t < 0.0) {
                 return Err(Error::invalid("--tol", "must be a number >= 0").into());
@@ -234,6 +271,20 @@ fn run(cli: Cli) -> AnyResult<()> {
             )?;
             Ok(())
         }
+    }
+}
+
+/// The cube name of an `--out NAME.hdr` (a `.hdr` file name).
+fn hdr_name(out: &std::path::Path) -> AnyResult<String> {
+    match (out.extension().and_then(|e| e.to_str()), out.file_stem()) {
+        (Some(e), Some(stem)) if e.eq_ignore_ascii_case("hdr") => {
+            Ok(stem.to_string_lossy().into_owned())
+        }
+        _ => Err(Error::invalid(
+            "--out",
+            format!("{}: name the new cube's header, NAME.hdr", out.display()),
+        )
+        .into()),
     }
 }
 

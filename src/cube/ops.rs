@@ -1,6 +1,8 @@
 //! Whole-cube operations that stream through cubes larger than memory: a
 //! window cut into a new cube (one 64 x 64 tile of all bands at a time),
-//! and the per-band difference of two cubes (two bands at a time).
+//! a band range cut into a new cube (tiles of those bands), per-band
+//! statistics (one band at a time) and the per-band difference of two
+//! cubes (two bands at a time).
 
 use super::envi::{CubeFiles, CubeSpec, EnviCube, EnviWriter};
 use crate::error::{Error, Result};
@@ -84,6 +86,103 @@ pub fn window(
         }
     }
     writer.finish()
+}
+
+/// The bands `from..=to` (0-based, inclusive) of `cube` as a new cube
+/// `dir/NAME.{hdr,bsq}`, one 64 x 64 tile of those bands at a time.
+pub fn subset(
+    cube: &EnviCube,
+    (from, to): (usize, usize),
+    dir: &Path,
+    name: &str,
+) -> Result<CubeFiles> {
+    if from > to || to >= cube.bands() {
+        return Err(Error::data(
+            cube.header_path(),
+            None,
+            "bands",
+            format!(
+                "{from}..={to} is not a band range of the {}-band cube (bands are numbered from 0)",
+                cube.bands()
+            ),
+        ));
+    }
+    let all = band_grid(cube)?;
+    let bands = BandGrid::explicit(
+        all.centers_nm()[from..=to].to_vec(),
+        all.fwhm_nm()[from..=to].to_vec(),
+    )?;
+    let spec = CubeSpec {
+        samples: cube.samples(),
+        lines: cube.lines(),
+        bands,
+        description: format!(
+            "{} (bands {from} to {to})",
+            cube.description().replace(['{', '}'], "")
+        ),
+        data_units: cube
+            .data_units()
+            .unwrap_or("unknown")
+            .replace(['{', '}'], ""),
+    };
+    let (w, h, nb) = (cube.samples(), cube.lines(), to - from + 1);
+    let writer = EnviWriter::create(dir, name, spec)?;
+    for ty in (0..h).step_by(TILE) {
+        for tx in (0..w).step_by(TILE) {
+            let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));
+            let mut tile = vec![0f32; tw * th * nb];
+            for b in from..=to {
+                for (i, v) in cube.window(b, tx, ty, tw, th)?.iter().enumerate() {
+                    tile[i * nb + b - from] = *v;
+                }
+            }
+            writer.write_tile(tx, ty, tw, th, &tile)?;
+        }
+    }
+    writer.finish()
+}
+
+/// One band's statistics over its finite values.
+#[derive(Clone, Debug, Serialize)]
+pub struct BandStats {
+    pub band: usize,
+    pub wavelength_nm: f64,
+    pub min: Option<f32>,
+    pub max: Option<f32>,
+    pub mean: Option<f64>,
+    /// Standard deviation over the pixels (population).
+    pub sd: Option<f64>,
+    pub finite: u64,
+    pub non_finite: u64,
+}
+
+/// Per-band statistics of `cube`, one band in memory at a time.
+pub fn stats(cube: &EnviCube) -> Result<Vec<BandStats>> {
+    (0..cube.bands())
+        .map(|b| {
+            let v = cube.band(b)?;
+            let (mut min, mut max, mut sum, mut sum_sq, mut n) =
+                (f32::INFINITY, f32::NEG_INFINITY, 0f64, 0f64, 0u64);
+            for &x in v.iter().filter(|x| x.is_finite()) {
+                min = min.min(x);
+                max = max.max(x);
+                sum += f64::from(x);
+                sum_sq += f64::from(x) * f64::from(x);
+                n += 1;
+            }
+            let mean = (n > 0).then(|| sum / n as f64);
+            Ok(BandStats {
+                band: b,
+                wavelength_nm: cube.wavelengths_nm()[b],
+                min: (n > 0).then_some(min),
+                max: (n > 0).then_some(max),
+                mean,
+                sd: mean.map(|m| (sum_sq / n as f64 - m * m).max(0.0).sqrt()),
+                finite: n,
+                non_finite: v.len() as u64 - n,
+            })
+        })
+        .collect()
 }
 
 /// How one band of two cubes differs. Statistics run over the pixels where

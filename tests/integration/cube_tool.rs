@@ -327,3 +327,50 @@ fn window_and_diff() {
         "window",
     );
 }
+
+/// `subset` keeps a band range with its wavelengths and values; `stats`
+/// gives each band's statistics, worked by hand for the test cube; a band
+/// range outside the cube and an --out that is not a header are refused.
+#[test]
+fn subset_and_stats() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    let out = dir.path().join("sub.hdr");
+    stdout(&cube_tool(&["subset", p(&hdr), "1", "2", "--out", p(&out)]));
+    let sub = littoral::cube::EnviCube::open(&out).unwrap();
+    assert_eq!(sub.wavelengths_nm(), &[550.0, 650.0]);
+    for b in 0..2 {
+        let band = sub.band(b).unwrap();
+        for y in 0..4 {
+            for x in 0..6 {
+                assert_eq!(band[y * 6 + x], value(x, y, b + 1));
+            }
+        }
+    }
+    let stats: serde_json::Value =
+        serde_json::from_str(&stdout(&cube_tool(&["stats", p(&hdr)]))).unwrap();
+    for b in 0..3 {
+        let vals: Vec<f64> = (0..4)
+            .flat_map(|y| (0..6).map(move |x| value(x, y, b) as f64))
+            .collect();
+        let mean = vals.iter().sum::<f64>() / 24.0;
+        let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 24.0).sqrt();
+        let s = &stats[b];
+        assert_eq!(s["finite"], 24);
+        assert!((s["mean"].as_f64().unwrap() - mean).abs() < 1e-6, "{s}");
+        assert!((s["sd"].as_f64().unwrap() - sd).abs() < 1e-6, "{s}");
+        assert_eq!(s["min"].as_f64().unwrap() as f32, value(0, 0, b));
+        assert_eq!(s["max"].as_f64().unwrap() as f32, value(5, 3, b));
+    }
+    let bad = cube_tool(&["subset", p(&hdr), "1", "3", "--out", p(&out)]);
+    assert_clean_failure(&bad, "not a band range");
+    let bad = cube_tool(&[
+        "subset",
+        p(&hdr),
+        "0",
+        "1",
+        "--out",
+        p(&dir.path().join("x.tif")),
+    ]);
+    assert_clean_failure(&bad, "NAME.hdr");
+}
