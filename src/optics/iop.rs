@@ -393,6 +393,17 @@ impl WaterModel {
         }
     }
 
+    /// True when the IOPs jump at depth boundaries (depth layers).
+    pub fn is_layered(&self) -> bool {
+        matches!(
+            self,
+            WaterModel::Constituents {
+                field: ConstituentField::Layers { .. },
+                ..
+            }
+        )
+    }
+
     /// True when the IOPs do not depend on position.
     pub fn is_uniform(&self) -> bool {
         match self {

@@ -151,7 +151,15 @@ impl<'a> RayMarcher<'a> {
         let (pw_ss, pp_ss) = (pw.eval(cos_ss), pp.eval(cos_ss));
         // Stratified: one jittered sample in each step, weighted by the
         // transmittance to the sample itself (unbiased for the step's
-        // integral of T times the source).
+        // integral of T times the source). Single scattering of the sun is
+        // integrated over the step in closed form instead, where the water
+        // varies smoothly or not at all: along the step it falls as
+        // exp(-k s), k = c up_len_per_s, with k from the IOPs at the sample,
+        // so that the step's jitter no longer moves the dominant source of
+        // strongly absorbed bands (at 650 nm in the built-in scene, c dt ~
+        // 0.35: the transmittance across a step varies by 30 %).
+        let closed_form = !scene.water.is_layered();
+        let up_len_per_s = (-dir.z / -self.sun_w.z).max(0.0) as f64;
         let mut t0 = 0.0f32;
         while t0 < t_end {
             let dt = step.min(t_end - t0);
@@ -169,7 +177,20 @@ impl<'a> RayMarcher<'a> {
                 // its share of scattering back into the ray (see `peak`).
                 let c = iop.c() - fw * iop.b_w - fp * iop.b_p;
                 let f = tr[b] * (-c * s as f64).exp() * dt as f64;
-                out[b] += f * (est[b] + single);
+                let single_step = if closed_form {
+                    // single at s is single(0) exp(-k s); T(s) = exp(-c s).
+                    let k = iop.c() * up_len_per_s;
+                    let rate = c + k;
+                    let integral = if rate * (dt as f64) > 1e-9 {
+                        (1.0 - (-rate * dt as f64).exp()) / rate
+                    } else {
+                        dt as f64
+                    };
+                    tr[b] * single * (k * s as f64).exp() * integral
+                } else {
+                    f * single
+                };
+                out[b] += f * est[b] + single_step;
                 for k in (nb + b..out.len()).step_by(nb) {
                     out[k] += f * est[k];
                 }
