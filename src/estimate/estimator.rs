@@ -27,7 +27,7 @@ use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode
 use crate::estimate::groups::{GroupSums, CHANNELS, GROUPS};
 use crate::estimate::shape::BandShapeGrid;
 use crate::estimate::spectral::{
-    combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
+    combine, combine_with_coarse, combine_with_shape, density, BandSums, SpectralMode,
 };
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
@@ -127,7 +127,7 @@ impl<'a> Estimator<'a> {
             spectral,
             grid,
             shapes: None,
-            layered: !scene.water.depth_boundaries().is_empty(),
+            layered: scene.water.is_layered(),
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -621,13 +621,10 @@ impl<'a> Estimator<'a> {
                 g.shape(v_local, v_big, shape, shape_groups, out);
             }
         } else if split {
-            let mode = match self.spectral {
-                SpectralMode::Grid => SpectralMode::Compensated,
-                m => m,
-            };
-            combine_with_coarse(mode, local, v_local, coarse, expanded, v_big, out);
+            // Without a grid shape here, `grid` combines as `compensated`.
+            combine_with_coarse(self.spectral, local, v_local, coarse, expanded, v_big, out);
             if let Some(g) = groups {
-                g.ratio(mode, v_local, v_big, true, expanded, out);
+                g.ratio(self.spectral, v_local, v_big, true, expanded, out);
             }
         } else {
             combine(self.spectral, local, v_local, expanded, v_big, out);
@@ -648,18 +645,11 @@ struct Groups<'s> {
     out: &'s mut [f64],
 }
 
-fn density(total: f64, v: f64) -> f64 {
-    if v > 0.0 && v.is_finite() {
-        total / v
-    } else {
-        0.0
-    }
-}
-
 impl Groups<'_> {
-    /// Group g's level, D_g = local_g / V + coarse_g / V'.
-    fn level(&self, g: usize, v_local: f64, v_big: f64) -> f64 {
-        density(self.local.totals()[g], v_local) + density(self.coarse.totals()[g], v_big)
+    /// Group g's level, D_g = local_g / V + coarse_g / V' (V' = 0: no
+    /// coarse part).
+    fn level(&self, g: usize, v_local: f64, v_coarse: f64) -> f64 {
+        density(self.local.totals()[g], v_local) + density(self.coarse.totals()[g], v_coarse)
     }
 
     /// The grid combination L_b = D s_b: D_g s_b + D s_{g,b}, with s_{g,b}
@@ -710,8 +700,7 @@ impl Groups<'_> {
                     return;
                 }
                 for g in 0..GROUPS {
-                    let d_g = density(self.local.totals()[g], v_local)
-                        + density(self.coarse.totals()[g], v_coarse);
+                    let d_g = self.level(g, v_local, v_coarse);
                     let e_g = self.expanded.totals()[g];
                     let e_gb = self.expanded.bands_of(g);
                     let o = &mut self.out[g * nb..(g + 1) * nb];

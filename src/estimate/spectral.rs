@@ -169,6 +169,15 @@ fn valid_volume(v: f64) -> bool {
     v > 0.0 && v.is_finite()
 }
 
+/// `total / v`, or 0 for a volume that is not positive and finite.
+pub(crate) fn density(total: f64, v: f64) -> f64 {
+    if valid_volume(v) {
+        total / v
+    } else {
+        0.0
+    }
+}
+
 /// [`combine`] with part of the signal estimated at the expanded scale:
 /// `coarse` holds the contributions of one class of photons (those the
 /// caller counts only in the expanded search) and the local sums the rest.
@@ -245,7 +254,6 @@ pub fn combine_with_shape(
         );
         return;
     };
-    let density = |total: f64, v: f64| if valid_volume(v) { total / v } else { 0.0 };
     let level = density(local.total(), v_local) + density(coarse.total(), v_expanded);
     let level = if level.is_finite() { level } else { 0.0 };
     for (o, s) in out.iter_mut().zip(shape) {

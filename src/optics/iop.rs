@@ -398,9 +398,9 @@ impl WaterModel {
         matches!(
             self,
             WaterModel::Constituents {
-                field: ConstituentField::Layers { .. },
+                field: ConstituentField::Layers { layers, .. },
                 ..
-            }
+            } if !layers.is_empty()
         )
     }
 

@@ -530,9 +530,12 @@ impl Moments {
             };
         }
         if !self.groups.is_empty() {
-            let mean: Vec<f64> = self.groups.iter().map(|g| g / n).collect();
-            groups::variance(&mean, &mut self.scratch);
-            out.iter_mut().zip(&self.scratch).for_each(|(o, v)| *o += v);
+            // The variance of the mean channels: that of their sums over n^2.
+            groups::variance(&self.groups, &mut self.scratch);
+            let n2 = n * n;
+            out.iter_mut()
+                .zip(&self.scratch)
+                .for_each(|(o, v)| *o += v / n2);
         }
         out.iter_mut().for_each(|o| *o = o.sqrt());
     }
