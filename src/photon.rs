@@ -69,19 +69,41 @@ pub struct PackedPhoton {
     pub oct: [u16; 2],
     /// Band and group ([`pack_band_group`]), as stored on disk.
     pub band_group: u16,
-    /// The map layer the photon belongs to ([`LAYER_VOLUME`] or [`LAYER_SURFACE`]).
+    /// The map layer the photon belongs to (`LAYER_*`).
     pub layer: u16,
     pub power: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<PackedPhoton>() == 24);
 
-/// Layer of photons stored at scattering events in the water.
+/// Layer of photons stored at scattering events in the water while
+/// travelling down or level (see [`volume_layer`]).
 pub const LAYER_VOLUME: u16 = 0;
 /// Layer of photons stored where light meets the floor or a target.
 pub const LAYER_SURFACE: u16 = 1;
+/// Layer of photons stored at scattering events in the water while
+/// travelling up.
+pub const LAYER_VOLUME_UP: u16 = 2;
 /// Number of layers a map holds.
-pub const LAYERS: usize = 2;
+pub const LAYERS: usize = 3;
+/// The layers of volume photons: down (or level), then up.
+pub const VOLUME_LAYERS: [u16; 2] = [LAYER_VOLUME, LAYER_VOLUME_UP];
+
+/// The layer of a volume photon travelling along `direction`.
+///
+/// Volume photons are kept apart by the sign of their vertical travel so
+/// that an estimate can search the few photons travelling toward a viewer
+/// looking down (through the phase function's forward lobe they carry most
+/// of the upwelling in-scatter) without visiting the many travelling down
+/// (`estimate::estimator`).
+#[inline]
+pub fn volume_layer(direction: Vec3) -> u16 {
+    if direction.z > 0.0 {
+        LAYER_VOLUME_UP
+    } else {
+        LAYER_VOLUME
+    }
+}
 
 impl PackedPhoton {
     /// Pack a photon of `layer` (encodes its direction).

@@ -13,7 +13,7 @@
 //!   sun and sky gives (equal power per source).
 
 use crate::bounds::Aabb;
-use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
+use crate::photon::{volume_layer, Photon, LAYER_SURFACE};
 use crate::rng::Pcg32;
 use crate::spectral::BandGrid;
 use crate::store::{PhotonSource, StagedPhoton};
@@ -80,16 +80,20 @@ impl SynthSource {
         let nb = self.bands.len() as f32 / self.photons.max(1) as f32;
         let group = crate::photon::group_of_path(i);
         match self.distribution {
-            Distribution::Uniform => (
-                Photon {
-                    position: Vec3::new(x, y, d.min.z + ext.z * rng.uniform_f32()),
-                    direction: uniform_sphere(&mut rng),
-                    band,
-                    power: nb,
-                    group,
-                },
-                LAYER_VOLUME,
-            ),
+            Distribution::Uniform => {
+                let position = Vec3::new(x, y, d.min.z + ext.z * rng.uniform_f32());
+                let direction = uniform_sphere(&mut rng);
+                (
+                    Photon {
+                        position,
+                        direction,
+                        band,
+                        power: nb,
+                        group,
+                    },
+                    volume_layer(direction),
+                )
+            }
             Distribution::Water => {
                 let on_floor = rng.uniform_f32() < WATER_FLOOR_SHARE;
                 let from_sky = rng.uniform_f32() < WATER_SKY_SHARE;
@@ -108,7 +112,7 @@ impl SynthSource {
                 let layer = if on_floor {
                     LAYER_SURFACE
                 } else {
-                    LAYER_VOLUME
+                    volume_layer(dir)
                 };
                 (
                     Photon {

@@ -132,7 +132,7 @@ impl<'s> Emitter<'s> {
         let mut tally = PhotonTally::new(self.scene.tally_depths.len());
         for i in range {
             let (band, t) = self.trace_one(i, &mut tally, out);
-            local.record(band, t.fate, &tally);
+            local.record(band, &t.fates, &tally);
             local.stored_volume += t.stored_volume as u64;
             local.stored_surface += t.stored_surface as u64;
             local.truncated += t.truncated as u64;

@@ -247,7 +247,7 @@ impl EmissionReport {
             counts
                 .iter()
                 .zip(photon_power)
-                .map(|(&c, p)| c as f64 * p)
+                .map(|(&c, p)| c as f64 / super::trace::FATE_UNIT as f64 * p)
                 .collect()
         };
         let emitted: Vec<f64> = (0..nb)

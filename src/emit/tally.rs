@@ -79,10 +79,10 @@ impl PhotonTally {
     pub fn add_above_down(&mut self) {
         self.values[self.depths * QUANTITIES] += 1.0;
     }
-    /// Upward irradiance just above the surface.
+    /// Upward irradiance just above the surface, of a path branch of weight `w`.
     #[inline]
-    pub fn add_above_up(&mut self) {
-        self.values[self.depths * QUANTITIES + 1] += 1.0;
+    pub fn add_above_up(&mut self, w: f64) {
+        self.values[self.depths * QUANTITIES + 1] += w;
     }
 }
 
@@ -95,6 +95,16 @@ pub enum Fate {
     LostEdge,
 }
 
+impl Fate {
+    /// Number of fates.
+    pub const COUNT: usize = 4;
+
+    /// Index of the fate in per-fate arrays.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
 /// Run totals over photons, per band.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Totals {
@@ -102,6 +112,8 @@ pub struct Totals {
     pub depths: usize,
     /// Photons emitted per band.
     pub emitted: Vec<u64>,
+    /// Photon weight that ended in each fate per band, in units of
+    /// 1 / `trace::FATE_UNIT` photon (split paths end in several).
     pub escaped: Vec<u64>,
     pub absorbed_water: Vec<u64>,
     pub absorbed_surfaces: Vec<u64>,
@@ -136,16 +148,15 @@ impl Totals {
         }
     }
 
-    /// Account one finished photon of `band`.
-    pub fn record(&mut self, band: usize, fate: Fate, t: &PhotonTally) {
+    /// Account one finished photon path of `band`, whose weight ended in
+    /// `fates` (units of 1 / `trace::FATE_UNIT`, by [`Fate::index`]).
+    pub fn record(&mut self, band: usize, fates: &[u64; Fate::COUNT], t: &PhotonTally) {
         self.traced += 1;
         self.emitted[band] += 1;
-        match fate {
-            Fate::Escaped => self.escaped[band] += 1,
-            Fate::AbsorbedWater => self.absorbed_water[band] += 1,
-            Fate::AbsorbedSurface => self.absorbed_surfaces[band] += 1,
-            Fate::LostEdge => self.lost_edges[band] += 1,
-        }
+        self.escaped[band] += fates[Fate::Escaped.index()];
+        self.absorbed_water[band] += fates[Fate::AbsorbedWater.index()];
+        self.absorbed_surfaces[band] += fates[Fate::AbsorbedSurface.index()];
+        self.lost_edges[band] += fates[Fate::LostEdge.index()];
         for (slot, &x) in t.values.iter().enumerate() {
             if x != 0.0 {
                 self.sum[slot * self.bands + band] += fixed(x);

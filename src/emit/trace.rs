@@ -6,19 +6,32 @@
 //! real with probability c(x)/c_max, then absorption (a/c), pure-water
 //! scattering (b_w/c) or particle scattering (b_p/c) is chosen; otherwise it
 //! is a null collision and the flight goes on. Absorption is analog (the
-//! photon ends) so every photon of one band carries the same power. The
-//! floor and targets are Lambertian: a photon is absorbed with probability
-//! 1 - R, else reflected into a cosine-weighted direction.
+//! photon ends). The floor and targets are Lambertian: a photon is absorbed
+//! with probability 1 - R, else reflected into a cosine-weighted direction.
 //!
-//! Stored photons: a volume photon at every real scattering event, a
+//! **Upward splitting.** A viewer looking down sees upwelling light, which
+//! rests on the few photons travelling up (in deep water a few per cent of
+//! the stored photons): through the phase function's forward lobe they carry
+//! most of the in-scatter toward the viewer. When a path of full weight
+//! scatters or reflects into a direction within 60 degrees of straight up
+//! ([`SPLIT_MU`]), it splits into `[photons] upward_split` copies of equal
+//! weight that go on independently from there (splitting in the sense of
+//! Kahn's particle splitting: the expected stored power is unchanged, and
+//! the weights of a path's branches sum to exactly one, so every unit of
+//! emitted power still ends in exactly one fate). A copy never splits
+//! again. Stored powers and tallies carry the branch's weight.
+//!
+//! Stored photons: a volume photon at every real scattering event (in the
+//! layer of its vertical direction, [`crate::photon::volume_layer`]), a
 //! surface photon at every floor or target hit, each with the direction it
-//! arrived in — except that light still on its unscattered path from the sun
-//! (transmitted once through the surface) is not stored unless the scene
-//! asks for it, since the renderer adds that single scattering directly.
+//! arrived in — except that light still on its unscattered path from the
+//! sun (transmitted once through the surface) is not stored unless the
+//! scene asks for it, since the renderer adds that single scattering
+//! directly.
 
 use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LD, LU, MIN_ABS_MU};
 use crate::optics::phase::{cosine_hemisphere, scatter};
-use crate::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
+use crate::photon::{volume_layer, Photon, LAYER_SURFACE};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 use crate::store::StagedPhoton;
@@ -27,6 +40,14 @@ use glam::Vec3;
 /// Events per photon path before it is stopped (ids keep 20 bits for them).
 pub const MAX_EVENTS: u32 = (1 << 20) - 1;
 
+/// A path of full weight splits when it turns into a direction whose
+/// vertical component exceeds this (within 60 degrees of straight up).
+pub const SPLIT_MU: f32 = 0.5;
+
+/// Fates are counted in units of 1 / `FATE_UNIT` of a photon: split weights
+/// (1 / a power of two up to this) add up exactly in integers.
+pub const FATE_UNIT: u64 = 1 << 16;
+
 /// Where a photon starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Source {
@@ -34,12 +55,40 @@ pub enum Source {
     Sky,
 }
 
-/// The outcome of one traced photon.
+/// The outcome of one traced photon path.
 pub struct Traced {
-    pub fate: Fate,
+    /// The path's weight that ended in each [`Fate`] (indexed by
+    /// [`Fate::index`]), in units of 1 / [`FATE_UNIT`]: they sum to
+    /// `FATE_UNIT`.
+    pub fates: [u64; Fate::COUNT],
     pub truncated: bool,
     pub stored_volume: u32,
     pub stored_surface: u32,
+}
+
+/// One branch of a split path: where it is, where it goes, its weight.
+#[derive(Clone, Copy)]
+struct Branch {
+    pos: Vec3,
+    dir: Vec3,
+    weight: f64,
+    /// Still the sun's unscattered light.
+    direct: bool,
+}
+
+/// What a path shares between its branches.
+struct Path<'a> {
+    scene: &'a Scene,
+    index: u64,
+    band: usize,
+    power: f32,
+    group: u8,
+    c_max: f64,
+    split: usize,
+    events: u32,
+    result: Traced,
+    /// Branches waiting to be traced (copies of a split).
+    pending: Vec<Branch>,
 }
 
 /// Trace photon `index` of band `band` from `source`; stored photons go to
@@ -57,183 +106,222 @@ pub fn trace(
 ) -> Traced {
     let d = &scene.domain;
     let (sx, sy) = (d.size_m[0], d.size_m[1]);
-    let mut events: u32 = 0;
-    let group = crate::photon::group_of_path(index);
-    let mut result = Traced {
-        fate: Fate::Escaped,
-        truncated: false,
-        stored_volume: 0,
-        stored_surface: 0,
+    let mut path = Path {
+        scene,
+        index,
+        band,
+        power,
+        group: crate::photon::group_of_path(index),
+        c_max: scene.water.majorant(band),
+        split: scene.upward_split.max(1),
+        events: 0,
+        result: Traced {
+            fates: [0; Fate::COUNT],
+            truncated: false,
+            stored_volume: 0,
+            stored_surface: 0,
+        },
+        pending: Vec::new(),
     };
-    let store =
-        |pos: Vec3, dir: Vec3, layer: u16, events: &mut u32, out: &mut Vec<StagedPhoton>| {
-            *events += 1;
-            out.push(StagedPhoton::new(
-                &Photon {
-                    position: pos,
-                    direction: dir,
-                    band: band as u16,
-                    power,
-                    group,
-                },
-                layer,
-                (index << 20) | (*events as u64),
-            ));
-        };
 
     // Start on the surface, anywhere in the domain.
-    let mut pos = Vec3::new(
+    let pos = Vec3::new(
         (rng.uniform_f64() * sx) as f32,
         (rng.uniform_f64() * sy) as f32,
         0.0,
     );
-    let mut dir = match source {
+    let dir = match source {
         Source::Sun => scene.sun.direction,
         Source::Sky => cosine_hemisphere(-Vec3::Z, rng),
     };
-    let mut direct = source == Source::Sun;
     tally.add_above_down();
     let ev = scene.surface.interact(dir, rng);
     if !ev.transmitted {
-        tally.add_above_up();
-        return result;
+        tally.add_above_up(1.0);
+        path.end(Fate::Escaped, 1.0);
+        return path.result;
     }
-    dir = ev.direction;
-    cross_surface_down(scene, tally, dir);
+    cross_surface_down(scene, tally, ev.direction, 1.0);
+    let mut next = Some(Branch {
+        pos,
+        dir: ev.direction,
+        weight: 1.0,
+        direct: source == Source::Sun,
+    });
+    while let Some(branch) = next {
+        let (fate, weight) = path.run(branch, rng, tally, out);
+        path.end(fate, weight);
+        next = path.pending.pop();
+    }
+    path.result
+}
 
-    let depths = &scene.tally_depths;
-    // The band is fixed for the whole path, and so is its majorant.
-    let c_max = scene.water.majorant(band);
-    loop {
-        if events >= MAX_EVENTS {
-            result.fate = Fate::AbsorbedWater;
-            result.truncated = true;
-            return result;
+impl Path<'_> {
+    fn end(&mut self, fate: Fate, weight: f64) {
+        self.result.fates[fate.index()] += (weight * FATE_UNIT as f64).round() as u64;
+    }
+
+    fn store(&mut self, b: &Branch, layer: u16, out: &mut Vec<StagedPhoton>) {
+        self.events += 1;
+        out.push(StagedPhoton::new(
+            &Photon {
+                position: b.pos,
+                direction: b.dir,
+                band: self.band as u16,
+                power: (self.power as f64 * b.weight) as f32,
+                group: self.group,
+            },
+            layer,
+            (self.index << 20) | (self.events as u64),
+        ));
+    }
+
+    /// After the branch turned into `b.dir`: split a path of full weight
+    /// that now travels up, leaving the copies for later.
+    fn maybe_split(&mut self, b: &mut Branch) {
+        if self.split > 1 && b.weight == 1.0 && b.dir.z > SPLIT_MU {
+            b.weight = 1.0 / self.split as f64;
+            self.pending.extend(std::iter::repeat_n(*b, self.split - 1));
         }
-        let t_flight = rng.exponential(c_max);
-        let t_surface = crate::scene::Domain::surface_distance(pos, dir);
-        let t_edge = scene.domain.edge_distance(pos, dir);
-        let t_limit = t_flight.min(t_surface).min(t_edge);
-        let hit = scene
-            .geometry
-            .intersect(pos, dir, t_limit.min(f32::MAX as f64) as f32);
-        if let Some(h) = hit {
-            let next = h.position;
-            tally_segment(depths, tally, pos, next, dir);
-            pos = next;
-            if !direct || scene.store_direct {
-                store(pos, dir, LAYER_SURFACE, &mut events, out);
-                result.stored_surface += 1;
-            } else {
-                events += 1;
+    }
+
+    /// Trace one branch to its end: its fate and weight.
+    fn run(
+        &mut self,
+        mut b: Branch,
+        rng: &mut Pcg32,
+        tally: &mut PhotonTally,
+        out: &mut Vec<StagedPhoton>,
+    ) -> (Fate, f64) {
+        let scene = self.scene;
+        let depths = &scene.tally_depths;
+        loop {
+            if self.events >= MAX_EVENTS {
+                self.result.truncated = true;
+                return (Fate::AbsorbedWater, b.weight);
             }
-            let r = scene.reflectance(h.surface, pos, band);
-            if rng.uniform_f64() >= r {
-                result.fate = Fate::AbsorbedSurface;
-                return result;
-            }
-            dir = cosine_hemisphere(h.normal, rng);
-            direct = false;
-            continue;
-        }
-        if t_surface <= t_limit {
-            let next = pos + dir * t_surface as f32;
-            let next = Vec3::new(next.x, next.y, 0.0);
-            tally_segment(depths, tally, pos, next, dir);
-            pos = next;
-            // Arriving at the surface from below: Eu just below the surface.
-            if depths.first() == Some(&0.0) {
-                tally.add(0, EU, 1.0);
-                tally.add(0, EOU, 1.0 / (dir.z as f64).abs().max(MIN_ABS_MU));
-                if in_lu_cone(dir.z as f64) {
-                    tally.add(0, LU, 1.0);
+            let t_flight = rng.exponential(self.c_max);
+            let t_surface = crate::scene::Domain::surface_distance(b.pos, b.dir);
+            let t_edge = scene.domain.edge_distance(b.pos, b.dir);
+            let t_limit = t_flight.min(t_surface).min(t_edge);
+            let hit = scene
+                .geometry
+                .intersect(b.pos, b.dir, t_limit.min(f32::MAX as f64) as f32);
+            if let Some(h) = hit {
+                tally_segment(depths, tally, b.pos, h.position, b.dir, b.weight);
+                b.pos = h.position;
+                if !b.direct || scene.store_direct {
+                    self.store(&b, LAYER_SURFACE, out);
+                    self.result.stored_surface += 1;
+                } else {
+                    self.events += 1;
                 }
+                let r = scene.reflectance(h.surface, b.pos, self.band);
+                if rng.uniform_f64() >= r {
+                    return (Fate::AbsorbedSurface, b.weight);
+                }
+                b.dir = cosine_hemisphere(h.normal, rng);
+                b.direct = false;
+                continue;
             }
-            let ev = scene.surface.interact(dir, rng);
-            events += 1;
-            if ev.transmitted {
-                tally.add_above_up();
-                result.fate = Fate::Escaped;
-                return result;
+            if t_surface <= t_limit {
+                let next = b.pos + b.dir * t_surface as f32;
+                let next = Vec3::new(next.x, next.y, 0.0);
+                tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
+                b.pos = next;
+                // Arriving at the surface from below: Eu just below the surface.
+                if depths.first() == Some(&0.0) {
+                    let w = b.weight;
+                    tally.add(0, EU, w);
+                    tally.add(0, EOU, w / (b.dir.z as f64).abs().max(MIN_ABS_MU));
+                    if in_lu_cone(b.dir.z as f64) {
+                        tally.add(0, LU, w);
+                    }
+                }
+                let ev = scene.surface.interact(b.dir, rng);
+                self.events += 1;
+                if ev.transmitted {
+                    tally.add_above_up(b.weight);
+                    return (Fate::Escaped, b.weight);
+                }
+                b.dir = ev.direction;
+                b.direct = false;
+                cross_surface_down(scene, tally, b.dir, b.weight);
+                continue;
             }
-            dir = ev.direction;
-            direct = false;
-            cross_surface_down(scene, tally, dir);
-            continue;
-        }
-        if t_edge <= t_limit {
-            let next = pos + dir * t_edge as f32;
-            tally_segment(depths, tally, pos, next, dir);
-            if !scene.domain.periodic {
-                result.fate = Fate::LostEdge;
-                return result;
+            if t_edge <= t_limit {
+                let next = b.pos + b.dir * t_edge as f32;
+                tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
+                if !scene.domain.periodic {
+                    return (Fate::LostEdge, b.weight);
+                }
+                b.pos = scene.domain.wrap(next, b.dir);
+                continue;
             }
-            pos = scene.domain.wrap(next, dir);
-            continue;
+            // A tentative collision.
+            let next = b.pos + b.dir * t_flight as f32;
+            tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
+            b.pos = next;
+            let iop = scene.water.iop(b.pos, self.band);
+            let xi = rng.uniform_f64() * self.c_max;
+            if xi < iop.a {
+                return (Fate::AbsorbedWater, b.weight);
+            }
+            if xi >= iop.c() {
+                continue; // null collision
+            }
+            let phase = if xi < iop.a + iop.b_w {
+                &scene.water_phase
+            } else {
+                &scene.particle_phase
+            };
+            if !b.direct || scene.store_direct {
+                self.store(&b, volume_layer(b.dir), out);
+                self.result.stored_volume += 1;
+            } else {
+                self.events += 1;
+            }
+            let mu = phase.sample_cos(rng.uniform_f64());
+            let phi = std::f64::consts::TAU * rng.uniform_f64();
+            b.dir = scatter(b.dir, mu as f32, phi as f32);
+            b.direct = false;
+            self.maybe_split(&mut b);
         }
-        // A tentative collision.
-        let next = pos + dir * t_flight as f32;
-        tally_segment(depths, tally, pos, next, dir);
-        pos = next;
-        let iop = scene.water.iop(pos, band);
-        let xi = rng.uniform_f64() * c_max;
-        if xi < iop.a {
-            result.fate = Fate::AbsorbedWater;
-            return result;
-        }
-        if xi >= iop.c() {
-            continue; // null collision
-        }
-        let phase = if xi < iop.a + iop.b_w {
-            &scene.water_phase
-        } else {
-            &scene.particle_phase
-        };
-        if !direct || scene.store_direct {
-            store(pos, dir, LAYER_VOLUME, &mut events, out);
-            result.stored_volume += 1;
-        } else {
-            events += 1;
-        }
-        let mu = phase.sample_cos(rng.uniform_f64());
-        let phi = std::f64::consts::TAU * rng.uniform_f64();
-        dir = scatter(dir, mu as f32, phi as f32);
-        direct = false;
     }
 }
 
-/// Light entering the water (or reflected down at the surface from below)
-/// crosses the depth-0 tally going down.
-fn cross_surface_down(scene: &Scene, tally: &mut PhotonTally, dir: Vec3) {
+/// Light of weight `w` entering the water (or reflected down at the surface
+/// from below) crosses the depth-0 tally going down.
+fn cross_surface_down(scene: &Scene, tally: &mut PhotonTally, dir: Vec3, w: f64) {
     if scene.tally_depths.first() == Some(&0.0) {
-        tally.add(0, ED, 1.0);
-        tally.add(0, EOD, 1.0 / (dir.z as f64).abs().max(MIN_ABS_MU));
+        tally.add(0, ED, w);
+        tally.add(0, EOD, w / (dir.z as f64).abs().max(MIN_ABS_MU));
         if in_lu_cone(-dir.z as f64) {
-            tally.add(0, LD, 1.0);
+            tally.add(0, LD, w);
         }
     }
 }
 
 /// Tally crossings of the depths strictly below the surface by the segment
-/// from `a` to `b` along `dir`.
-fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir: Vec3) {
-    let inv_mu = 1.0 / (dir.z as f64).abs().max(MIN_ABS_MU);
+/// from `a` to `b` along `dir`, of weight `w`.
+fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir: Vec3, w: f64) {
+    let w_mu = w / (dir.z as f64).abs().max(MIN_ABS_MU);
     for (i, &depth) in depths.iter().enumerate() {
         if depth == 0.0 {
             continue;
         }
         let z = -depth as f32;
         if a.z > z && b.z <= z {
-            tally.add(i, ED, 1.0);
-            tally.add(i, EOD, inv_mu);
+            tally.add(i, ED, w);
+            tally.add(i, EOD, w_mu);
             if in_lu_cone(-dir.z as f64) {
-                tally.add(i, LD, 1.0);
+                tally.add(i, LD, w);
             }
         } else if a.z < z && b.z >= z {
-            tally.add(i, EU, 1.0);
-            tally.add(i, EOU, inv_mu);
+            tally.add(i, EU, w);
+            tally.add(i, EOU, w_mu);
             if in_lu_cone(dir.z as f64) {
-                tally.add(i, LU, 1.0);
+                tally.add(i, LU, w);
             }
         }
     }

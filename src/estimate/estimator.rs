@@ -12,11 +12,18 @@
 //! The search is k nearest within a maximum radius (or a fixed radius);
 //! V and A follow the boundary mode (`estimate::boundary`), and the band
 //! estimates are combined with a larger search by the spectral mode
-//! (`estimate::spectral`). One search of the larger size serves both: its k
-//! nearest are the local search. In volume estimates the photons travelling
-//! toward the viewer's hemisphere are counted at the larger scale
+//! (`estimate::spectral`). In volume estimates the photons travelling
+//! toward the viewer are counted at the larger scale
 //! (`estimate::spectral::combine_with_coarse`): through the forward lobe a
-//! few of them carry much of the in-scatter, too few in a search of k.
+//! few of them carry much of the in-scatter, too few in a search of k. In
+//! the `grid` mode they are searched apart, in their own map layer (volume
+//! photons are layered by the sign of their vertical travel,
+//! `photon::volume_layer`): the `k` nearest of the other layer at the local
+//! scale, the `k_expanded` nearest of theirs at the expanded scale. The
+//! `naive` and `compensated` modes keep the poster's single search over
+//! both layers, whose k nearest are the local search and whose photons
+//! travelling into the viewer's hemisphere are counted at the larger
+//! scale.
 //!
 //! Not for: direct light (the renderer adds single scattering of the sun
 //! and direct sun on the floor by next-event estimation).
@@ -31,7 +38,7 @@ use crate::estimate::spectral::{
 };
 use crate::geometry::SurfaceId;
 use crate::optics::iop::Iop;
-use crate::photon::{LAYER_SURFACE, LAYER_VOLUME};
+use crate::photon::{LAYER_SURFACE, LAYER_VOLUME, LAYER_VOLUME_UP, VOLUME_LAYERS};
 use crate::scene::Scene;
 use crate::store::query::{Neighbour, PhotonQuery, Search};
 use glam::Vec3;
@@ -49,6 +56,7 @@ pub struct Scratch {
     mix: Vec<f32>,
     iops: Vec<Iop>,
     found: Vec<Neighbour>,
+    part: Vec<Neighbour>,
     extra: Vec<Neighbour>,
     local: BandSums,
     expanded: BandSums,
@@ -67,6 +75,7 @@ impl Scratch {
             mix: Vec::new(),
             iops: Vec::new(),
             found: Vec::new(),
+            part: Vec::new(),
             extra: Vec::new(),
             local: BandSums::new(bands),
             expanded: BandSums::new(bands),
@@ -140,7 +149,7 @@ impl<'a> Estimator<'a> {
             }),
         };
         if spectral == SpectralMode::Grid {
-            let voxels = Self::shape_voxels(scene, map.layer_photons(LAYER_VOLUME));
+            let voxels = Self::shape_voxels(scene, VOLUME_LAYERS.map(|l| map.layer_photons(l)));
             let shapes = BandShapeGrid::build(
                 map,
                 scene.domain.size_m,
@@ -165,25 +174,28 @@ impl<'a> Estimator<'a> {
         mixture(self.phases_for(toward_viewer), fw, cos)
     }
 
-    /// Voxels of the band-shape grid over `volume_photons` photons: about
-    /// `shape_photons_per_band` photons per band and voxel at
-    /// `POLICY_PHOTONS` traced photons, that count growing as the square
-    /// root of the photons traced, so that both the voxels' size and their
-    /// noise shrink as photons are added.
-    fn shape_voxels(scene: &Scene, volume_photons: u64) -> usize {
+    /// Voxels of the band-shape grid over a map of `volume_photons` volume
+    /// photons ([down, up] layers): about `shape_photons_per_band` photons
+    /// per band and voxel at `POLICY_PHOTONS` traced photons, that count
+    /// growing as the square root of the photons traced, so that both the
+    /// voxels' size and their noise shrink as photons are added. Photons of
+    /// the up layer count as 1 / `upward_split` photon each: the copies of a
+    /// split path refine the grid's upwelling light, not its resolution.
+    fn shape_voxels(scene: &Scene, [down, up]: [u64; 2]) -> usize {
         let nb = scene.bands.len();
         let by_bytes = (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb)) as usize;
         let growth = (scene.photons as f64 / crate::scene::settings::POLICY_PHOTONS)
             .sqrt()
             .max(1.0);
         let per_band = (scene.estimate.shape_photons_per_band as f64 * growth).round() as usize;
-        BandShapeGrid::planned_voxels(volume_photons, nb, per_band, MAX_SHAPE_VOXELS.min(by_bytes))
+        let photons = down + up / scene.upward_split.max(1) as u64;
+        BandShapeGrid::planned_voxels(photons, nb, per_band, MAX_SHAPE_VOXELS.min(by_bytes))
     }
 
     /// Bytes of the band-shape grid `Estimator::new` builds for `scene` over
-    /// a map of `volume_photons` volume photons (0 unless `spectral =
-    /// "grid"`), for the memory budget.
-    pub fn shape_grid_bytes(scene: &Scene, volume_photons: u64) -> u64 {
+    /// a map of `volume_photons` volume photons ([down, up] layers; 0
+    /// unless `spectral = "grid"`), for the memory budget.
+    pub fn shape_grid_bytes(scene: &Scene, volume_photons: [u64; 2]) -> u64 {
         match scene.estimate.spectral {
             SpectralMode::Grid => {
                 BandShapeGrid::bytes(Self::shape_voxels(scene, volume_photons), scene.bands.len())
@@ -257,21 +269,34 @@ impl<'a> Estimator<'a> {
         }
     }
 
-    /// Photons of `layer` for a search of `k` around `x`, in any order,
-    /// continued across periodic edges.
+    /// Photons of `layers` for a search of `k` around `x`, in any order,
+    /// continued across periodic edges, appended to `found`: with several
+    /// layers, the search over their union.
     fn find(
         &self,
         x: Vec3,
-        layer: u16,
+        layers: &[u16],
         k: usize,
         found: &mut Vec<Neighbour>,
+        part: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<()> {
+        let start = found.len();
         let search = self.search(k);
-        self.map
-            .query_any_order_into(x, Some(layer), search, found)?;
-        if self.scene.domain.periodic {
-            self.wrap_search(x, layer, k, search, found, extra)?;
+        for &layer in layers {
+            self.map
+                .query_any_order_into(x, Some(layer), search, part)?;
+            if self.scene.domain.periodic {
+                self.wrap_search(x, layer, k, search, part, extra)?;
+            }
+            found.extend_from_slice(part);
+        }
+        let ours = &mut found[start..];
+        if let (Search::Nearest { k, .. }, true) = (search, layers.len() > 1) {
+            if ours.len() > k {
+                ours.select_nth_unstable_by(k - 1, |a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                found.truncate(start + k);
+            }
         }
         Ok(())
     }
@@ -423,7 +448,18 @@ impl<'a> Estimator<'a> {
             (w, cos > 0.0)
         };
         let view_up = Some(toward_viewer.z > 0.0);
-        let r = self.estimate(x, LAYER_VOLUME, &weight, None, view_up, scratch, out);
+        let classes = if self.shapes.is_some() {
+            // Light travelling toward the viewer looking down travels up.
+            let (light, heavy) = if toward_viewer.z > 0.0 {
+                (LAYER_VOLUME, LAYER_VOLUME_UP)
+            } else {
+                (LAYER_VOLUME_UP, LAYER_VOLUME)
+            };
+            Classes::Split { light, heavy }
+        } else {
+            Classes::Union(&VOLUME_LAYERS)
+        };
+        let r = self.estimate(x, classes, &weight, None, view_up, scratch, out);
         scratch.mix = mix;
         r
     }
@@ -453,7 +489,7 @@ impl<'a> Estimator<'a> {
         };
         self.estimate(
             x,
-            LAYER_SURFACE,
+            Classes::Union(&[LAYER_SURFACE]),
             &weight,
             Some((normal, surface)),
             None,
@@ -462,20 +498,23 @@ impl<'a> Estimator<'a> {
         )
     }
 
-    /// One search serves both sizes: the expanded search (or the local one
-    /// alone when only one size is needed) is found, its nearest photons are
-    /// the local search, and the boundaries are traced once at the larger
-    /// radius. Volume estimates count the photons travelling toward the
-    /// viewer's hemisphere (`weight` returns them as heavy) at the expanded
-    /// scale: through the phase function's forward lobe a few of them carry
-    /// most of the in-scatter (upwelling light seen looking down rests on
-    /// the few photons travelling up), and a local search of k holds too
-    /// few of them for a steady estimate.
+    /// The searches of one estimate and its sums. With [`Classes::Union`]
+    /// one search serves both sizes: the expanded search (or the local one
+    /// alone when only one size is needed) is found, its nearest photons
+    /// are the local search, and volume estimates count the photons
+    /// travelling toward the viewer's hemisphere (`weight` returns them as
+    /// heavy) at the expanded scale. With [`Classes::Split`] the two
+    /// classes are two layers, each searched for its own count. Either way
+    /// the boundaries are traced once, at the larger radius: through the
+    /// phase function's forward lobe a few photons travelling toward the
+    /// viewer carry most of the in-scatter (upwelling light seen looking
+    /// down rests on the few photons travelling up), and a local search of
+    /// k holds too few of them for a steady estimate.
     #[allow(clippy::too_many_arguments)]
     fn estimate(
         &self,
         x: Vec3,
-        layer: u16,
+        classes: Classes,
         weight: &dyn Fn(&Neighbour) -> (f64, bool),
         surface: Option<(Vec3, SurfaceId)>,
         view_up: Option<bool>,
@@ -484,6 +523,7 @@ impl<'a> Estimator<'a> {
     ) -> Result<()> {
         let Scratch {
             found,
+            part,
             extra,
             local,
             expanded,
@@ -502,6 +542,7 @@ impl<'a> Estimator<'a> {
         out_groups.iter_mut().for_each(|o| *o = 0.0);
         let compensated = self.spectral != SpectralMode::Naive;
         let split = surface.is_none();
+        let by_layer = matches!(classes, Classes::Split { .. });
         let two_sizes = compensated || split;
         let k = self.scene.estimate.k;
         let k_big = if two_sizes {
@@ -509,35 +550,57 @@ impl<'a> Estimator<'a> {
         } else {
             k
         };
-        self.find(x, layer, k_big, found, extra)?;
+        found.clear();
+        // The local search is found[..n_local], of radius r_local; the
+        // expanded search of radius r_big is all of `found` (one search) or
+        // found[n_local..] (two layers).
+        let (n_local, r_local, r_big) = match classes {
+            Classes::Union(layers) => {
+                self.find(x, layers, k_big, found, part, extra)?;
+                let r_big = self.region_radius(found, k_big);
+                let n_local = if two_sizes {
+                    self.take_local(found, k)
+                } else {
+                    found.len()
+                };
+                let r_local = if two_sizes {
+                    self.region_radius(&found[..n_local], k)
+                } else {
+                    r_big
+                };
+                (n_local, r_local, r_big)
+            }
+            Classes::Split { light, heavy } => {
+                self.find(x, &[light], k, found, part, extra)?;
+                let n_local = found.len();
+                let r_local = self.region_radius(found, k);
+                self.find(x, &[heavy], k_big, found, part, extra)?;
+                (
+                    n_local,
+                    r_local,
+                    self.region_radius(&found[n_local..], k_big),
+                )
+            }
+        };
         if found.is_empty() {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
         }
-        let r_big = self.region_radius(found, k_big);
-        let n_local = if two_sizes {
-            self.take_local(found, k)
-        } else {
-            found.len()
-        };
-        let r_local = if two_sizes {
-            self.region_radius(&found[..n_local], k)
-        } else {
-            r_big
-        };
         let mode = self.boundary;
-        let big = match surface {
+        let r_outer = r_local.max(r_big);
+        let outer = match surface {
             None => Region::Volume(match (mode, &self.grid) {
-                (BoundaryMode::None, _) => AxialDistances::unbounded(r_big),
-                (_, Some(grid)) => grid.distances(x, r_big),
-                (_, None) => boundary::axial_distances_traced(self.scene, x, r_big),
+                (BoundaryMode::None, _) => AxialDistances::unbounded(r_outer),
+                (_, Some(grid)) => grid.distances(x, r_outer),
+                (_, None) => boundary::axial_distances_traced(self.scene, x, r_outer),
             }),
             Some((normal, id)) => Region::Disc(match mode {
-                BoundaryMode::None => DiscDistances::unbounded(r_big, normal),
-                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_big),
+                BoundaryMode::None => DiscDistances::unbounded(r_outer, normal),
+                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_outer),
             }),
         };
-        let small = big.capped(r_local);
+        let small = outer.capped(r_local);
+        let big = outer.capped(r_big);
         // The band shape from the grid, where the grid mode has one here.
         let has_shape = match (&self.shapes, view_up) {
             (Some(grid), Some(up)) => {
@@ -555,7 +618,7 @@ impl<'a> Estimator<'a> {
         // Photons on other surfaces (a target's side, the far side of a thin
         // panel) are not on this one; they still bound the search, whose
         // radius comes from every photon found.
-        let plane = surface.map(|(normal, _)| (normal, PLANE_TOLERANCE * r_big + 0.005));
+        let plane = surface.map(|(normal, _)| (normal, PLANE_TOLERANCE * r_outer + 0.005));
         local.clear();
         expanded.clear();
         coarse.clear();
@@ -564,13 +627,20 @@ impl<'a> Estimator<'a> {
             if plane.is_some_and(|(normal, tol)| offset.dot(normal).abs() > tol) {
                 continue;
             }
-            let in_local = i < n_local && small.accepts(mode, offset, r_local);
-            let in_big = two_sizes && big.accepts(mode, offset, r_big);
+            let is_local = i < n_local;
+            let in_local = is_local && small.accepts(mode, offset, r_local);
+            let in_big = if by_layer {
+                !is_local && big.accepts(mode, offset, r_big)
+            } else {
+                two_sizes && big.accepts(mode, offset, r_big)
+            };
             if !(in_local || in_big) {
                 continue;
             }
-            let (w, heavy) = weight(n);
-            let heavy = split && heavy;
+            let (w, toward) = weight(n);
+            // Counted at the expanded scale: the heavy layer's photons, or
+            // in one search those travelling toward the viewer.
+            let heavy = if by_layer { !is_local } else { split && toward };
             let (band, group) = (n.photon.band, n.photon.group);
             if in_local && !heavy {
                 local.add(band, w);
@@ -578,16 +648,18 @@ impl<'a> Estimator<'a> {
                     group_local.add(group, band, w);
                 }
             }
-            if in_big {
+            // Two layers: the expanded band sums (a shape where the grid
+            // has none) take every photon counted.
+            if in_big || by_layer {
                 expanded.add(band, w);
                 if with_groups {
                     group_expanded.add(group, band, w);
                 }
-                if heavy {
-                    coarse.add(band, w);
-                    if with_groups {
-                        group_coarse.add(group, band, w);
-                    }
+            }
+            if in_big && heavy {
+                coarse.add(band, w);
+                if with_groups {
+                    group_coarse.add(group, band, w);
                 }
             }
         }
@@ -719,6 +791,18 @@ impl Groups<'_> {
 /// at scattering cosine `cos`.
 fn mixture([pw, pp]: &[TruncatedPhase; 2], fw: f64, cos: f64) -> f64 {
     fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)
+}
+
+/// Which photons an estimate searches, and at which scale.
+#[derive(Clone, Copy)]
+enum Classes<'l> {
+    /// One search over the union of these layers.
+    Union(&'l [u16]),
+    /// The `k` nearest of `light` at the local scale and the `k_expanded`
+    /// nearest of `heavy` at the expanded scale: volume estimates of the
+    /// grid mode, where the heavy layer holds the photons travelling toward
+    /// the viewer.
+    Split { light: u16, heavy: u16 },
 }
 
 /// The search region of an estimate: a sphere or a disc with its boundary

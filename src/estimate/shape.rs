@@ -37,7 +37,7 @@
 //! incident light, which the expanded search gives well).
 
 use crate::error::Result;
-use crate::photon::LAYER_VOLUME;
+use crate::photon::VOLUME_LAYERS;
 use crate::store::PhotonQuery;
 use glam::Vec3;
 
@@ -102,11 +102,16 @@ impl BandShapeGrid {
         let bands = map.bands().len();
         // Pass 1: the depth distribution of the photons, below the surface
         // down to the deepest (from the map's index).
-        let z_min = map.layer_bounds(LAYER_VOLUME).min.z;
+        let z_min = VOLUME_LAYERS
+            .iter()
+            .map(|&l| map.layer_bounds(l).min.z)
+            .fold(f32::INFINITY, f32::min);
         let depth = if z_min.is_finite() { -z_min } else { 0.0 }.max(1e-3);
         let mut hist = vec![0u64; Z_BINS];
         let bin = |z: f32| (((-z / depth) * Z_BINS as f32) as usize).min(Z_BINS - 1);
-        map.for_each_photon(LAYER_VOLUME, &mut |p| hist[bin(p.position.z)] += 1)?;
+        for layer in VOLUME_LAYERS {
+            map.for_each_photon(layer, &mut |p| hist[bin(p.position.z)] += 1)?;
+        }
         let total: u64 = hist.iter().sum();
         let nz = ((voxels as f64).cbrt().round() as usize).clamp(1, 64);
         let nxy = ((voxels as f64 / nz as f64).sqrt().round() as usize).max(1);
@@ -152,16 +157,18 @@ impl BandShapeGrid {
         let cells = nxy * nxy * nz;
         let per_voxel = GROUPS * bands;
         let mut sums = vec![0f64; cells * 2 * per_voxel];
-        map.for_each_photon(LAYER_VOLUME, &mut |p| {
-            let v = grid.voxel_of(p.position);
-            let g = p.group as usize % GROUPS;
-            for (h, up) in [(0, true), (1, false)] {
-                let w = weight(p, up) * p.power as f64;
-                if w.is_finite() {
-                    sums[(v * 2 + h) * per_voxel + g * bands + p.band as usize] += w;
+        for layer in VOLUME_LAYERS {
+            map.for_each_photon(layer, &mut |p| {
+                let v = grid.voxel_of(p.position);
+                let g = p.group as usize % GROUPS;
+                for (h, up) in [(0, true), (1, false)] {
+                    let w = weight(p, up) * p.power as f64;
+                    if w.is_finite() {
+                        sums[(v * 2 + h) * per_voxel + g * bands + p.band as usize] += w;
+                    }
                 }
-            }
-        })?;
+            })?;
+        }
         grid.shapes = vec![0.0; cells * 2 * bands];
         grid.deviations = vec![0.0; cells * 2 * per_voxel];
         let mut band_sums = vec![0f64; bands];

@@ -263,7 +263,7 @@ impl RenderJob<'_> {
         let t_emit = start.elapsed().as_secs_f64();
         crate::mem::release_free_memory();
 
-        let volume_photons = file.layer_photons(crate::photon::LAYER_VOLUME);
+        let volume_photons = crate::photon::VOLUME_LAYERS.map(|l| file.layer_photons(l));
         shares.take_band_shape_grid(crate::estimate::Estimator::shape_grid_bytes(
             scene,
             volume_photons,

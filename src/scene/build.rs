@@ -215,6 +215,13 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     if f.photons.count == 0 {
         return Err(ctx.err(&[K("photons"), K("count")], "must be at least 1"));
     }
+    let split = f.photons.upward_split;
+    if !(split.is_power_of_two() && split <= 64) {
+        return Err(ctx.err(
+            &[K("photons"), K("upward_split")],
+            format!("{split} is not a power of two from 1 to 64"),
+        ));
+    }
     let mut tally_depths = f.tally.depths_m.clone();
     for (i, d) in tally_depths.iter().enumerate() {
         if !finite_in(*d, 0.0, 1e5) {
@@ -249,6 +256,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         geometry,
         photons: f.photons.count,
         store_direct: f.photons.store_direct,
+        upward_split: f.photons.upward_split as usize,
         tally_depths,
         sensor,
         radiometers,

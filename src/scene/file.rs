@@ -332,6 +332,14 @@ pub struct PhotonsFile {
     /// computes it directly, so by default it is not stored).
     #[serde(default)]
     pub store_direct: bool,
+    /// Copies a path of full weight splits into when it turns upward
+    /// (`emit::trace`): a power of two, 1 (no splitting) to 64.
+    #[serde(default = "default_upward_split")]
+    pub upward_split: u32,
+}
+
+fn default_upward_split() -> u32 {
+    crate::scene::settings::DEFAULT_UPWARD_SPLIT
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -206,6 +206,9 @@ pub struct Scene {
     pub geometry: Geometry,
     pub photons: u64,
     pub store_direct: bool,
+    /// Copies a photon path splits into when it first turns upward (1: no
+    /// splitting; see `emit::trace`).
+    pub upward_split: usize,
     /// Depths (m, >= 0) of the irradiance tallies; 0 is just below the surface.
     pub tally_depths: Vec<f64>,
     pub sensor: Sensor,

@@ -3,7 +3,7 @@
 //! Hashed: every validated value emission reads, after defaults and
 //! overrides are applied (seed, photon count, band grid, sun, sky, surface,
 //! domain, water and its phase functions, floor and target reflectances,
-//! the geometry's triangles, tally depths, `store_direct`), and the bytes of
+//! the geometry's triangles, tally depths, `store_direct`, `upward_split`), and the bytes of
 //! every file the scene names. Not hashed: `[sensor]`, `[[radiometer]]`,
 //! `[estimate]` and the scene's name, which do not change a single photon.
 //!
@@ -24,6 +24,7 @@ impl Scene {
             .value("bands", self.bands.len())
             .value("seed", self.seed)
             .value("store_direct", self.store_direct)
+            .value("upward_split", self.upward_split)
             .value("tally_depths_m", &self.tally_depths);
         let parts: [(&str, String); 11] = [
             ("band_grid", format!("{:?}", self.bands)),

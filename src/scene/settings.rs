@@ -28,6 +28,9 @@ pub fn policy_k(photons: u64) -> usize {
     let k = DEFAULT_K as f64 * (photons as f64 / POLICY_PHOTONS).powf(4.0 / 7.0);
     (k.round() as usize).clamp(16, 100_000)
 }
+/// Copies a photon path splits into when it first turns upward
+/// (`[photons] upward_split`; see `emit::trace`).
+pub const DEFAULT_UPWARD_SPLIT: u32 = 4;
 /// Largest radius of a k-nearest search (m).
 pub const DEFAULT_MAX_RADIUS_M: f64 = 2.0;
 /// Ray-marching step in water (m).
@@ -35,7 +38,7 @@ pub const DEFAULT_STEP_M: f64 = 0.5;
 /// Photons per band in a band-shape voxel at [`POLICY_PHOTONS`] traced
 /// photons (`spectral = "grid"`; see `estimate::shape`, which grows it
 /// with the photon count).
-pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 400;
+pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 1600;
 /// Half-angle of the truncated forward peak (degrees) along rays looking up
 /// or sideways, into the downwelling light and the sun's aureole (see
 /// `estimate::peak` for the measurements behind it).

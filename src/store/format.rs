@@ -11,7 +11,8 @@
 //!                     emitted map, the emission report)
 //!            index    one 72-byte entry per tile (offset, length, count,
 //!                     quantisation box, photon bounds, crc32 of the blob,
-//!                     layer: 0 volume photons, 1 surface photons)
+//!                     layer: 0 volume photons travelling down, 1 surface
+//!                     photons, 2 volume photons travelling up)
 //! end - 40   footer   index offset u64, index length u64, tile count u32,
 //!                     index crc32, version u32, footer crc32, magic "LTRLEND\0"
 //! ```
@@ -36,7 +37,7 @@ pub const HEADER_MAGIC: [u8; 8] = *b"LTRLMAP\0";
 /// Magic at the end of a map file.
 pub const FOOTER_MAGIC: [u8; 8] = *b"LTRLEND\0";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Size of the footer in bytes.
 pub const FOOTER_LEN: usize = 40;
 /// Size of one index entry in bytes.
@@ -276,7 +277,7 @@ impl Header {
             return Err(Error::format(
                 path,
                 format!(
-                    "format version {version} records no photon groups (version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
+                    "format version {version} keeps volume photons in one layer (version 2 records no photon groups, version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
                 ),
             ));
         }

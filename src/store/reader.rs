@@ -268,7 +268,10 @@ impl MapFile {
             path: self.path.display().to_string(),
             format_version: FORMAT_VERSION,
             photons: h.photons,
-            volume_photons: self.layer_photons(crate::photon::LAYER_VOLUME),
+            volume_photons: crate::photon::VOLUME_LAYERS
+                .iter()
+                .map(|&l| self.layer_photons(l))
+                .sum(),
             surface_photons: self.layer_photons(crate::photon::LAYER_SURFACE),
             tiles: h.tiles,
             bands: h.bands.len(),

@@ -20,3 +20,4 @@ mod products;
 mod render;
 mod roundtrip;
 mod scenes;
+mod splitting;

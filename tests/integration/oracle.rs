@@ -313,11 +313,11 @@ proptest! {
 /// photons (the water map keeps its floor photons in the surface layer).
 #[test]
 fn layer_queries_match_brute_force() {
-    use littoral::photon::{LAYER_SURFACE, LAYER_VOLUME};
+    use littoral::photon::{LAYERS, LAYER_SURFACE, LAYER_VOLUME, LAYER_VOLUME_UP};
     use littoral::store::codec::TileDecoder;
     let f = fixture(Distribution::Water);
     let file = f.map.file();
-    let mut by_layer: [Vec<Photon>; 2] = [Vec::new(), Vec::new()];
+    let mut by_layer: [Vec<Photon>; LAYERS] = Default::default();
     let mut dec = TileDecoder::default();
     let mut tile = Vec::new();
     for t in 0..file.tiles().len() as u32 {
@@ -328,6 +328,10 @@ fn layer_queries_match_brute_force() {
     }
     assert!(by_layer[1].iter().all(|p| p.position.z == -10.0));
     assert!(by_layer[0].len() > 2 * by_layer[1].len() && !by_layer[1].is_empty());
+    // Layered by the direction before quantisation.
+    let eps = littoral::photon::OCT_MAX_ANGLE_ERROR_RAD;
+    assert!(by_layer[0].iter().all(|p| p.direction.z <= eps));
+    assert!(by_layer[2].iter().all(|p| p.direction.z > -eps) && !by_layer[2].is_empty());
     assert_eq!(file.layer_photons(LAYER_SURFACE), by_layer[1].len() as u64);
     let mut rng = littoral::rng::Pcg32::new(8, 8);
     for _ in 0..200 {
@@ -336,7 +340,11 @@ fn layer_queries_match_brute_force() {
             100.0 * rng.uniform_f32(),
             -10.5 + 11.0 * rng.uniform_f32(),
         );
-        for (layer, photons) in [(LAYER_VOLUME, &by_layer[0]), (LAYER_SURFACE, &by_layer[1])] {
+        for (layer, photons) in [
+            (LAYER_VOLUME, &by_layer[0]),
+            (LAYER_SURFACE, &by_layer[1]),
+            (LAYER_VOLUME_UP, &by_layer[2]),
+        ] {
             for map in f.maps() {
                 let got = map
                     .query_layer(

@@ -9,7 +9,7 @@ use littoral::estimate::groups::{variance, CHANNELS};
 use littoral::estimate::{Estimator, Scratch};
 use littoral::job::report::RunReport;
 use littoral::job::{MemoryBudget, RenderJob};
-use littoral::photon::{Photon, LAYER_SURFACE, LAYER_VOLUME};
+use littoral::photon::{volume_layer, Photon, LAYER_SURFACE};
 use littoral::progress::Silent;
 use littoral::rng::Pcg32;
 use littoral::scene::{BoundaryMode, Overrides, Scene};
@@ -46,7 +46,11 @@ impl PhotonSource for UniformBox {
                 power: 1.0,
                 group: littoral::photon::group_of_path(i),
             };
-            out.push(StagedPhoton::new(&photon, LAYER_VOLUME, i));
+            out.push(StagedPhoton::new(
+                &photon,
+                volume_layer(photon.direction),
+                i,
+            ));
         }
     }
     fn bands(&self) -> littoral::BandGrid {

@@ -185,8 +185,10 @@ pub struct QueryArgs {
 /// Photon map layers.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum Layer {
-    /// Photons stored at scattering events in the water.
+    /// Photons stored at scattering events in the water, travelling down.
     Volume,
+    /// Photons stored at scattering events in the water, travelling up.
+    VolumeUp,
     /// Photons stored on the floor and targets.
     Surface,
 }

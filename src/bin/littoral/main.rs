@@ -151,6 +151,7 @@ fn run_map(cmd: MapCommand) -> AnyResult<()> {
             let map = PhotonMap::new(MapFile::open(&a.file)?, budget)?;
             let layer = a.layer.map(|l| match l {
                 Layer::Volume => littoral::photon::LAYER_VOLUME,
+                Layer::VolumeUp => littoral::photon::LAYER_VOLUME_UP,
                 Layer::Surface => littoral::photon::LAYER_SURFACE,
             });
             let mut found = Vec::new();

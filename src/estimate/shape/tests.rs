@@ -1,6 +1,6 @@
 use super::*;
 use crate::bounds::Aabb;
-use crate::photon::Photon;
+use crate::photon::{volume_layer, Photon};
 use crate::rng::Pcg32;
 use crate::spectral::BandGrid;
 use crate::store::InMemoryMap;
@@ -52,7 +52,7 @@ fn map(n: u64) -> InMemoryMap {
             power: 1.0,
             group: 0,
         };
-        (photon, LAYER_VOLUME)
+        (photon, volume_layer(photon.direction))
     });
     let bounds = Aabb {
         min: Vec3::new(0.0, 0.0, -8.0),
@@ -113,7 +113,7 @@ fn voxels_follow_the_photon_count() {
             power: 1.0,
             group: 0,
         };
-        (p, LAYER_VOLUME)
+        (p, volume_layer(p.direction))
     });
     let bounds = Aabb {
         min: Vec3::new(0.0, 0.0, -8.0),
@@ -142,7 +142,7 @@ fn shapes_are_not_blended_across_an_iop_jump() {
             power: 1.0,
             group: (i % 16) as u8,
         };
-        (p, LAYER_VOLUME)
+        (p, volume_layer(p.direction))
     });
     let bounds = Aabb {
         min: Vec3::new(0.0, 0.0, -4.0),
