@@ -154,6 +154,7 @@ impl<'a> Estimator<'a> {
                 map,
                 scene.domain.size_m,
                 voxels,
+                scene.horizontally_uniform(),
                 &scene.water.depth_boundaries(),
                 &|p: &crate::photon::Photon, up: bool| est.shape_weight(p, up),
             )?;

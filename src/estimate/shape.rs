@@ -43,6 +43,8 @@ use glam::Vec3;
 
 /// Vertical histogram bins for the equal-count layers.
 const Z_BINS: usize = 4096;
+/// Most depth layers of a grid.
+const MAX_LAYERS: usize = 64;
 
 /// Band shapes of the in-scatter toward the two viewing directions, per voxel.
 pub struct BandShapeGrid {
@@ -91,11 +93,15 @@ impl BandShapeGrid {
     /// Build the grid from the volume photons of `map` over a domain of
     /// `size_m`, with about `voxels` voxels; `weight(photon, up)` is a
     /// photon's phase weight toward a viewer of light travelling up (`up`)
-    /// or down.
+    /// or down. With `layers_only` (a scene whose light field cannot vary
+    /// across the domain) the voxels are depth layers spanning the domain:
+    /// the grid resolves only what varies, and each layer gathers as many
+    /// photons as the grid's cells of that depth would together.
     pub fn build(
         map: &dyn PhotonQuery,
         size_m: [f64; 2],
         voxels: usize,
+        layers_only: bool,
         boundaries_m: &[f64],
         weight: &(dyn Fn(&crate::photon::Photon, bool) -> f64 + Sync),
     ) -> Result<BandShapeGrid> {
@@ -113,8 +119,15 @@ impl BandShapeGrid {
             map.for_each_photon(layer, &mut |p| hist[bin(p.position.z)] += 1)?;
         }
         let total: u64 = hist.iter().sum();
-        let nz = ((voxels as f64).cbrt().round() as usize).clamp(1, 64);
-        let nxy = ((voxels as f64 / nz as f64).sqrt().round() as usize).max(1);
+        let (nz, nxy) = if layers_only {
+            (voxels.clamp(1, MAX_LAYERS), 1)
+        } else {
+            let nz = ((voxels as f64).cbrt().round() as usize).clamp(1, MAX_LAYERS);
+            (
+                nz,
+                ((voxels as f64 / nz as f64).sqrt().round() as usize).max(1),
+            )
+        };
         // Equal-count layers.
         let mut z_edges = vec![0.0f32];
         let mut acc = 0u64;

@@ -404,6 +404,17 @@ impl WaterModel {
         )
     }
 
+    /// True when the IOPs vary with depth alone (uniform, or in layers).
+    pub fn is_horizontally_uniform(&self) -> bool {
+        match self {
+            WaterModel::Explicit { .. } => true,
+            WaterModel::Constituents { field, .. } => matches!(
+                field,
+                ConstituentField::Uniform(_) | ConstituentField::Layers { .. }
+            ),
+        }
+    }
+
     /// True when the IOPs do not depend on position.
     pub fn is_uniform(&self) -> bool {
         match self {

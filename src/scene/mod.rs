@@ -294,6 +294,17 @@ impl Scene {
         )
     }
 
+    /// True when nothing in the scene varies across the domain: periodic
+    /// edges, no floor and no target, and water whose IOPs vary with depth
+    /// alone. The light field then depends on depth alone (the band-shape
+    /// grid resolves only depth).
+    pub fn horizontally_uniform(&self) -> bool {
+        self.domain.periodic
+            && self.bottom.is_none()
+            && self.target_reflectance.is_empty()
+            && self.water.is_horizontally_uniform()
+    }
+
     /// Lambertian reflectance of `surface` at `p` in `band`.
     pub fn reflectance(&self, surface: SurfaceId, p: Vec3, band: usize) -> f64 {
         if surface == FLOOR {

@@ -38,7 +38,7 @@ pub const DEFAULT_STEP_M: f64 = 0.5;
 /// Photons per band in a band-shape voxel at [`POLICY_PHOTONS`] traced
 /// photons (`spectral = "grid"`; see `estimate::shape`, which grows it
 /// with the photon count).
-pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 1600;
+pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 400;
 /// Half-angle of the truncated forward peak (degrees) along rays looking up
 /// or sideways, into the downwelling light and the sun's aureole (see
 /// `estimate::peak` for the measurements behind it).

@@ -70,7 +70,7 @@ fn grid_reads_the_band_shares_of_each_hemisphere() {
     let n = 400_000;
     let m = map(n);
     let voxels = 64;
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, &[], &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, false, &[], &hemisphere).unwrap();
     let [nx, ny, nz] = g.dims();
     assert!(nx * ny * nz >= 32 && nz >= 3, "{:?}", g.dims());
     let per_voxel_hemisphere = n as f64 / (nx * ny * nz) as f64 / 2.0;
@@ -120,7 +120,7 @@ fn voxels_follow_the_photon_count() {
         max: Vec3::new(10.0, 10.0, 0.0),
     };
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, &[], &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], &hemisphere).unwrap();
     let mut out = [0.0; 4];
     assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
     assert!(g.shape_at(Vec3::new(5.0, 5.0, -3.0), false, &mut out));
@@ -151,11 +151,11 @@ fn shapes_are_not_blended_across_an_iop_jump() {
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
     let mut out = [0.0; 2];
     for (x_z, want) in [(-1.95, [1.0, 0.0]), (-2.05, [0.0, 1.0])] {
-        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, &[2.0], &hemisphere).unwrap();
+        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[2.0], &hemisphere).unwrap();
         assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert_eq!(out, want, "at z = {x_z}");
         // Without the jump the site is between two centres and mixes them.
-        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, &[], &hemisphere).unwrap();
+        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[], &hemisphere).unwrap();
         assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert!(out[0] > 0.0 && out[1] > 0.0, "{out:?}");
     }
