@@ -1,6 +1,7 @@
 //! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
 //! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
 //! a true-colour quicklook, a window or a band range cut into a new cube,
+//! the cube in a real sensor's bands,
 //! per-band statistics, the per-band difference of two cubes, and a
 //! spectral OpenEXR copy.
 //!
@@ -92,6 +93,21 @@ enum Command {
         from: usize,
         /// Last band kept (inclusive).
         to: usize,
+        /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Integrate the cube over a real sensor's bands into a new cube
+    /// (bands whose response the cube's wavelengths do not cover are left
+    /// out and listed).
+    Resample {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// sentinel2a-msi, sentinel2b-msi, landsat8-oli, landsat9-oli,
+        /// aviris-ng, or csv:FILE (wavelength_nm,<band>,... responses on an
+        /// even grid, or band,center_nm,fwhm_nm Gaussians).
+        #[arg(long)]
+        sensor: String,
         /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
         #[arg(long)]
         out: PathBuf,
@@ -233,6 +249,29 @@ fn run(cli: Cli) -> AnyResult<()> {
             let summary =
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "bands": to - from + 1 });
             print(&format!("{summary}\n"))
+        }
+        Command::Resample { cube, sensor, out } => {
+            let sensor = littoral::cube::sensor::Sensor::named(&sensor)?;
+            let cube = EnviCube::open(&cube)?;
+            let name = hdr_name(&out)?;
+            let dir = littoral::output::parent_dir(&out);
+            let (files, made) = littoral::cube::ops::resample(&cube, &sensor, dir, &name)?;
+            let band = |i: usize| {
+                let b = &sensor.bands[i];
+                serde_json::json!({ "name": b.name, "centre_nm": b.centre_nm, "fwhm_nm": b.fwhm_nm })
+            };
+            let left_out: Vec<&str> = (0..sensor.bands.len())
+                .filter(|i| !made.iter().any(|m| m.band == *i))
+                .map(|i| sensor.bands[i].name.as_str())
+                .collect();
+            let summary = serde_json::json!({
+                "hdr": files.hdr,
+                "bsq": files.bsq,
+                "sensor": sensor.name,
+                "bands": made.iter().map(|m| band(m.band)).collect::<Vec<_>>(),
+                "left_out": left_out,
+            });
+            print(&format!("{}\n", serde_json::to_string_pretty(&summary)?))
         }
         Command::Stats { cube } => {
             let stats = littoral::cube::ops::stats(&EnviCube::open(&cube)?)?;

@@ -19,6 +19,7 @@ pub mod exr;
 pub mod georef;
 pub mod ops;
 pub mod quicklook;
+pub mod sensor;
 
 pub use envi::{CubeSpec, EnviCube, EnviWriter};
 pub use quicklook::Quicklook;

@@ -1,8 +1,9 @@
 //! Whole-cube operations that stream through cubes larger than memory: a
 //! window cut into a new cube (one 64 x 64 tile of all bands at a time),
 //! a band range cut into a new cube (tiles of those bands), per-band
-//! statistics (one band at a time) and the per-band difference of two
-//! cubes (two bands at a time).
+//! statistics (one band at a time), the per-band difference of two
+//! cubes (two bands at a time), and the cube in a real sensor's bands (one
+//! tile of all bands at a time).
 
 use super::envi::{CubeFiles, CubeSpec, EnviCube, EnviWriter};
 use crate::error::{Error, Result};
@@ -140,6 +141,84 @@ pub fn subset(
         }
     }
     writer.finish()
+}
+
+/// `cube` integrated over the bands of `sensor` (`cube::sensor`) as a new
+/// cube `dir/NAME.{hdr,bsq}`, one 64 x 64 tile at a time; returns its
+/// files and the sensor bands made, by wavelength. Bands whose response the
+/// cube's spectral range does not cover are left out; none covered is an
+/// error.
+pub fn resample(
+    cube: &EnviCube,
+    sensor: &super::sensor::Sensor,
+    dir: &Path,
+    name: &str,
+) -> Result<(CubeFiles, Vec<super::sensor::BandWeights>)> {
+    let grid = band_grid(cube)?;
+    let mut made = sensor.weights(&grid);
+    // The cube's bands rise in wavelength (a panchromatic band is listed last).
+    made.sort_by(|a, b| {
+        let c = |m: &super::sensor::BandWeights| sensor.bands[m.band].centre_nm;
+        c(a).total_cmp(&c(b))
+    });
+    if made.is_empty() {
+        return Err(Error::data(
+            cube.header_path(),
+            None,
+            "wavelength",
+            format!(
+                "the cube's {:.1}-{:.1} nm cover no band of {} (each needs {} % of its response inside)",
+                grid.centers_nm()[0],
+                grid.centers_nm()[grid.len() - 1],
+                sensor.name,
+                super::sensor::MIN_COVERAGE * 100.0
+            ),
+        ));
+    }
+    let bands = BandGrid::explicit(
+        made.iter()
+            .map(|m| sensor.bands[m.band].centre_nm as f32)
+            .collect(),
+        made.iter()
+            .map(|m| sensor.bands[m.band].fwhm_nm as f32)
+            .collect(),
+    )?;
+    let spec = CubeSpec {
+        samples: cube.samples(),
+        lines: cube.lines(),
+        bands,
+        description: format!(
+            "{} (in the bands of {})",
+            cube.description().replace(['{', '}'], ""),
+            sensor.name
+        ),
+        data_units: cube
+            .data_units()
+            .unwrap_or("unknown")
+            .replace(['{', '}'], ""),
+    };
+    let (w, h, nb, out_nb) = (cube.samples(), cube.lines(), cube.bands(), made.len());
+    let writer = EnviWriter::create(dir, name, spec)?;
+    for ty in (0..h).step_by(TILE) {
+        for tx in (0..w).step_by(TILE) {
+            let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));
+            let mut bands = vec![Vec::new(); nb];
+            let mut sums = vec![0f64; tw * th * out_nb];
+            for (o, m) in made.iter().enumerate() {
+                for &(b, weight) in &m.weights {
+                    if bands[b].is_empty() {
+                        bands[b] = cube.window(b, tx, ty, tw, th)?;
+                    }
+                    for (i, v) in bands[b].iter().enumerate() {
+                        sums[i * out_nb + o] += weight * *v as f64;
+                    }
+                }
+            }
+            let tile: Vec<f32> = sums.iter().map(|&v| v as f32).collect();
+            writer.write_tile(tx, ty, tw, th, &tile)?;
+        }
+    }
+    Ok((writer.finish()?, made))
 }
 
 /// One band's statistics over its finite values.

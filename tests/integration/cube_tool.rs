@@ -374,3 +374,70 @@ fn subset_and_stats() {
     ]);
     assert_clean_failure(&bad, "NAME.hdr");
 }
+
+/// `resample` into Sentinel-2A's bands: a band that lies inside one of the
+/// cube's bands reads that band (B3 at 560 nm inside 500-600 nm, B4 at 665
+/// nm inside 600-700 nm), a flat spectrum reads itself in every band, the
+/// bands beyond the cube's 400-700 nm are left out and listed, and an
+/// unknown sensor is refused.
+#[test]
+fn resample_into_sentinel2_bands() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    let out = dir.path().join("s2.hdr");
+    let summary: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
+        "resample",
+        p(&hdr),
+        "--sensor",
+        "sentinel2a-msi",
+        "--out",
+        p(&out),
+    ])))
+    .unwrap();
+    let names: Vec<&str> = summary["bands"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["B1", "B2", "B3", "B4"], "{summary}");
+    let left_out = summary["left_out"].as_array().unwrap();
+    assert!(left_out.iter().any(|b| b == "B8A") && left_out.len() == 9);
+    let s2 = littoral::cube::EnviCube::open(&out).unwrap();
+    for (band, from) in [(2, 1), (3, 2)] {
+        let got = s2.band(band).unwrap();
+        for y in 0..4 {
+            for x in 0..6 {
+                let want = value(x, y, from);
+                assert!((got[y * 6 + x] - want).abs() < 1e-6 * want, "band {band}");
+            }
+        }
+    }
+    let flat_dir = tempdir();
+    let flat = small_cube_with(flat_dir.path(), |x, y, _| 0.5 + 0.01 * (x + y) as f32);
+    let out = flat_dir.path().join("flat.hdr");
+    let sensor = "csv:".to_string() + p(&flat_dir.path().join("g.csv"));
+    std::fs::write(
+        flat_dir.path().join("g.csv"),
+        "band,center_nm,fwhm_nm\nblue,480,20\ngreen,551.5,10\n",
+    )
+    .unwrap();
+    stdout(&cube_tool(&[
+        "resample",
+        p(&flat),
+        "--sensor",
+        &sensor,
+        "--out",
+        p(&out),
+    ]));
+    let cube = littoral::cube::EnviCube::open(&out).unwrap();
+    assert_eq!(cube.bands(), 2);
+    for b in 0..2 {
+        for (i, v) in cube.band(b).unwrap().iter().enumerate() {
+            let want = 0.5 + 0.01 * (i % 6 + i / 6) as f32;
+            assert!((v - want).abs() < 1e-6, "band {b} pixel {i}: {v}");
+        }
+    }
+    let bad = cube_tool(&["resample", p(&hdr), "--sensor", "enmap", "--out", p(&out)]);
+    assert_clean_failure(&bad, "enmap");
+}
