@@ -155,6 +155,7 @@ impl RenderJob<'_> {
             crate::output::write_atomic(&k, e.kd_csv().as_bytes())?;
             profiles = Some((p.display().to_string(), k.display().to_string()));
         }
+        let sensor_cubes = self.sensor_cubes(&rendered)?;
         let report = RunReport {
             integrator,
             Ed_above_surface: ed_above,
@@ -200,6 +201,7 @@ impl RenderJob<'_> {
                         bsq: f.bsq.display().to_string(),
                     })
                     .collect(),
+                sensor_cubes,
             },
             timings_s: RenderTimings {
                 scene: self.scene_seconds,
@@ -220,6 +222,45 @@ impl RenderJob<'_> {
     /// The photon-map integrator: the map (reused or emitted), then the
     /// render; returns the render, the map stage and the seconds to the end
     /// of emission.
+    /// With `[sensor] response`: the radiance and the product cubes
+    /// integrated over that sensor's bands (`cube::ops::resample`), as
+    /// `NAME[.product].SENSOR.{hdr,bsq}` beside them.
+    fn sensor_cubes(
+        &self,
+        rendered: &crate::render::Rendered,
+    ) -> Result<Vec<report::ProductFiles>> {
+        let Some(sensor) = &self.scene.sensor.response else {
+            return Ok(Vec::new());
+        };
+        let tag = Path::new(&sensor.name)
+            .file_stem()
+            .map_or_else(|| sensor.name.clone(), |s| s.to_string_lossy().into_owned());
+        let mut cubes = vec![("radiance", rendered.hdr.clone())];
+        cubes.extend(
+            crate::render::PRODUCTS
+                .iter()
+                .zip(&rendered.products)
+                .map(|(p, f)| (p.suffix, f.hdr.clone())),
+        );
+        let mut out = Vec::with_capacity(cubes.len());
+        for (product, hdr) in cubes {
+            let cube = crate::cube::EnviCube::open(&hdr)?;
+            let stem = hdr
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let (files, _) =
+                crate::cube::ops::resample(&cube, sensor, &self.out_dir, &format!("{stem}.{tag}"))?;
+            out.push(report::ProductFiles {
+                product: product.into(),
+                units: cube.data_units().unwrap_or("unknown").into(),
+                hdr: files.hdr.display().to_string(),
+                bsq: files.bsq.display().to_string(),
+            });
+        }
+        Ok(out)
+    }
+
     fn photon_map(
         &self,
         shares: &mut RenderShares,

@@ -130,12 +130,16 @@ pub struct Outputs {
     /// surface-reflected radiance, remote-sensing reflectance), by suffix.
     #[serde(default)]
     pub products: Vec<ProductFiles>,
+    /// With `[sensor] response`: the radiance (`product` "radiance") and
+    /// each product in that sensor's bands, `NAME[.product].SENSOR.hdr`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensor_cubes: Vec<ProductFiles>,
 }
 
 /// One product cube's files.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProductFiles {
-    /// `lw`, `surface` or `rrs`.
+    /// `lw`, `surface` or `rrs` (or `radiance` among `sensor_cubes`).
     pub product: String,
     pub units: String,
     pub hdr: String,

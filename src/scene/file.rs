@@ -71,6 +71,9 @@ pub struct SensorFile {
     pub position_m: Option<[f64; 3]>,
     pub look_at_m: Option<[f64; 3]>,
     pub fov_deg: Option<f64>,
+    /// A real sensor's bands to write the cubes in as well
+    /// (`cube::sensor::Sensor::named`).
+    pub response: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

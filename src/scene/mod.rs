@@ -171,6 +171,9 @@ pub struct Sensor {
     /// Image size [samples (x), lines (y)].
     pub pixels: [usize; 2],
     pub samples_per_pixel: u32,
+    /// A real sensor whose bands the cubes are also written in
+    /// (`[sensor] response`).
+    pub response: Option<crate::cube::sensor::Sensor>,
 }
 
 /// An in-water (or above-water, at negative depth) radiance meter.

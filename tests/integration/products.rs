@@ -167,3 +167,60 @@ fn profiles_and_kd_are_written_as_csv() {
         );
     }
 }
+
+/// `[sensor] response` writes the radiance and every product in the
+/// sensor's bands beside them (here two Gaussian bands from a CSV named
+/// relative to the scene): each sensor band of each cube is the
+/// response-weighted sum of that cube's bands. An unknown sensor is an
+/// error naming the key.
+#[test]
+fn sensor_response_writes_the_cubes_in_the_sensor_bands() {
+    let dir = tempdir();
+    std::fs::write(
+        dir.path().join("two.csv"),
+        "band,center_nm,fwhm_nm\nblue,480,30\ngreen,560,30\n",
+    )
+    .unwrap();
+    let text = scene(0.8).replace(
+        "pixels = [6, 6]",
+        "pixels = [6, 6]\nresponse = \"csv:two.csv\"",
+    );
+    let s = Scene::parse(&text, &dir.path().join("prod.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("out"), 0);
+    let products: Vec<&str> = r
+        .outputs
+        .sensor_cubes
+        .iter()
+        .map(|c| c.product.as_str())
+        .collect();
+    assert_eq!(products, ["radiance", "lw", "surface", "rrs"]);
+    assert!(r.outputs.sensor_cubes[0].hdr.ends_with("prod.two.hdr"));
+    let sensor = s.sensor.response.as_ref().unwrap();
+    let weights = sensor.weights(&s.bands);
+    assert_eq!(weights.len(), 2);
+    let pixels = 36;
+    let sources = std::iter::once(&r.outputs.bsq).chain(r.outputs.products.iter().map(|p| &p.bsq));
+    for (source, files) in sources.zip(&r.outputs.sensor_cubes) {
+        let (c, got) = (f32s(source), f32s(&files.bsq));
+        for (o, w) in weights.iter().enumerate() {
+            for i in 0..pixels {
+                let want: f64 = w
+                    .weights
+                    .iter()
+                    .map(|(b, w)| w * c[b * pixels + i] as f64)
+                    .sum();
+                let v = got[o * pixels + i] as f64;
+                let what = &files.product;
+                assert!(
+                    (v - want).abs() <= 1e-6 * want.abs().max(1e-12),
+                    "{what} band {o} pixel {i}"
+                );
+            }
+        }
+    }
+    let bad = text.replace("csv:two.csv", "prisma");
+    let e = Scene::parse(&bad, &dir.path().join("prod.toml"), &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("response") && e.contains("prisma"), "{e}");
+}

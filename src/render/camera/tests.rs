@@ -9,6 +9,7 @@ fn orthographic_pixels_tile_the_footprint() {
         },
         pixels: [100, 80],
         samples_per_pixel: 1,
+        response: None,
     };
     let a = ray(&s, 0, 0, 0.0, 0.0);
     let b = ray(&s, 99, 79, 1.0, 1.0);
@@ -27,6 +28,7 @@ fn pinhole_centre_ray_looks_at_the_target() {
         },
         pixels: [64, 64],
         samples_per_pixel: 1,
+        response: None,
     };
     let c = ray(&s, 32, 32, 0.0, 0.0);
     let want = (Vec3::new(50.0, 0.0, 0.0) - Vec3::new(0.0, 0.0, 100.0)).normalize();

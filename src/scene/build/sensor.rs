@@ -23,6 +23,7 @@ pub(super) fn render_settings(
         position_m: None,
         look_at_m: None,
         fov_deg: None,
+        response: None,
     };
     let s = f.sensor.as_ref().unwrap_or(&default);
     let pixels = s.pixels.unwrap_or([256, 256]);
@@ -84,10 +85,28 @@ pub(super) fn render_settings(
                 }
             }
         };
+    // A csv: response is read relative to the scene, like every file it
+    // names (but not an emission input: it changes no photon).
+    let response = match &s.response {
+        None => None,
+        Some(name) => {
+            let name = match name.strip_prefix("csv:") {
+                Some(file) if std::path::Path::new(file).is_relative() => {
+                    format!("csv:{}", ctx.dir.join(file).display())
+                }
+                _ => name.clone(),
+            };
+            Some(
+                crate::cube::sensor::Sensor::named(&name)
+                    .map_err(|e| ctx.err(&sk("response"), e.to_string()))?,
+            )
+        }
+    };
     let sensor = Sensor {
         kind,
         pixels,
         samples_per_pixel: spp,
+        response,
     };
 
     let mut radiometers = Vec::new();
