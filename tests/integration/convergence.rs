@@ -49,11 +49,14 @@ fn spread(dir: &Path, photons: u64, mode: SpectralMode) -> f64 {
 }
 
 /// With the default `grid` mode and the search-size policy, eight times
-/// the photons cut the per-pixel per-band spread: measured over three
-/// seeds it was 12.0 % +- 0.8 % (seed-to-seed deviation) at 200 k photons
-/// and 7.6 % +- 0.3 % at 1.6 M, a ratio of 0.63 +- 0.05; asserted below
-/// 0.8, over three deviations from the measured ratio. The `compensated`
-/// mode at 200 k photons is far noisier per band (over twice the spread).
+/// the photons cut the per-pixel per-band spread at least as N^-1/3
+/// (a ratio of 0.5): measured over seeds 1-3 it was 6.0 % +- 0.5 %
+/// (seed-to-seed deviation) at 200 k photons and 2.9 % +- 0.1 % at 1.6 M,
+/// a ratio of 0.49 +- 0.03; asserted below 0.6, over three deviations
+/// above the measured ratio. (Before the photons travelling up had a map
+/// layer of their own: 12.0 % and 7.6 %, a ratio of 0.63.) The
+/// `compensated` mode at 200 k photons is far noisier per band (five
+/// times the spread; asserted over twice).
 #[test]
 fn identical_band_spread_falls_with_photons() {
     let dir = tempdir();
@@ -61,7 +64,7 @@ fn identical_band_spread_falls_with_photons() {
     let big = spread(dir.path(), 1_600_000, SpectralMode::Grid);
     let compensated = spread(dir.path(), 200_000, SpectralMode::Compensated);
     eprintln!("grid 200 k {small}, 1.6 M {big}; compensated 200 k {compensated}");
-    assert!(big < 0.8 * small, "spread {small} -> {big}");
+    assert!(big < 0.6 * small, "spread {small} -> {big}");
     assert!(
         compensated > 2.0 * small,
         "compensated {compensated}, grid {small}"
