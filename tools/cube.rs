@@ -1,15 +1,17 @@
-//! `littoral-cube`: look inside the radiance cubes littoral writes (ENVI,
-//! float32 BSQ): a JSON summary, one pixel's spectrum, one band as an image,
-//! a true-colour quicklook, a window or a band range cut into a new cube,
-//! the cube in a real sensor's bands,
-//! per-band statistics, the per-band difference of two cubes, and a
-//! spectral OpenEXR copy.
+//! `littoral-cube`: look inside radiance cubes (ENVI: littoral's float32
+//! BSQ, or BSQ, BIL and BIP cubes of 16-bit integers or 32/64-bit floats
+//! that other software writes): a JSON summary, one pixel's spectrum, one
+//! band as an image, a true-colour quicklook, a window or a band range cut
+//! into a new cube, the cube in another interleave, a window as CSV, the
+//! cube in a real sensor's bands, per-band statistics, the per-band
+//! difference of two cubes, and a spectral OpenEXR copy.
 //!
 //! Thin, like `littoral`: arguments and exit codes here, the reading and
 //! image writing in the library (`littoral::cube`). Every command reads the
 //! cube with positioned reads and holds at most one band (plus, for the
-//! quicklook, the RGB image), so it works on cubes larger than memory.
-//! Not for: editing cubes, or other formats.
+//! quicklook, the RGB image; for `csv`, the window), so it works on cubes
+//! larger than memory.
+//! Not for: editing cubes, or formats other than ENVI.
 
 use clap::{Parser, Subcommand};
 use littoral::cli::{self, print, AnyResult};
@@ -23,11 +25,16 @@ use std::process::ExitCode;
 #[command(
     name = "littoral-cube",
     version,
-    about = "Inspect littoral's radiance cubes (ENVI float32 BSQ)"
+    about = "Inspect radiance cubes (ENVI: BSQ, BIL or BIP; int16, uint16, float32 or float64)"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Band centres in nm, comma-separated, for a cube whose header has
+    /// neither `wavelength` nor wavelengths in its `band names` (or to
+    /// replace them).
+    #[arg(long, global = true, value_delimiter = ',', allow_hyphen_values = true)]
+    wavelengths: Option<Vec<f64>>,
 }
 
 #[derive(Subcommand)]
@@ -84,6 +91,33 @@ enum Command {
         /// Header of the new cube (NAME.hdr; NAME.bsq is written beside it).
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Write the cube with its values in another order (BSQ, BIL or BIP),
+    /// as float32 little-endian.
+    Convert {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// The new cube's interleave.
+        #[arg(long, value_enum)]
+        interleave: littoral::cube::envi::Interleave,
+        /// Header of the new cube (NAME.hdr; the data beside it as
+        /// NAME.bsq, NAME.bil or NAME.bip).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Print the window of W x H pixels at (X, Y) as CSV: x,y and one
+    /// column per band (its wavelength in nm as the header).
+    Csv {
+        /// The cube's header or data file.
+        cube: PathBuf,
+        /// Left column of the window.
+        x: usize,
+        /// Top line of the window.
+        y: usize,
+        /// Width in pixels.
+        w: usize,
+        /// Height in lines.
+        h: usize,
     },
     /// Cut the bands FROM..=TO (numbered from 0) into a new cube.
     Subset {
@@ -153,10 +187,22 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> AnyResult<()> {
+    if let Some(bad) = cli
+        .wavelengths
+        .iter()
+        .flatten()
+        .find(|v| !(v.is_finite() && **v > 0.0))
+    {
+        return Err(
+            Error::invalid("--wavelengths", format!("{bad} is not a wavelength in nm")).into(),
+        );
+    }
+    let wavelengths = cli.wavelengths;
+    let open = |path: &PathBuf| EnviCube::open_with(path, wavelengths.as_deref());
     match cli.command {
-        Command::Info { cube } => info(&EnviCube::open(&cube)?),
+        Command::Info { cube } => info(&open(&cube)?),
         Command::Spectrum { cube, x, y } => {
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let spectrum = cube.spectrum(x, y)?;
             let mut text = String::from("wavelength_nm,value\n");
             for (nm, v) in cube.wavelengths_nm().iter().zip(&spectrum) {
@@ -171,7 +217,7 @@ fn run(cli: Cli) -> AnyResult<()> {
                 );
             }
             png_only(&out)?;
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let b = cube.band_index_nearest(nm);
             let centre = cube.wavelengths_nm()[b];
             let reach = cube.fwhm_nm().map_or(0.0, |f| f[b]).max(1e-9);
@@ -202,7 +248,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             exposure,
         } => {
             png_only(&out)?;
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let q = Quicklook::for_cube(&cube);
             if !q.has_visible_bands() {
                 return Err(Error::data(
@@ -225,7 +271,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             h,
             out,
         } => {
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let name = out
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -242,7 +288,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             to,
             out,
         } => {
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let name = hdr_name(&out)?;
             let dir = littoral::output::parent_dir(&out);
             let files = littoral::cube::ops::subset(&cube, (from, to), dir, &name)?;
@@ -252,7 +298,7 @@ fn run(cli: Cli) -> AnyResult<()> {
         }
         Command::Resample { cube, sensor, out } => {
             let sensor = littoral::cube::sensor::Sensor::named(&sensor)?;
-            let cube = EnviCube::open(&cube)?;
+            let cube = open(&cube)?;
             let name = hdr_name(&out)?;
             let dir = littoral::output::parent_dir(&out);
             let (files, made) = littoral::cube::ops::resample(&cube, &sensor, dir, &name)?;
@@ -273,15 +319,35 @@ fn run(cli: Cli) -> AnyResult<()> {
             });
             print(&format!("{}\n", serde_json::to_string_pretty(&summary)?))
         }
+        Command::Convert {
+            cube,
+            interleave,
+            out,
+        } => {
+            let cube = open(&cube)?;
+            let name = hdr_name(&out)?;
+            let dir = littoral::output::parent_dir(&out);
+            let files = littoral::cube::ops::convert(&cube, interleave, dir, &name)?;
+            let summary = serde_json::json!({
+                "hdr": files.hdr,
+                "data": files.bsq,
+                "interleave": interleave.extension(),
+            });
+            print(&format!("{summary}\n"))
+        }
+        Command::Csv { cube, x, y, w, h } => print(&littoral::cube::ops::window_csv(
+            &open(&cube)?,
+            (x, y, w, h),
+        )?),
         Command::Stats { cube } => {
-            let stats = littoral::cube::ops::stats(&EnviCube::open(&cube)?)?;
+            let stats = littoral::cube::ops::stats(&open(&cube)?)?;
             print(&format!("{}\n", serde_json::to_string_pretty(&stats)?))
         }
         Command::Diff { a, b, tol } => {
             if tol.is_some_and(|t| t.is_nan() || t < 0.0) {
                 return Err(Error::invalid("--tol", "must be a number >= 0").into());
             }
-            let d = littoral::cube::ops::diff(&EnviCube::open(&a)?, &EnviCube::open(&b)?)?;
+            let d = littoral::cube::ops::diff(&open(&a)?, &open(&b)?)?;
             print(&format!("{}\n", serde_json::to_string_pretty(&d)?))?;
             match tol {
                 Some(t) if !d.within(t) => Err(Error::invalid(
@@ -304,7 +370,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             compression,
         } => {
             littoral::cube::exr::write_spectral_exr_layers_with(
-                &[("radiance", &EnviCube::open(&cube)?)],
+                &[("radiance", &open(&cube)?)],
                 &out,
                 compression,
             )?;

@@ -16,14 +16,16 @@
 //! finds a complete cube, and a writer dropped without `finish` (a crash, an
 //! error in another tile) leaves neither final name behind.
 //!
-//! [`EnviCube`] (in `envi/reader.rs`) reads such a cube, or any ENVI
-//! float32 little-endian BSQ cube with wavelengths, with positioned reads: a
-//! pixel's spectrum, a band, or rows of a band, never the whole cube.
-//! Malformed headers are refused with an error naming the file, the line and
-//! the field.
+//! [`EnviCube`] (in `envi/reader.rs`) reads such a cube, or an ENVI cube
+//! of another software (BSQ, BIL or BIP; int16, uint16, float32 or float64;
+//! either byte order), with positioned reads: a pixel's spectrum, a band,
+//! or rows of a band, never the whole cube. Malformed headers are refused
+//! with an error naming the file, the line and the field. The writer can
+//! also lay the data out BIL or BIP ([`EnviWriter::create_interleaved`]),
+//! always float32 little-endian.
 //!
-//! Not for: other data types, interleaves (BIL, BIP) or big-endian cubes
-//! (refused, not converted), nor for editing a cube in place.
+//! Not for: writing other data types or byte orders, nor for editing a
+//! cube in place.
 
 use std::path::{Path, PathBuf};
 
@@ -34,7 +36,51 @@ mod reader;
 #[cfg(test)]
 mod tests;
 
-pub use reader::EnviCube;
+pub use reader::{DataType, EnviCube};
+
+/// How an ENVI data file orders its values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Interleave {
+    /// Band-sequential: `[band][line][sample]`.
+    Bsq,
+    /// Band-interleaved by line: `[line][band][sample]`.
+    Bil,
+    /// Band-interleaved by pixel: `[line][sample][band]`.
+    Bip,
+}
+
+impl Interleave {
+    /// The header's `interleave` value (case-insensitive).
+    pub fn parse(v: &str) -> Option<Interleave> {
+        match v.to_ascii_lowercase().as_str() {
+            "bsq" => Some(Interleave::Bsq),
+            "bil" => Some(Interleave::Bil),
+            "bip" => Some(Interleave::Bip),
+            _ => None,
+        }
+    }
+
+    /// The header value, also the data file's usual extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Interleave::Bsq => "bsq",
+            Interleave::Bil => "bil",
+            Interleave::Bip => "bip",
+        }
+    }
+
+    /// Element index of sample `x` of line `y` in band `b` of a cube of
+    /// `[samples, lines, bands]`.
+    pub fn element(self, [samples, lines, bands]: [usize; 3], b: usize, y: usize, x: usize) -> u64 {
+        let (s, l, n) = (samples as u64, lines as u64, bands as u64);
+        let (b, y, x) = (b as u64, y as u64, x as u64);
+        match self {
+            Interleave::Bsq => (b * l + y) * s + x,
+            Interleave::Bil => (y * n + b) * s + x,
+            Interleave::Bip => (y * s + x) * n + b,
+        }
+    }
+}
 
 /// Bytes per stored value (32-bit float).
 const VALUE_BYTES: u64 = 4;
@@ -100,8 +146,8 @@ impl CubeSpec {
         self.values().map(|_| ())
     }
 
-    /// The ENVI header text for this cube.
-    fn header_text(&self) -> String {
+    /// The ENVI header text for this cube, its data in `interleave` order.
+    fn header_text(&self, interleave: Interleave) -> String {
         let list = |v: &[f32]| {
             v.iter()
                 .map(|x| x.to_string())
@@ -138,7 +184,7 @@ impl CubeSpec {
              header offset = 0\n\
              file type = ENVI Standard\n\
              data type = 4\n\
-             interleave = bsq\n\
+             interleave = {}\n\
              byte order = 0\n\
              wavelength units = Nanometers\n\
              wavelength = {{{}}}\n\
@@ -151,6 +197,7 @@ impl CubeSpec {
             self.samples,
             self.lines,
             self.bands.len(),
+            interleave.extension(),
             list(self.bands.centers_nm()),
             list(self.bands.fwhm_nm()),
             names,
@@ -183,6 +230,7 @@ pub struct EnviWriter {
     hdr: tempfile::NamedTempFile,
     bsq_path: PathBuf,
     hdr_path: PathBuf,
+    interleave: Interleave,
 }
 
 impl EnviWriter {
@@ -201,6 +249,18 @@ impl EnviWriter {
         name: &str,
         spec: CubeSpec,
         extra: &[String],
+    ) -> Result<EnviWriter> {
+        Self::create_interleaved(dir, name, spec, extra, Interleave::Bsq)
+    }
+
+    /// [`EnviWriter::create_with`], the data in `interleave` order in
+    /// `NAME.bsq`, `NAME.bil` or `NAME.bip`.
+    pub fn create_interleaved(
+        dir: &Path,
+        name: &str,
+        spec: CubeSpec,
+        extra: &[String],
+        interleave: Interleave,
     ) -> Result<EnviWriter> {
         if let Some(bad) = extra
             .iter()
@@ -223,7 +283,7 @@ impl EnviWriter {
             ));
         }
         spec.validate()?;
-        let bsq_path = dir.join(format!("{name}.bsq"));
+        let bsq_path = dir.join(format!("{name}.{}", interleave.extension()));
         let hdr_path = dir.join(format!("{name}.hdr"));
         let temp = |path: &Path| {
             tempfile::Builder::new()
@@ -237,7 +297,7 @@ impl EnviWriter {
         bsq.as_file()
             .set_len(spec.values()? * VALUE_BYTES)
             .map_err(|e| Error::io(&bsq_path, "pre-size", e))?;
-        let mut text = spec.header_text();
+        let mut text = spec.header_text(interleave);
         for line in extra {
             text.push_str(line);
             text.push('\n');
@@ -250,6 +310,7 @@ impl EnviWriter {
             hdr,
             bsq_path,
             hdr_path,
+            interleave,
         })
     }
 
@@ -296,7 +357,24 @@ impl EnviWriter {
             ));
         }
         let file = self.bsq.as_file();
-        let whole_lines = w == samples;
+        let dims = [samples, lines, bands];
+        if self.interleave == Interleave::Bip {
+            // A tile row is one run of [x][band] values.
+            let le: Vec<f32> = values
+                .iter()
+                .map(|v| f32::from_bits(v.to_bits().to_le()))
+                .collect();
+            let row = w * bands;
+            return le
+                .chunks_exact(row)
+                .enumerate()
+                .try_for_each(|(dy, r)| {
+                    let offset = Interleave::Bip.element(dims, 0, y0 + dy, x0) * VALUE_BYTES;
+                    crate::output::write_all_at(file, bytemuck::cast_slice(r), offset)
+                })
+                .map_err(|e| Error::io(&self.bsq_path, "write", e));
+        }
+        let whole_lines = w == samples && self.interleave == Interleave::Bsq;
         let mut run: Vec<f32> = Vec::with_capacity(w * h);
         for b in 0..bands {
             run.clear();
@@ -309,7 +387,7 @@ impl EnviWriter {
             );
             let bytes: &[u8] = bytemuck::cast_slice(&run);
             let row_bytes = w * VALUE_BYTES as usize;
-            let offset = |y: usize| ((b * lines + y) * samples + x0) as u64 * VALUE_BYTES;
+            let offset = |y: usize| self.interleave.element(dims, b, y, x0) * VALUE_BYTES;
             let result = if whole_lines {
                 crate::output::write_all_at(file, bytes, offset(y0))
             } else {

@@ -11,8 +11,9 @@
 //! The spectral OpenEXR copy ([`exr::write_spectral_exr`]) is made from the
 //! finished ENVI cube, one tile of all bands at a time.
 //!
-//! Not for: rendering (the sensor produces the spectra), or other ENVI data types and interleaves than 32-bit
-//! float BSQ — the reader refuses those with an error rather than guessing.
+//! Not for: rendering (the sensor produces the spectra). The reader takes
+//! BSQ, BIL and BIP cubes of 16-bit integers or 32/64-bit floats in either
+//! byte order; anything else is refused with an error rather than guessed.
 
 pub mod envi;
 pub mod exr;

@@ -5,7 +5,7 @@
 //! cubes (two bands at a time), and the cube in a real sensor's bands (one
 //! tile of all bands at a time).
 
-use super::envi::{CubeFiles, CubeSpec, EnviCube, EnviWriter};
+use super::envi::{CubeFiles, CubeSpec, EnviCube, EnviWriter, Interleave};
 use crate::error::{Error, Result};
 use crate::spectral::BandGrid;
 use serde::Serialize;
@@ -71,8 +71,13 @@ pub fn window(
             .unwrap_or("unknown")
             .replace(['{', '}'], ""),
     };
-    let nb = cube.bands();
-    let writer = EnviWriter::create(dir, name, spec)?;
+    copy_tiles(cube, (x0, y0), EnviWriter::create(dir, name, spec)?)
+}
+
+/// Copy the window of `cube` at `(x0, y0)` the size of `writer`'s cube into
+/// it, one 64 x 64 tile of all bands at a time, and finish it.
+fn copy_tiles(cube: &EnviCube, (x0, y0): (usize, usize), writer: EnviWriter) -> Result<CubeFiles> {
+    let (w, h, nb) = (writer.spec().samples, writer.spec().lines, cube.bands());
     for ty in (0..h).step_by(TILE) {
         for tx in (0..w).step_by(TILE) {
             let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));
@@ -87,6 +92,54 @@ pub fn window(
         }
     }
     writer.finish()
+}
+
+/// `cube` as float32 little-endian in `interleave` order, a new cube
+/// `dir/NAME.{hdr,bsq|bil|bip}` with the same bands and description.
+pub fn convert(
+    cube: &EnviCube,
+    interleave: Interleave,
+    dir: &Path,
+    name: &str,
+) -> Result<CubeFiles> {
+    let spec = CubeSpec {
+        samples: cube.samples(),
+        lines: cube.lines(),
+        bands: band_grid(cube)?,
+        description: cube.description().replace(['{', '}'], ""),
+        data_units: cube
+            .data_units()
+            .unwrap_or("unknown")
+            .replace(['{', '}'], ""),
+    };
+    copy_tiles(
+        cube,
+        (0, 0),
+        EnviWriter::create_interleaved(dir, name, spec, &[], interleave)?,
+    )
+}
+
+/// The window `x0..x0+w` x `y0..y0+h` of `cube` as CSV: a header
+/// `x,y,<nm>,...` and one row per pixel (row order); the window's values
+/// are held, not the cube's.
+pub fn window_csv(cube: &EnviCube, (x0, y0, w, h): (usize, usize, usize, usize)) -> Result<String> {
+    let mut values = vec![Vec::new(); cube.bands()];
+    for (b, v) in values.iter_mut().enumerate() {
+        *v = cube.window(b, x0, y0, w, h)?;
+    }
+    let mut text = String::from("x,y");
+    for nm in cube.wavelengths_nm() {
+        text.push_str(&format!(",{nm}"));
+    }
+    text.push('\n');
+    for i in 0..w * h {
+        text.push_str(&format!("{},{}", x0 + i % w, y0 + i / w));
+        for band in &values {
+            text.push_str(&format!(",{}", band[i]));
+        }
+        text.push('\n');
+    }
+    Ok(text)
 }
 
 /// The bands `from..=to` (0-based, inclusive) of `cube` as a new cube

@@ -230,7 +230,7 @@ fn bad_cubes_and_arguments_fail_cleanly() {
     assert_clean_failure(&cube_tool(&["info", p(&missing)]), "none.hdr");
 
     let text = std::fs::read_to_string(&hdr).unwrap();
-    std::fs::write(&hdr, text.replace("data type = 4", "data type = 12")).unwrap();
+    std::fs::write(&hdr, text.replace("data type = 4", "data type = 6")).unwrap();
     assert_clean_failure(
         &cube_tool(&["info", p(&hdr)]),
         "small.hdr: line 8: data type",
@@ -440,4 +440,58 @@ fn resample_into_sentinel2_bands() {
     }
     let bad = cube_tool(&["resample", p(&hdr), "--sensor", "enmap", "--out", p(&out)]);
     assert_clean_failure(&bad, "enmap");
+}
+
+/// `convert` rewrites the cube BIL and BIP with the same values (`diff`
+/// reads both layouts: RMSE 0); `csv` prints a window with the
+/// wavelengths as its header; `--wavelengths` replaces the header's and
+/// must give one per band.
+#[test]
+fn convert_csv_and_given_wavelengths() {
+    let dir = tempdir();
+    let hdr = small_cube(dir.path());
+    for layout in ["bil", "bip"] {
+        let out = dir.path().join(format!("c{layout}.hdr"));
+        let s: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
+            "convert",
+            p(&hdr),
+            "--interleave",
+            layout,
+            "--out",
+            p(&out),
+        ])))
+        .unwrap();
+        assert!(s["data"]
+            .as_str()
+            .unwrap()
+            .ends_with(&format!("c{layout}.{layout}")));
+        let d: serde_json::Value =
+            serde_json::from_str(&stdout(&cube_tool(&["diff", p(&hdr), p(&out)]))).unwrap();
+        assert_eq!(d["rmse"], 0.0, "{layout}: {d}");
+        assert!(std::fs::read_to_string(&out)
+            .unwrap()
+            .contains(&format!("interleave = {layout}")));
+    }
+    let csv = stdout(&cube_tool(&["csv", p(&hdr), "4", "1", "2", "2"]));
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "x,y,450,550,650");
+    assert_eq!(lines.len(), 5);
+    let row: Vec<f32> = lines[4].split(',').map(|v| v.parse().unwrap()).collect();
+    assert_eq!(
+        row,
+        [5.0, 2.0, value(5, 2, 0), value(5, 2, 1), value(5, 2, 2)]
+    );
+    let info: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
+        "info",
+        p(&hdr),
+        "--wavelengths",
+        "500,600,700",
+    ])))
+    .unwrap();
+    assert_eq!(info["wavelength_nm"]["min"], 500.0);
+    assert_clean_failure(
+        &cube_tool(&["info", p(&hdr), "--wavelengths", "500,600"]),
+        "--wavelengths",
+    );
+    assert_clean_failure(&cube_tool(&["csv", p(&hdr), "5", "0", "2", "1"]), "window");
 }

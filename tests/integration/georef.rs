@@ -124,3 +124,35 @@ fn unsupported_crs_is_refused() {
     .to_string();
     assert!(e.contains("georef.epsg") && e.contains("UTM"), "{e}");
 }
+
+/// A cube GDAL re-exports as 16-bit integers, band-interleaved by line
+/// (`gdal_translate -of ENVI`), reads back in littoral-cube with the same
+/// values, scaled as asked, and the wavelengths GDAL kept.
+#[test]
+fn littoral_cube_reads_what_gdal_writes() {
+    let dir = tempdir();
+    let s = Scene::parse(&scene(""), Path::new("geo.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, dir.path(), 0);
+    let out = dir.path().join("gdal.img");
+    let status = Command::new("gdal_translate")
+        .args(["-q", "-of", "ENVI", "-ot", "Int16", "-co", "INTERLEAVE=BIL"])
+        .args(["-scale", "0", "1", "0", "10000"])
+        .arg(&r.outputs.bsq)
+        .arg(&out)
+        .status()
+        .expect("gdal_translate (GDAL) is installed by .ci/run");
+    assert!(status.success());
+    let cube = littoral::cube::EnviCube::open(&out).unwrap();
+    let ours = littoral::cube::EnviCube::open(Path::new(&r.outputs.hdr)).unwrap();
+    assert_eq!(cube.interleave(), littoral::cube::envi::Interleave::Bil);
+    assert_eq!(cube.data_type(), littoral::cube::envi::DataType::I16);
+    assert_eq!(cube.wavelengths_nm(), ours.wavelengths_nm());
+    for b in 0..ours.bands() {
+        for (g, o) in cube.band(b).unwrap().iter().zip(ours.band(b).unwrap()) {
+            assert!(
+                (g - (o * 10000.0).round()).abs() <= 1.0,
+                "band {b}: {g} vs {o}"
+            );
+        }
+    }
+}

@@ -1,13 +1,22 @@
 //! Reading ENVI cubes lazily: the header parsed and checked field by field,
 //! values fetched with positioned reads.
 //!
+//! Reads what other software writes, not only littoral's own cubes: BSQ,
+//! BIL or BIP; 16-bit integers (signed or not), 32- or 64-bit floats
+//! (data types 2, 12, 4, 5), either byte order; the data file beside the
+//! header under any of the usual names (`NAME.bsq`, `.bil`, `.bip`,
+//! `.img`, `.dat`, `.raw`, or `NAME` itself). Wavelengths come from the
+//! header's `wavelength`, else from the first number in each of its `band
+//! names` (what `gdal_translate -of ENVI` keeps), else from the caller
+//! ([`EnviCube::open_with`]). Values are returned as f32.
+//!
 //! Not for: writing (see the parent module) or holding a cube in memory.
 
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use super::VALUE_BYTES;
+use super::Interleave;
 use crate::error::{Error, Result};
 
 /// Headers larger than this are refused: 65 535 bands of wavelengths and
@@ -15,7 +24,50 @@ use crate::error::{Error, Result};
 /// likely the data file passed by mistake).
 const MAX_HEADER_BYTES: u64 = 16 << 20;
 
-/// A float32 little-endian BSQ ENVI cube opened for random access.
+/// How each value is stored (ENVI `data type`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DataType {
+    /// 2: 16-bit signed integer.
+    I16,
+    /// 12: 16-bit unsigned integer.
+    U16,
+    /// 4: 32-bit float.
+    F32,
+    /// 5: 64-bit float.
+    F64,
+}
+
+impl DataType {
+    fn bytes(self) -> usize {
+        match self {
+            DataType::I16 | DataType::U16 => 2,
+            DataType::F32 => 4,
+            DataType::F64 => 8,
+        }
+    }
+
+    /// The value stored in `b` (`bytes()` long).
+    fn decode(self, b: &[u8], big_endian: bool) -> f32 {
+        macro_rules! num {
+            ($t:ty, $n:literal) => {{
+                let a: [u8; $n] = b.try_into().expect("value width");
+                if big_endian {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }
+            }};
+        }
+        match self {
+            DataType::I16 => num!(i16, 2) as f32,
+            DataType::U16 => num!(u16, 2) as f32,
+            DataType::F32 => num!(f32, 4),
+            DataType::F64 => num!(f64, 8) as f32,
+        }
+    }
+}
+
+/// An ENVI cube opened for random access.
 #[derive(Debug)]
 pub struct EnviCube {
     header_path: PathBuf,
@@ -25,6 +77,9 @@ pub struct EnviCube {
     lines: usize,
     bands: usize,
     header_offset: u64,
+    data_type: DataType,
+    interleave: Interleave,
+    big_endian: bool,
     wavelengths_nm: Vec<f64>,
     fwhm_nm: Option<Vec<f64>>,
     description: String,
@@ -32,15 +87,23 @@ pub struct EnviCube {
 }
 
 impl EnviCube {
-    /// Open a cube given its header (`NAME.hdr`, data in `NAME.bsq`) or its
-    /// data file (header `NAME.hdr`, or `NAME.bsq.hdr` if that exists).
-    /// Checks the header and that the data file is long enough.
+    /// Open a cube given its header (`NAME.hdr`, data beside it, see the
+    /// module notes) or its data file (header `NAME.hdr`, or `DATA.hdr` if
+    /// that exists). Checks the header and that the data file is long
+    /// enough.
     pub fn open(hdr_or_bsq: &Path) -> Result<EnviCube> {
+        Self::open_with(hdr_or_bsq, None)
+    }
+
+    /// [`EnviCube::open`], with the band centres (nm) given for a header
+    /// that has neither `wavelength` nor numbers in its `band names`, or to
+    /// replace them.
+    pub fn open_with(hdr_or_bsq: &Path, wavelengths_nm: Option<&[f64]>) -> Result<EnviCube> {
         let is_hdr = hdr_or_bsq
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
         let (header_path, data_path) = if is_hdr {
-            (hdr_or_bsq.to_path_buf(), hdr_or_bsq.with_extension("bsq"))
+            (hdr_or_bsq.to_path_buf(), PathBuf::new())
         } else {
             let mut appended = hdr_or_bsq.as_os_str().to_owned();
             appended.push(".hdr");
@@ -66,9 +129,48 @@ impl EnviCube {
             None => 0,
             Some(_) => h.whole("header offset")? as u64,
         };
-        h.expect("data type", &["4"], "only 4 (32-bit float) is supported")?;
-        h.expect("interleave", &["bsq"], "only bsq is supported")?;
-        h.expect("byte order", &["0"], "only 0 (little-endian) is supported")?;
+        let data_type = match h.required("data type")? {
+            ("2", _) => DataType::I16,
+            ("12", _) => DataType::U16,
+            ("4", _) => DataType::F32,
+            ("5", _) => DataType::F64,
+            (v, line) => {
+                return Err(Error::data(
+                    &header_path,
+                    Some(line),
+                    "data type",
+                    format!(
+                    "is '{v}': supported are 2 (int16), 12 (uint16), 4 (float32) and 5 (float64)"
+                ),
+                ))
+            }
+        };
+        let (v, line) = h.required("interleave")?;
+        let interleave = Interleave::parse(v).ok_or_else(|| {
+            Error::data(
+                &header_path,
+                Some(line),
+                "interleave",
+                format!("is '{v}': bsq, bil or bip"),
+            )
+        })?;
+        let big_endian = match h.get("byte order") {
+            None | Some(("0", _)) => false,
+            Some(("1", _)) => true,
+            Some((v, line)) => {
+                return Err(Error::data(
+                    &header_path,
+                    Some(line),
+                    "byte order",
+                    format!("is '{v}': 0 (little-endian) or 1 (big-endian)"),
+                ))
+            }
+        };
+        let data_path = if is_hdr {
+            find_data_file(&header_path, interleave)?
+        } else {
+            data_path
+        };
         let scale = match h.get("wavelength units") {
             None => 1.0,
             Some((v, line)) => match v.to_ascii_lowercase().as_str() {
@@ -84,19 +186,26 @@ impl EnviCube {
                 }
             },
         };
-        let wavelengths_nm: Vec<f64> = h
-            .list("wavelength", bands)?
-            .ok_or_else(|| {
-                Error::data(
-                    &header_path,
-                    None,
-                    "wavelength",
-                    "missing: a spectral cube needs band wavelengths",
-                )
-            })?
-            .into_iter()
-            .map(|w| w * scale)
-            .collect();
+        let wavelengths_nm: Vec<f64> = match wavelengths_nm {
+            Some(given) if given.len() != bands => {
+                return Err(Error::invalid(
+                    "--wavelengths",
+                    format!("has {} values but the cube has {bands} bands", given.len()),
+                ))
+            }
+            Some(given) => given.to_vec(),
+            None => match h.list("wavelength", bands)? {
+                Some(w) => w.into_iter().map(|w| w * scale).collect(),
+                None => h.band_name_wavelengths(bands, scale)?.ok_or_else(|| {
+                    Error::data(
+                        &header_path,
+                        None,
+                        "wavelength",
+                        "missing: a spectral cube needs band wavelengths (a wavelength list, numbers in band names, or --wavelengths)",
+                    )
+                })?,
+            },
+        };
         let fwhm_nm = h
             .list("fwhm", bands)?
             .map(|v| v.into_iter().map(|w| w * scale).collect());
@@ -114,7 +223,7 @@ impl EnviCube {
         let needed = (samples as u64)
             .checked_mul(lines as u64)
             .and_then(|n| n.checked_mul(bands as u64))
-            .and_then(|n| n.checked_mul(VALUE_BYTES))
+            .and_then(|n| n.checked_mul(data_type.bytes() as u64))
             .and_then(|n| n.checked_add(header_offset))
             .filter(|&n| usize::try_from(n).is_ok())
             .ok_or_else(|| {
@@ -131,7 +240,8 @@ impl EnviCube {
                 None,
                 "size",
                 format!(
-                    "holds {len} bytes but the header's {samples} x {lines} x {bands} float32 values need {needed}"
+                    "holds {len} bytes but the header's {samples} x {lines} x {bands} values of {} bytes need {needed}",
+                    data_type.bytes()
                 ),
             ));
         }
@@ -143,6 +253,9 @@ impl EnviCube {
             lines,
             bands,
             header_offset,
+            data_type,
+            interleave,
+            big_endian,
             wavelengths_nm,
             fwhm_nm,
             description,
@@ -195,6 +308,16 @@ impl EnviCube {
         &self.data_path
     }
 
+    /// How the data file orders the values.
+    pub fn interleave(&self) -> Interleave {
+        self.interleave
+    }
+
+    /// How each value is stored.
+    pub fn data_type(&self) -> DataType {
+        self.data_type
+    }
+
     /// The spectrum of pixel (`x`, `y`): one value per band (one small read
     /// per band, as BSQ stores a pixel's bands a whole band apart).
     pub fn spectrum(&self, x: usize, y: usize) -> Result<Vec<f32>> {
@@ -209,10 +332,18 @@ impl EnviCube {
                 ),
             ));
         }
+        if self.interleave == Interleave::Bip {
+            let mut v = vec![0f32; self.bands];
+            self.read_values(
+                (y as u64 * self.samples as u64 + x as u64) * self.bands as u64,
+                &mut v,
+            )?;
+            return Ok(v);
+        }
         (0..self.bands)
             .map(|b| {
                 let mut v = [0f32];
-                self.read_values(self.index(b, y) + x as u64, &mut v)?;
+                self.read_run(b, y, x, &mut v)?;
                 Ok(v[0])
             })
             .collect()
@@ -246,7 +377,14 @@ impl EnviCube {
             ));
         }
         let mut values = vec![0f32; h * self.samples];
-        self.read_values(self.index(b, y0), &mut values)?;
+        if self.interleave == Interleave::Bsq {
+            // A band's lines are contiguous: one read.
+            self.read_values(self.element(b, y0, 0), &mut values)?;
+        } else {
+            for (row, out) in values.chunks_mut(self.samples).enumerate() {
+                self.read_run(b, y0 + row, 0, out)?;
+            }
+        }
         Ok(values)
     }
 
@@ -269,7 +407,7 @@ impl EnviCube {
         }
         let mut values = vec![0f32; w * h];
         for (row, out) in values.chunks_mut(w.max(1)).enumerate().take(h) {
-            self.read_values(self.index(b, y0 + row) + x0 as u64, out)?;
+            self.read_run(b, y0 + row, x0, out)?;
         }
         Ok(values)
     }
@@ -284,20 +422,89 @@ impl EnviCube {
             .map_or(0, |(i, _)| i)
     }
 
-    /// Element index of (0, y) in band b.
-    fn index(&self, b: usize, y: usize) -> u64 {
-        (b as u64 * self.lines as u64 + y as u64) * self.samples as u64
+    /// Element index of (x, y) in band b.
+    fn element(&self, b: usize, y: usize, x: usize) -> u64 {
+        self.interleave
+            .element([self.samples, self.lines, self.bands], b, y, x)
     }
 
-    fn read_values(&self, element: u64, out: &mut [f32]) -> Result<()> {
-        let offset = self.header_offset + element * VALUE_BYTES;
-        crate::output::read_exact_at(&self.file, bytemuck::cast_slice_mut(out), offset)
-            .map_err(|e| Error::io(&self.data_path, "read", e))?;
-        for v in out.iter_mut() {
-            *v = f32::from_bits(u32::from_le(v.to_bits()));
+    /// `out.len()` values of band `b` on line `y` from column `x0`.
+    fn read_run(&self, b: usize, y: usize, x0: usize, out: &mut [f32]) -> Result<()> {
+        if self.interleave != Interleave::Bip {
+            return self.read_values(self.element(b, y, x0), out);
+        }
+        // A line's pixels hold every band: read them all, keep one.
+        let nb = self.bands;
+        let mut all = vec![0f32; out.len() * nb];
+        self.read_values(self.element(0, y, x0), &mut all)?;
+        for (o, v) in out.iter_mut().zip(all.iter().skip(b).step_by(nb)) {
+            *o = *v;
         }
         Ok(())
     }
+
+    /// `out.len()` consecutive values from `element`, as f32.
+    fn read_values(&self, element: u64, out: &mut [f32]) -> Result<()> {
+        let width = self.data_type.bytes();
+        let offset = self.header_offset + element * width as u64;
+        if self.data_type == DataType::F32 && !self.big_endian {
+            crate::output::read_exact_at(&self.file, bytemuck::cast_slice_mut(out), offset)
+                .map_err(|e| Error::io(&self.data_path, "read", e))?;
+            for v in out.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits()));
+            }
+            return Ok(());
+        }
+        let mut bytes = vec![0u8; out.len() * width];
+        crate::output::read_exact_at(&self.file, &mut bytes, offset)
+            .map_err(|e| Error::io(&self.data_path, "read", e))?;
+        for (o, b) in out.iter_mut().zip(bytes.chunks_exact(width)) {
+            *o = self.data_type.decode(b, self.big_endian);
+        }
+        Ok(())
+    }
+}
+
+/// The data file of the cube whose header is `header`: the first that
+/// exists of `NAME.<interleave>`, `NAME.bsq`, `.bil`, `.bip`, `.img`,
+/// `.dat`, `.raw` and `NAME`.
+fn find_data_file(header: &Path, interleave: Interleave) -> Result<PathBuf> {
+    let mut tried = Vec::new();
+    for ext in [
+        interleave.extension(),
+        "bsq",
+        "bil",
+        "bip",
+        "img",
+        "dat",
+        "raw",
+        "",
+    ] {
+        let path = if ext.is_empty() {
+            header.with_extension("")
+        } else {
+            header.with_extension(ext)
+        };
+        if path.is_file() {
+            return Ok(path);
+        }
+        if !tried.contains(&path) {
+            tried.push(path);
+        }
+    }
+    Err(Error::data(
+        header,
+        None,
+        "data file",
+        format!(
+            "none beside the header (tried {})",
+            tried
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    ))
 }
 
 fn read_header_text(path: &Path) -> Result<String> {
@@ -434,19 +641,48 @@ impl Header<'_> {
         }
     }
 
-    /// The field must be present and one of `allowed` (case-insensitive).
-    fn expect(&self, key: &str, allowed: &[&str], what: &str) -> Result<()> {
-        let (v, n) = self.required(key)?;
-        if allowed.iter().any(|a| a.eq_ignore_ascii_case(v)) {
-            Ok(())
-        } else {
-            Err(Error::data(
+    /// Band centres (nm) from the first number in each of `band names`
+    /// that is followed by a unit (nm, um) or is the whole name (then in
+    /// the header's wavelength units, `scale`), or `None` without band
+    /// names or such a number in each ("Band 3" names a band, not a
+    /// wavelength).
+    fn band_name_wavelengths(&self, count: usize, scale: f64) -> Result<Option<Vec<f64>>> {
+        let Some((v, n)) = self.get("band names") else {
+            return Ok(None);
+        };
+        let names: Vec<&str> = v.split(',').map(str::trim).collect();
+        if names.len() != count {
+            return Err(Error::data(
                 self.path,
                 Some(n),
-                key,
-                format!("is '{v}': {what}"),
-            ))
+                "band names",
+                format!("has {} names but bands = {count}", names.len()),
+            ));
         }
+        let number = |name: &str| -> Option<f64> {
+            let start = name.find(|c: char| c.is_ascii_digit())?;
+            let rest = &name[start..];
+            let end = rest
+                .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .unwrap_or(rest.len());
+            let x: f64 = rest[..end].parse().ok()?;
+            let lower = rest[end..].trim_start().to_ascii_lowercase();
+            let micro =
+                lower.starts_with("um") || lower.starts_with("µm") || lower.starts_with("micro");
+            let nano = lower.starts_with("nm") || lower.starts_with("nano");
+            // A bare number, or one with a unit: "Band 3" numbers bands.
+            if micro {
+                Some(x * 1000.0)
+            } else if nano {
+                Some(x)
+            } else {
+                (name.trim() == &rest[..end]).then_some(x * scale)
+            }
+        };
+        Ok(names
+            .iter()
+            .map(|name| number(name).filter(|x| *x > 0.0 && x.is_finite()))
+            .collect())
     }
 
     /// A `{a, b, ...}` list of finite numbers with exactly `count` entries,

@@ -287,7 +287,7 @@ fn open_edited(
     data_bytes: usize,
 ) -> (tempfile::TempDir, Result<EnviCube>) {
     let dir = tempfile::tempdir().unwrap();
-    let text = spec(3, 2, 2).header_text();
+    let text = spec(3, 2, 2).header_text(Interleave::Bsq);
     let hdr = dir.path().join("c.hdr");
     std::fs::write(&hdr, edit(text)).unwrap();
     std::fs::write(dir.path().join("c.bsq"), vec![0u8; data_bytes]).unwrap();
@@ -310,14 +310,13 @@ fn bad_headers_name_the_file_and_the_field() {
         ),
         ("lines = 2", "lines = 0", "lines: must be at least 1"),
         ("bands = 2\n", "", "bands: missing"),
-        ("data type = 4", "data type = 5", "data type: is '5'"),
+        ("data type = 4", "data type = 3", "data type: is '3'"),
         (
             "interleave = bsq",
-            "interleave = bip",
-            "interleave: is 'bip'",
+            "interleave = bsx",
+            "interleave: is 'bsx'",
         ),
-        ("byte order = 0", "byte order = 1", "byte order: is '1'"),
-        ("byte order = 0\n", "", "byte order: missing"),
+        ("byte order = 0", "byte order = 2", "byte order: is '2'"),
         (
             "{400, 700}",
             "{400}",
@@ -330,7 +329,16 @@ fn bad_headers_name_the_file_and_the_field() {
             "data units = {W",
             "data units: '{' is never closed",
         ),
-        ("wavelength = {400, 700}\n", "", "wavelength: missing"),
+        (
+            "wavelength = {400, 700}\nfwhm = {300, 300}\nband names = {400 nm, 700 nm}",
+            "band names = {Band 1, Band 2}",
+            "wavelength: missing",
+        ),
+        (
+            "wavelength = {400, 700}\nfwhm = {300, 300}\nband names = {400 nm, 700 nm}",
+            "band names = {400 nm}",
+            "band names: has 1 names but bands = 2",
+        ),
         (
             "= Nanometers",
             "= Index",
@@ -403,4 +411,159 @@ fn out_of_range_requests_are_errors() {
     assert!(cube.band_rows(0, 1, 2).is_err());
     assert!(cube.band_rows(0, usize::MAX, 2).is_err());
     assert_eq!(cube.band_rows(0, 1, 1).unwrap().len(), 3);
+}
+
+/// A 3 x 2 x 2 cube written by hand in `layout` as `data_type` (2, 12, 4
+/// or 5) in either byte order, under `data_name`, with `extra` header
+/// lines: (dir, header path).
+fn foreign(
+    layout: Interleave,
+    data_type: u32,
+    big_endian: bool,
+    data_name: &str,
+    wavelengths: &str,
+) -> (tempfile::TempDir, PathBuf) {
+    let (samples, lines, bands) = (3usize, 2usize, 2usize);
+    let dir = tempfile::tempdir().unwrap();
+    let mut data = vec![0u8; 0];
+    let mut values = vec![0f64; samples * lines * bands];
+    for b in 0..bands {
+        for y in 0..lines {
+            for x in 0..samples {
+                let e = layout.element([samples, lines, bands], b, y, x) as usize;
+                values[e] = (10 * b + 3 * y + x) as f64 - 4.0;
+            }
+        }
+    }
+    for v in values {
+        let bytes: Vec<u8> = match (data_type, big_endian) {
+            (2, false) => (v as i16).to_le_bytes().to_vec(),
+            (2, true) => (v as i16).to_be_bytes().to_vec(),
+            (12, false) => ((v + 4.0) as u16).to_le_bytes().to_vec(),
+            (12, true) => ((v + 4.0) as u16).to_be_bytes().to_vec(),
+            (4, false) => (v as f32).to_le_bytes().to_vec(),
+            (4, true) => (v as f32).to_be_bytes().to_vec(),
+            (5, false) => v.to_le_bytes().to_vec(),
+            _ => v.to_be_bytes().to_vec(),
+        };
+        data.extend(bytes);
+    }
+    std::fs::write(dir.path().join(data_name), data).unwrap();
+    let hdr = dir.path().join("f.hdr");
+    std::fs::write(
+        &hdr,
+        format!(
+            "ENVI\nsamples = 3\nlines = 2\nbands = 2\nheader offset = 0\ndata type = {data_type}\ninterleave = {}\nbyte order = {}\n{wavelengths}\n",
+            layout.extension(),
+            u8::from(big_endian)
+        ),
+    )
+    .unwrap();
+    (dir, hdr)
+}
+
+/// Cubes other software writes read back the same values whatever their
+/// interleave, data type and byte order, with the data file under another
+/// name; wavelengths come from `band names` when there is no
+/// `wavelength` list, or from the caller.
+#[test]
+fn foreign_layouts_types_and_byte_orders_read_back() {
+    let layouts = [Interleave::Bsq, Interleave::Bil, Interleave::Bip];
+    for layout in layouts {
+        for data_type in [2, 12, 4, 5] {
+            for big_endian in [false, true] {
+                let name = if big_endian { "f.img" } else { "f" };
+                let (_dir, hdr) = foreign(
+                    layout,
+                    data_type,
+                    big_endian,
+                    name,
+                    "wavelength = {450, 550}",
+                );
+                let cube = EnviCube::open(&hdr).unwrap();
+                let shift = if data_type == 12 { 4.0 } else { 0.0 };
+                let want = |x: usize, y: usize, b: usize| (10 * b + 3 * y + x) as f32 - 4.0 + shift;
+                let what = format!("{layout:?} type {data_type} big-endian {big_endian}");
+                assert_eq!(
+                    cube.spectrum(2, 1).unwrap(),
+                    [want(2, 1, 0), want(2, 1, 1)],
+                    "{what}"
+                );
+                for b in 0..2 {
+                    let band: Vec<f32> = (0..6).map(|i| want(i % 3, i / 3, b)).collect();
+                    assert_eq!(cube.band(b).unwrap(), band, "{what}");
+                    assert_eq!(
+                        cube.window(b, 1, 1, 2, 1).unwrap(),
+                        [want(1, 1, b), want(2, 1, b)],
+                        "{what}"
+                    );
+                }
+            }
+        }
+    }
+    let (_dir, hdr) = foreign(
+        Interleave::Bil,
+        4,
+        false,
+        "f.dat",
+        "band names = {450.5 nm, 0.5505 um}",
+    );
+    assert_eq!(
+        EnviCube::open(&hdr).unwrap().wavelengths_nm(),
+        [450.5, 550.5]
+    );
+    let (_dir, hdr) = foreign(
+        Interleave::Bil,
+        4,
+        false,
+        "f.bil",
+        "band names = {Band 1, Band 2}",
+    );
+    let e = EnviCube::open(&hdr).unwrap_err().to_string();
+    assert!(e.contains("wavelength: missing"), "{e}");
+    let given = EnviCube::open_with(&hdr, Some(&[500.0, 600.0])).unwrap();
+    assert_eq!(given.wavelengths_nm(), [500.0, 600.0]);
+    let e = EnviCube::open_with(&hdr, Some(&[500.0]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--wavelengths") && e.contains("2 bands"), "{e}");
+    let (dir, hdr) = foreign(
+        Interleave::Bsq,
+        4,
+        false,
+        "elsewhere.bin",
+        "wavelength = {450, 550}",
+    );
+    let e = EnviCube::open(&hdr).unwrap_err().to_string();
+    assert!(
+        e.contains("data file: none beside the header")
+            && e.contains(&dir.path().join("f.bsq").display().to_string()),
+        "{e}"
+    );
+}
+
+/// The writer lays data out BIL or BIP too; the reader reads them back.
+#[test]
+fn bil_and_bip_writers_round_trip() {
+    for layout in [Interleave::Bil, Interleave::Bip] {
+        let dir = tempfile::tempdir().unwrap();
+        let (samples, lines, bands) = (70, 5, 3);
+        let w = EnviWriter::create_interleaved(
+            dir.path(),
+            "c",
+            spec(samples, lines, bands),
+            &[],
+            layout,
+        )
+        .unwrap();
+        for t in tiles(samples, lines, 64) {
+            w.write_tile(t.0, t.1, t.2, t.3, &tile_values(bands, t))
+                .unwrap();
+        }
+        let files = w.finish().unwrap();
+        assert_eq!(files.bsq.extension().unwrap(), layout.extension());
+        let cube = EnviCube::open(&files.hdr).unwrap();
+        assert_eq!(cube.interleave(), layout);
+        assert_whole_cube(&cube);
+    }
 }
