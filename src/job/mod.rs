@@ -22,6 +22,7 @@
 
 pub mod budget;
 pub mod report;
+pub mod units;
 
 use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
@@ -74,6 +75,7 @@ impl EmitJob<'_> {
             peak_memory: peaks,
             mem_budget_bytes: self.budget.total(),
             peak_rss_bytes: peaks.rss_bytes,
+            units: units::report_units(),
         })
     }
 }
@@ -211,6 +213,7 @@ impl RenderJob<'_> {
             },
             peak_memory: peaks,
             peak_rss_bytes: peaks.rss_bytes,
+            units: units::report_units(),
         };
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::invalid("report", e.to_string()))?

@@ -80,6 +80,9 @@ pub struct EmitReport {
     /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
     /// plus resident file pages.
     pub peak_rss_bytes: u64,
+    /// The unit of every number above, by field path (`job::units`).
+    #[serde(default)]
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 /// The sensor a render imaged with.
@@ -188,6 +191,9 @@ pub struct RunReport {
     /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
     /// plus resident pages of the mapped photon map.
     pub peak_rss_bytes: u64,
+    /// The unit of every number above, by field path (`job::units`).
+    #[serde(default)]
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 fn mib(bytes: u64) -> f64 {

@@ -247,3 +247,66 @@ fn typed_report_round_trips() {
         assert!(Path::new(f).is_file(), "{f}");
     }
 }
+
+/// Every number an emission report and a render report hold (photon map
+/// and path integrator) has its unit in the report's `units`, keyed by the
+/// field's path (`[]` for an element of a list of records).
+#[test]
+fn every_number_in_a_report_has_a_unit() {
+    fn numeric_paths(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
+        let join = |k: &str| {
+            if path.is_empty() {
+                k.to_string()
+            } else {
+                format!("{path}.{k}")
+            }
+        };
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m {
+                    if k != "units" {
+                        numeric_paths(x, &join(k), out);
+                    }
+                }
+            }
+            serde_json::Value::Array(a) if a.iter().all(|x| x.is_number() || x.is_null()) => {
+                out.push(path.to_string())
+            }
+            serde_json::Value::Array(a) => {
+                for x in a {
+                    numeric_paths(x, &format!("{path}[]"), out);
+                }
+            }
+            serde_json::Value::Number(_) | serde_json::Value::Null => out.push(path.to_string()),
+            _ => {}
+        }
+    }
+    let s = Setup::new();
+    let scene = s.scene(&scene_text("k = 50", ""));
+    let emitted = EmitJob {
+        scene: &scene,
+        map: s.map(),
+        threads: 1,
+        budget: MemoryBudget::new(64 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&Silent)
+    .unwrap();
+    let photon_map = s.render(&scene);
+    let path = s.scene(&scene_text("", "[render]\nintegrator = \"path\""));
+    let traced = render_job(&path, &s.dir.path().join("path"), 0);
+    let reports = [
+        serde_json::to_value(&emitted).unwrap(),
+        serde_json::to_value(&photon_map).unwrap(),
+        serde_json::to_value(&traced).unwrap(),
+    ];
+    for report in &reports {
+        let units = report["units"].as_object().unwrap();
+        let mut paths = Vec::new();
+        numeric_paths(report, "", &mut paths);
+        assert!(paths.len() > 30, "{paths:?}");
+        for p in paths {
+            assert!(units.contains_key(&p), "no unit for {p}");
+        }
+    }
+}
