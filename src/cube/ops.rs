@@ -35,6 +35,31 @@ fn band_grid(cube: &EnviCube) -> Result<BandGrid> {
     BandGrid::explicit(centres, widths)
 }
 
+/// The spec of a cube derived from `cube`: `samples` x `lines` over
+/// `bands`, its description followed by `note` (if any), its data units.
+fn derived_spec(
+    cube: &EnviCube,
+    [samples, lines]: [usize; 2],
+    bands: BandGrid,
+    note: &str,
+) -> CubeSpec {
+    let description = cube.description().replace(['{', '}'], "");
+    CubeSpec {
+        samples,
+        lines,
+        bands,
+        description: if note.is_empty() {
+            description
+        } else {
+            format!("{description} ({note})")
+        },
+        data_units: cube
+            .data_units()
+            .unwrap_or("unknown")
+            .replace(['{', '}'], ""),
+    }
+}
+
 /// Copy the window `x0..x0+w` x `y0..y0+h` of `cube` into a new cube
 /// `dir/NAME.{hdr,bsq}` with the same bands; returns its files.
 pub fn window(
@@ -58,19 +83,8 @@ pub fn window(
             ),
         ));
     }
-    let spec = CubeSpec {
-        samples: w,
-        lines: h,
-        bands: band_grid(cube)?,
-        description: format!(
-            "{} (window {w} x {h} at {x0}, {y0})",
-            cube.description().replace(['{', '}'], "")
-        ),
-        data_units: cube
-            .data_units()
-            .unwrap_or("unknown")
-            .replace(['{', '}'], ""),
-    };
+    let note = format!("window {w} x {h} at {x0}, {y0}");
+    let spec = derived_spec(cube, [w, h], band_grid(cube)?, &note);
     copy_tiles(cube, (x0, y0), EnviWriter::create(dir, name, spec)?)
 }
 
@@ -102,16 +116,7 @@ pub fn convert(
     dir: &Path,
     name: &str,
 ) -> Result<CubeFiles> {
-    let spec = CubeSpec {
-        samples: cube.samples(),
-        lines: cube.lines(),
-        bands: band_grid(cube)?,
-        description: cube.description().replace(['{', '}'], ""),
-        data_units: cube
-            .data_units()
-            .unwrap_or("unknown")
-            .replace(['{', '}'], ""),
-    };
+    let spec = derived_spec(cube, [cube.samples(), cube.lines()], band_grid(cube)?, "");
     copy_tiles(
         cube,
         (0, 0),
@@ -166,19 +171,8 @@ pub fn subset(
         all.centers_nm()[from..=to].to_vec(),
         all.fwhm_nm()[from..=to].to_vec(),
     )?;
-    let spec = CubeSpec {
-        samples: cube.samples(),
-        lines: cube.lines(),
-        bands,
-        description: format!(
-            "{} (bands {from} to {to})",
-            cube.description().replace(['{', '}'], "")
-        ),
-        data_units: cube
-            .data_units()
-            .unwrap_or("unknown")
-            .replace(['{', '}'], ""),
-    };
+    let note = format!("bands {from} to {to}");
+    let spec = derived_spec(cube, [cube.samples(), cube.lines()], bands, &note);
     let (w, h, nb) = (cube.samples(), cube.lines(), to - from + 1);
     let writer = EnviWriter::create(dir, name, spec)?;
     for ty in (0..h).step_by(TILE) {
@@ -236,20 +230,8 @@ pub fn resample(
             .map(|m| sensor.bands[m.band].fwhm_nm as f32)
             .collect(),
     )?;
-    let spec = CubeSpec {
-        samples: cube.samples(),
-        lines: cube.lines(),
-        bands,
-        description: format!(
-            "{} (in the bands of {})",
-            cube.description().replace(['{', '}'], ""),
-            sensor.name
-        ),
-        data_units: cube
-            .data_units()
-            .unwrap_or("unknown")
-            .replace(['{', '}'], ""),
-    };
+    let note = format!("in the bands of {}", sensor.name);
+    let spec = derived_spec(cube, [cube.samples(), cube.lines()], bands, &note);
     let (w, h, nb, out_nb) = (cube.samples(), cube.lines(), cube.bands(), made.len());
     let writer = EnviWriter::create(dir, name, spec)?;
     for ty in (0..h).step_by(TILE) {

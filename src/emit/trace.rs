@@ -132,7 +132,7 @@ pub fn trace(
     );
     let dir = match source {
         Source::Sun => scene.sun.direction,
-        Source::Sky => cosine_hemisphere(-Vec3::Z, rng),
+        Source::Sky => scene.sky.model.sample_travel(rng),
     };
     tally.add_above_down();
     let ev = scene.surface.interact(dir, rng);

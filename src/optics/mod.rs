@@ -1,7 +1,8 @@
-//! Optics: data tables, inherent optical properties, phase functions and
-//! the sea surface.
+//! Optics: data tables, inherent optical properties, phase functions, the
+//! sky's radiance distribution and the sea surface.
 
 pub mod iop;
 pub mod phase;
+pub mod sky;
 pub mod surface;
 pub mod tables;

@@ -23,7 +23,9 @@ use glam::Vec3;
 /// an instrument there looking along `dir` sees), written into `out`.
 pub type InWater<'f> = dyn FnMut(Vec3, Vec3, &mut Pcg32, &mut [f64]) -> Result<()> + 'f;
 
-/// Isotropic sky radiance per band (W m^-2 sr^-1 nm^-1) of `scene`.
+/// The radiance per band (W m^-2 sr^-1 nm^-1) of an isotropic sky of
+/// `scene`'s horizontal irradiance; a direction's is this times
+/// `scene.sky.model.relative(s)`.
 pub fn sky_radiance(scene: &Scene) -> Vec<f64> {
     scene
         .sky
@@ -68,7 +70,7 @@ pub fn from_air_parts(
     let d = ray.direction;
     water.iter_mut().for_each(|w| *w = 0.0);
     if d.z >= 0.0 {
-        set_sky(sky_l, out);
+        set_sky(scene, sky_l, d, out);
         return Ok(());
     }
     let p = ray.origin + d * (-ray.origin.z / d.z);
@@ -129,15 +131,19 @@ fn leave_surface(
         in_water(p + dir * 1e-4, dir, rng, out)?;
         out.iter_mut().for_each(|o| *o /= n2);
     } else {
-        set_sky(sky_l, out);
+        set_sky(scene, sky_l, dir, out);
     }
     Ok(into_water)
 }
 
-/// The sky radiance into the first run of `out`, zero in the others.
-fn set_sky(sky_l: &[f64], out: &mut [f64]) {
+/// The sky radiance toward `s` (unit, up) into the first run of `out`,
+/// zero in the others; `sky_l` is the isotropic sky's radiance.
+fn set_sky(scene: &Scene, sky_l: &[f64], s: Vec3, out: &mut [f64]) {
     let (l, rest) = out.split_at_mut(sky_l.len());
-    l.copy_from_slice(sky_l);
+    let g = scene.sky.model.relative(s);
+    for (o, v) in l.iter_mut().zip(sky_l) {
+        *o = v * g;
+    }
     rest.iter_mut().for_each(|o| *o = 0.0);
 }
 

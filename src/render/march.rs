@@ -220,11 +220,14 @@ impl<'a> RayMarcher<'a> {
                 }
             }
         } else if t_surface <= MAX_MARCH_M {
-            // Looking up through the surface: the transmitted sky, n^2 brighter.
+            // Looking up through the surface: the transmitted sky, n^2
+            // brighter, from the direction the ray leaves the water in.
             let n = scene.surface.n_water;
             let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
+            let g = crate::optics::surface::refract(dir.as_dvec3(), glam::DVec3::NEG_Z, n, 1.0)
+                .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
             for b in 0..nb {
-                out[b] += tr[b] * t * n * n * self.sky_l[b];
+                out[b] += tr[b] * t * n * n * g * self.sky_l[b];
             }
         }
         Ok(())

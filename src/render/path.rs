@@ -456,16 +456,19 @@ impl<'a> PathTracer<'a> {
                 }
                 if scene.surface.slope_variance <= 0.0 {
                     let r = fresnel_reflectance(dir.z as f64, n_w, 1.0);
+                    let g = refract(dir.as_dvec3(), DVec3::NEG_Z, n_w, 1.0)
+                        .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
                     for b in 0..out.len() {
-                        out[b] += w[b] * (1.0 - r) * n2 * self.sky_l[b];
+                        out[b] += w[b] * (1.0 - r) * n2 * g * self.sky_l[b];
                         w[b] *= r;
                     }
                     dir = Vec3::new(dir.x, dir.y, -dir.z);
                 } else {
                     let ev = scene.surface.interact(dir, rng);
                     if ev.transmitted {
+                        let g = scene.sky.model.relative(ev.direction);
                         for b in 0..out.len() {
-                            out[b] += w[b] * n2 * self.sky_l[b];
+                            out[b] += w[b] * n2 * g * self.sky_l[b];
                         }
                         return;
                     }

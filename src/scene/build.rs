@@ -171,7 +171,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     };
 
     let sun = light::sun(&ctx, &f.sun)?;
-    let sky = light::sky(&ctx, &f.sky)?;
+    let sky = light::sky(&ctx, &f.sky, &sun)?;
     let surface = light::surface(&ctx, &f.surface)?;
 
     // Domain.

@@ -206,6 +206,18 @@ pub struct SunFile {
 pub struct SkyFile {
     pub spectrum: Option<String>,
     pub radiance: Option<f64>,
+    /// How the radiance spreads over the sky (`optics::sky`).
+    #[serde(default)]
+    pub distribution: SkyDistribution,
+}
+
+/// `[sky] distribution`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SkyDistribution {
+    #[default]
+    Isotropic,
+    CieClear,
 }
 
 #[derive(Debug, Default, Deserialize)]

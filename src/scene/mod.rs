@@ -53,8 +53,12 @@ impl Sun {
 /// The sky: isotropic diffuse radiance.
 #[derive(Clone, Debug)]
 pub struct Sky {
-    /// Horizontal spectral irradiance from the sky per band (pi x radiance).
+    /// Horizontal spectral irradiance from the sky per band (pi x the
+    /// radiance of an isotropic sky of that irradiance).
     pub irradiance: Vec<f64>,
+    /// The radiance's distribution over the sky: L(s) = irradiance / pi x
+    /// `model.relative(s)`.
+    pub model: crate::optics::sky::SkyModel,
 }
 
 /// The horizontal domain.

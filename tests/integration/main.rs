@@ -20,4 +20,5 @@ mod products;
 mod render;
 mod roundtrip;
 mod scenes;
+mod sky;
 mod splitting;

@@ -2,6 +2,7 @@
 //! and `[surface]`.
 
 use super::*;
+use crate::optics::sky::SkyModel;
 
 /// The sun: position and direct normal irradiance per band.
 pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
@@ -57,8 +58,9 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
     Ok(sun)
 }
 
-/// The sky: horizontal diffuse irradiance per band.
-pub(super) fn sky(ctx: &Ctx, s: &SkyFile) -> Result<Sky> {
+/// The sky: horizontal diffuse irradiance per band, and how its radiance
+/// spreads over the hemisphere.
+pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
     let nb = ctx.bands.len();
     let key = |k| [K("sky"), K(k)];
     let sky_irr = match (&s.spectrum, s.radiance) {
@@ -84,8 +86,13 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile) -> Result<Sky> {
             return Err(ctx.err(&key("radiance"), what));
         }
     };
+    let model = match s.distribution {
+        SkyDistribution::Isotropic => SkyModel::Isotropic,
+        SkyDistribution::CieClear => SkyModel::cie_clear(-sun.direction),
+    };
     let sky = Sky {
         irradiance: sky_irr,
+        model,
     };
     Ok(sky)
 }

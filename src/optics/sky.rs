@@ -1,0 +1,138 @@
+//! How the sky's radiance is spread over the hemisphere.
+//!
+//! The sky's spectrum fixes its horizontal irradiance E_sky per band
+//! (`[sky] spectrum` or `radiance`, E = pi L); its distribution gives the
+//! radiance toward each sky direction s (a unit vector pointing up to the
+//! sky element) as
+//!
+//! ```text
+//! L(s) = E_sky / pi * g(s),   integral over the hemisphere of g(s) cos(Z) = pi
+//! ```
+//!
+//! so that any distribution keeps the horizontal irradiance. g is the same
+//! in every band (a shape, not a colour).
+//!
+//! - `isotropic`: g = 1.
+//! - `cie-clear`: the CIE standard clear sky (CIE S 011/E:2003, ISO
+//!   15469:2004, sky type 12, "CIE standard clear sky, low illuminance
+//!   turbidity"): relative radiance f(chi) phi(Z) with the gradation
+//!   phi(Z) = 1 + a exp(b / cos Z) (phi = 1 at the horizon) and the
+//!   indicatrix f(chi) = 1 + c (exp(d chi) - exp(d pi / 2)) + e cos^2 chi,
+//!   a = -1, b = -0.32, c = 10, d = -3, e = 0.45, Z the element's zenith
+//!   angle and chi its angle from the sun. Normalised numerically (a
+//!   midpoint rule on a 180 x 720 grid in zenith and azimuth, relative
+//!   error below 1e-5 against finer grids).
+//!
+//! Emission draws sky photons in proportion to g(s) cos Z by rejection
+//! from the cosine-weighted hemisphere, against the bound f(0) phi(90°) /
+//! norm, which no direction exceeds.
+//!
+//! Not for: the sun's disc (the sun is its own source), or polarisation.
+
+use crate::optics::phase::cosine_hemisphere;
+use crate::rng::Pcg32;
+use glam::{DVec3, Vec3};
+
+/// The CIE type 12 coefficients (gradation a, b; indicatrix c, d, e).
+const CIE_CLEAR: [f64; 5] = [-1.0, -0.32, 10.0, -3.0, 0.45];
+
+/// The sky's radiance distribution.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SkyModel {
+    /// The same radiance from every direction.
+    Isotropic,
+    /// The CIE standard clear sky for the sun toward `sun` (unit, up).
+    CieClear {
+        sun: DVec3,
+        /// 1 / (the hemisphere integral of f phi cos Z / pi).
+        scale: f64,
+    },
+}
+
+impl SkyModel {
+    /// The CIE clear sky for the sun toward `sun_toward` (unit, up: minus
+    /// the direction sunlight travels).
+    pub fn cie_clear(sun_toward: Vec3) -> SkyModel {
+        let sun = sun_toward.as_dvec3().normalize();
+        let (nz, na) = (180, 720);
+        let (dz, da) = (
+            std::f64::consts::FRAC_PI_2 / nz as f64,
+            std::f64::consts::TAU / na as f64,
+        );
+        let mut sum = 0.0;
+        for i in 0..nz {
+            let z = (i as f64 + 0.5) * dz;
+            let (sz, cz) = z.sin_cos();
+            for j in 0..na {
+                let a = (j as f64 + 0.5) * da;
+                let s = DVec3::new(sz * a.cos(), sz * a.sin(), cz);
+                sum += cie_relative(s, sun) * cz * sz * dz * da;
+            }
+        }
+        SkyModel::CieClear {
+            sun,
+            scale: std::f64::consts::PI / sum,
+        }
+    }
+
+    /// g(s) for the sky element toward `s` (unit, pointing up; 0 below the
+    /// horizon).
+    pub fn relative(&self, s: Vec3) -> f64 {
+        match self {
+            SkyModel::Isotropic => 1.0,
+            SkyModel::CieClear { sun, scale } => {
+                if s.z <= 0.0 {
+                    return 0.0;
+                }
+                scale * cie_relative(s.as_dvec3().normalize(), *sun)
+            }
+        }
+    }
+
+    /// An upper bound of g over the hemisphere.
+    pub fn max_relative(&self) -> f64 {
+        match self {
+            SkyModel::Isotropic => 1.0,
+            SkyModel::CieClear { scale, .. } => {
+                let [_, _, c, d, e] = CIE_CLEAR;
+                // f is largest at chi = 0, phi at the horizon (phi = 1).
+                scale * (1.0 + c * (1.0 - (d * std::f64::consts::FRAC_PI_2).exp()) + e)
+            }
+        }
+    }
+
+    /// The direction of travel (down) of a sky photon, drawn in proportion
+    /// to g(s) cos Z.
+    pub fn sample_travel(&self, rng: &mut Pcg32) -> Vec3 {
+        let max = self.max_relative();
+        loop {
+            let travel = cosine_hemisphere(-Vec3::Z, rng);
+            if matches!(self, SkyModel::Isotropic)
+                || rng.uniform_f64() * max < self.relative(-travel)
+            {
+                return travel;
+            }
+        }
+    }
+}
+
+/// The CIE relative radiance f(chi) phi(Z) of the sky element toward `s`
+/// (unit, z > 0) for the sun toward `sun`.
+fn cie_relative(s: DVec3, sun: DVec3) -> f64 {
+    let [a, b, c, d, e] = CIE_CLEAR;
+    let cos_z = s.z;
+    let phi = if cos_z > 1e-9 {
+        1.0 + a * (b / cos_z).exp()
+    } else {
+        1.0
+    };
+    let cos_chi = s.dot(sun).clamp(-1.0, 1.0);
+    let chi = cos_chi.acos();
+    let f = 1.0
+        + c * ((d * chi).exp() - (d * std::f64::consts::FRAC_PI_2).exp())
+        + e * cos_chi * cos_chi;
+    f * phi
+}
+
+#[cfg(test)]
+mod tests;
