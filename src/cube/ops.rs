@@ -60,6 +60,58 @@ fn derived_spec(
     }
 }
 
+/// Header keys a derived cube keeps from its source: where it lies on the
+/// map and the sun it was rendered under.
+const CARRIED_KEYS: [&str; 5] = [
+    "map info",
+    "coordinate system string",
+    "pixel size",
+    "sun elevation",
+    "sun azimuth",
+];
+
+/// The one-line `key = value` lines of `cube`'s header with a key of
+/// [`CARRIED_KEYS`], for a cube derived from it; for a window whose top
+/// left pixel is `(x0, y0)` of the source, `map info`'s reference pixel
+/// moves by (-x0, -y0) so that every pixel keeps its map position.
+fn carried_lines(cube: &EnviCube, (x0, y0): (usize, usize)) -> Result<Vec<String>> {
+    let text = std::fs::read_to_string(cube.header_path())
+        .map_err(|e| Error::io(cube.header_path(), "read", e))?;
+    let mut lines = Vec::new();
+    for line in text.lines() {
+        let Some((key, value)) = line.split_once('=') else {
+            continue;
+        };
+        let key = key.trim().to_ascii_lowercase();
+        let value = value.trim();
+        let one_line = value.matches('{').count() == value.matches('}').count();
+        if !CARRIED_KEYS.contains(&key.as_str()) || !one_line {
+            continue;
+        }
+        if key == "map info" && (x0, y0) != (0, 0) {
+            // {projection, ref x, ref y, easting, northing, dx, dy, ...}
+            let inner = value.trim_start_matches('{').trim_end_matches('}');
+            let mut fields: Vec<String> = inner.split(',').map(|f| f.trim().to_string()).collect();
+            let shift =
+                |f: &str, by: usize| f.parse::<f64>().ok().map(|v| (v - by as f64).to_string());
+            match (
+                fields.get(1).and_then(|f| shift(f, x0)),
+                fields.get(2).and_then(|f| shift(f, y0)),
+            ) {
+                (Some(rx), Some(ry)) => {
+                    fields[1] = rx;
+                    fields[2] = ry;
+                    lines.push(format!("map info = {{{}}}", fields.join(", ")));
+                }
+                _ => continue,
+            }
+        } else {
+            lines.push(format!("{key} = {value}"));
+        }
+    }
+    Ok(lines)
+}
+
 /// Copy the window `x0..x0+w` x `y0..y0+h` of `cube` into a new cube
 /// `dir/NAME.{hdr,bsq}` with the same bands; returns its files.
 pub fn window(
@@ -85,7 +137,12 @@ pub fn window(
     }
     let note = format!("window {w} x {h} at {x0}, {y0}");
     let spec = derived_spec(cube, [w, h], band_grid(cube)?, &note);
-    copy_tiles(cube, (x0, y0), EnviWriter::create(dir, name, spec)?)
+    let extra = carried_lines(cube, (x0, y0))?;
+    copy_tiles(
+        cube,
+        (x0, y0),
+        EnviWriter::create_with(dir, name, spec, &extra)?,
+    )
 }
 
 /// Copy the window of `cube` at `(x0, y0)` the size of `writer`'s cube into
@@ -120,7 +177,7 @@ pub fn convert(
     copy_tiles(
         cube,
         (0, 0),
-        EnviWriter::create_interleaved(dir, name, spec, &[], interleave)?,
+        EnviWriter::create_interleaved(dir, name, spec, &carried_lines(cube, (0, 0))?, interleave)?,
     )
 }
 
@@ -174,7 +231,7 @@ pub fn subset(
     let note = format!("bands {from} to {to}");
     let spec = derived_spec(cube, [cube.samples(), cube.lines()], bands, &note);
     let (w, h, nb) = (cube.samples(), cube.lines(), to - from + 1);
-    let writer = EnviWriter::create(dir, name, spec)?;
+    let writer = EnviWriter::create_with(dir, name, spec, &carried_lines(cube, (0, 0))?)?;
     for ty in (0..h).step_by(TILE) {
         for tx in (0..w).step_by(TILE) {
             let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));
@@ -233,7 +290,7 @@ pub fn resample(
     let note = format!("in the bands of {}", sensor.name);
     let spec = derived_spec(cube, [cube.samples(), cube.lines()], bands, &note);
     let (w, h, nb, out_nb) = (cube.samples(), cube.lines(), cube.bands(), made.len());
-    let writer = EnviWriter::create(dir, name, spec)?;
+    let writer = EnviWriter::create_with(dir, name, spec, &carried_lines(cube, (0, 0))?)?;
     for ty in (0..h).step_by(TILE) {
         for tx in (0..w).step_by(TILE) {
             let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));

@@ -156,3 +156,77 @@ fn littoral_cube_reads_what_gdal_writes() {
         }
     }
 }
+
+/// Cubes derived with littoral-cube keep their place on the map: a window
+/// at (1, 2) starts 1 pixel east and 2 south of the cube, and a resampled,
+/// converted or band-subset cube has the cube's transform and CRS.
+#[test]
+fn derived_cubes_keep_the_map_grid() {
+    let dir = tempdir();
+    let text = scene("[georef]\norigin_m = [500000.0, 4100000.0]\nepsg = 32617");
+    let s = Scene::parse(&text, Path::new("geo.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("utm"), 0);
+    let tool = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_littoral-cube"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let path = |name: &str| dir.path().join(name).display().to_string();
+    tool(&[
+        "window",
+        &r.outputs.hdr,
+        "1",
+        "2",
+        "2",
+        "2",
+        "--out",
+        &path("win.hdr"),
+    ]);
+    tool(&[
+        "subset",
+        &r.outputs.hdr,
+        "0",
+        "0",
+        "--out",
+        &path("sub.hdr"),
+    ]);
+    tool(&[
+        "convert",
+        &r.outputs.hdr,
+        "--interleave",
+        "bip",
+        "--out",
+        &path("bip.hdr"),
+    ]);
+    let sensor = dir.path().join("g.csv");
+    std::fs::write(&sensor, "band,center_nm,fwhm_nm\nb,500,20\n").unwrap();
+    let sensor = format!("csv:{}", sensor.display());
+    tool(&[
+        "resample",
+        &r.outputs.hdr,
+        "--sensor",
+        &sensor,
+        "--out",
+        &path("res.hdr"),
+    ]);
+    let cube = [500000.0, 5.0, 0.0, 4100020.0, 0.0, -5.0];
+    let window = [500005.0, 5.0, 0.0, 4100010.0, 0.0, -5.0];
+    for (data, want) in [
+        ("win.bsq", window),
+        ("sub.bsq", cube),
+        ("bip.bip", cube),
+        ("res.bsq", cube),
+    ] {
+        let info = gdalinfo(&dir.path().join(data));
+        let gt: Vec<f64> = serde_json::from_value(info["geoTransform"].clone()).unwrap();
+        assert_eq!(gt, want, "{data}");
+        let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap();
+        assert!(wkt.contains("ID[\"EPSG\",32617]"), "{data}: {wkt}");
+    }
+}
