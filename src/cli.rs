@@ -14,6 +14,22 @@ use std::sync::Mutex;
 /// The result type of a command: any error, reported by [`exit`].
 pub type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
 
+/// On SIGINT, SIGTERM or SIGHUP, remove the run's temporary files
+/// (`output::remove_temporaries`: partial maps, cubes and scratch maps) and
+/// exit with status 130, so that an interrupted run leaves nothing behind
+/// but what it had finished. (SIGKILL cannot be caught: its temporaries stay,
+/// named `.*.partial` and `.littoral-map.*`.)
+pub fn remove_temporaries_on_signals(program: &'static str) {
+    let installed = ctrlc::set_handler(move || {
+        let removed = crate::output::remove_temporaries();
+        eprintln!("{program}: interrupted; {removed} temporary files removed");
+        std::process::exit(130);
+    });
+    if let Err(e) = installed {
+        eprintln!("{program}: warning: no signal handler ({e}): an interrupted run may leave temporary files");
+    }
+}
+
 /// The exit status of `program` after `result`: success, or one line
 /// `PROGRAM: error: ...` on stderr and status 1. (Usage errors exit with 2
 /// from the argument parser before a command runs.)

@@ -2,7 +2,38 @@
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Every temporary file this process created, for [`remove_temporaries`].
+/// Published ones were renamed away and dropped ones deleted, so the list
+/// only grows; removing a path that is gone does nothing.
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// A temporary file in `dir` named `PREFIX` + random + `SUFFIX`, deleted if
+/// dropped, and recorded so that [`remove_temporaries`] finds it when a
+/// signal ends the process before it is dropped or published.
+pub fn temp_in(dir: &Path, prefix: &str, suffix: &str) -> std::io::Result<tempfile::NamedTempFile> {
+    let tmp = tempfile::Builder::new()
+        .prefix(prefix)
+        .suffix(suffix)
+        .tempfile_in(dir)?;
+    TEMPORARIES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(tmp.path().to_path_buf());
+    Ok(tmp)
+}
+
+/// Remove the temporary files of [`temp_in`] that still exist: what a
+/// SIGINT or SIGTERM handler calls before the process exits without
+/// running destructors. Returns how many it removed.
+pub fn remove_temporaries() -> usize {
+    let list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    list.iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count()
+}
 
 /// The directory a file at `path` lives in (`.` for a bare name).
 pub fn parent_dir(path: &Path) -> &Path {
@@ -27,10 +58,7 @@ pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".partial")
-        .tempfile_in(parent_dir(path))
+    temp_in(parent_dir(path), &format!(".{name}."), ".partial")
         .map_err(|e| Error::io(path, "create", e))
 }
 

@@ -183,6 +183,7 @@ enum Command {
 const SCAN_VALUES: usize = 1 << 20;
 
 fn main() -> ExitCode {
+    cli::remove_temporaries_on_signals("littoral-cube");
     cli::exit("littoral-cube", run(Cli::parse()))
 }
 

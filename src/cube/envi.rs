@@ -286,10 +286,7 @@ impl EnviWriter {
         let bsq_path = dir.join(format!("{name}.{}", interleave.extension()));
         let hdr_path = dir.join(format!("{name}.hdr"));
         let temp = |path: &Path| {
-            tempfile::Builder::new()
-                .prefix(".littoral.")
-                .suffix(".partial")
-                .tempfile_in(dir)
+            crate::output::temp_in(dir, ".littoral.", ".partial")
                 .map_err(|e| Error::io(path, "create", e))
         };
         let bsq = temp(&bsq_path)?;

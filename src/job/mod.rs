@@ -275,9 +275,7 @@ impl RenderJob<'_> {
         let scratch = match &self.map {
             Some(_) => None,
             None => Some(
-                tempfile::Builder::new()
-                    .prefix(".littoral-map.")
-                    .tempfile_in(&self.out_dir)
+                crate::output::temp_in(&self.out_dir, ".littoral-map.", "")
                     .map_err(|e| Error::io(&self.out_dir, "create", e))?,
             ),
         };

@@ -301,3 +301,76 @@ fn full_disk_leaves_nothing_behind() {
     assert_clean_failure(&out, "full.map");
     assert_nothing_written(&out_dir);
 }
+
+/// SIGTERM or SIGINT mid-run removes the run's temporary files: the
+/// partial map of `emit`, and the scratch map and partial cubes of
+/// `render`; the exit status is 130 and nothing is left under a final name.
+#[test]
+fn signals_leave_no_temporary_files() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = tempdir();
+    let scene = dir.path().join("c.toml");
+    std::fs::write(&scene, include_str!("../../src/scene/coastal.toml")).unwrap();
+    let runs: [(&str, Vec<String>); 2] = [
+        (
+            "TERM",
+            vec![
+                "emit".into(),
+                p(&scene).into(),
+                "--photons".into(),
+                "50000000".into(),
+                "--map".into(),
+                p(&dir.path().join("out/big.map")).into(),
+                "--quiet".into(),
+            ],
+        ),
+        (
+            "INT",
+            vec![
+                "render".into(),
+                p(&scene).into(),
+                "--photons".into(),
+                "50000000".into(),
+                "--out".into(),
+                p(&dir.path().join("out")).into(),
+                "--quiet".into(),
+            ],
+        ),
+    ];
+    for (signal, args) in runs {
+        let out = dir.path().join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_littoral"))
+            .args(&args)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let names = || -> Vec<String> {
+            std::fs::read_dir(&out)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        };
+        // Wait until the run has a temporary file to lose.
+        let start = Instant::now();
+        while !names().iter().any(|n| n.starts_with('.')) {
+            assert!(
+                start.elapsed() < Duration::from_secs(120),
+                "no temporary file appeared"
+            );
+            assert!(child.try_wait().unwrap().is_none(), "{args:?} ended early");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let killed = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let output = child.wait_with_output().unwrap();
+        assert_eq!(output.status.code(), Some(130), "{args:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains("interrupted"), "{stderr}");
+        assert_eq!(names(), Vec::<String>::new(), "{args:?} left files behind");
+    }
+}

@@ -14,6 +14,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 fn main() -> ExitCode {
+    cli::remove_temporaries_on_signals("littoral");
     cli::exit("littoral", run(Cli::parse()))
 }
 
