@@ -1,5 +1,5 @@
 //! Shared setup for the benchmarks: synthetic maps cached under
-//! `target/bench-maps` so repeated runs skip the build.
+//! `target/bench-maps/v<format>` so repeated runs skip the build.
 
 #![allow(dead_code)]
 
@@ -11,8 +11,11 @@ use std::path::PathBuf;
 
 pub const MIB: u64 = 1 << 20;
 
+/// `target/bench-maps/vN` for map format N: a format change rebuilds them.
 pub fn bench_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-maps");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/bench-maps")
+        .join(format!("v{}", littoral::store::format::FORMAT_VERSION));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
