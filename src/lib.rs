@@ -6,7 +6,8 @@
 //!   emission inputs for map provenance.
 //! - [`optics`]: embedded spectral tables averaged over the band grid
 //!   ([`optics::tables::Table`]), IOPs, phase functions with exact samplers
-//!   ([`optics::phase::PhaseFunction`]), the sea surface.
+//!   ([`optics::phase::PhaseFunction`]), the sky's radiance distribution
+//!   ([`optics::sky::SkyModel`]), the sea surface.
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy, the
 //!   emission report ([`emit::Emitter`]).
@@ -22,8 +23,9 @@
 //!   ([`render::march::RayMarcher`]) and the unbiased reference path tracer
 //!   ([`render::path::PathTracer`]); the image loop and radiometers
 //!   ([`render::render_with`]).
-//! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR) and its
-//!   quicklook (PNG).
+//! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR), its
+//!   quicklook (PNG), derived cubes ([`cube::ops`]) and real sensors' bands
+//!   ([`cube::sensor::Sensor`]).
 //! - [`job`]: the whole pipeline as one call — scene, map (reused by
 //!   provenance or emitted), render, outputs — with the typed report and the
 //!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]).
