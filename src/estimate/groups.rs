@@ -35,6 +35,7 @@
 //! With G = 16 the variance estimate has 15 degrees of freedom: a single
 //! pixel's standard error is itself uncertain by about 18 %.
 
+use crate::estimate::spectral::{density, BandSums, SpectralMode};
 pub use crate::photon::GROUPS;
 
 /// Channels of a radiance vector that carries its photon noise: the
@@ -107,6 +108,84 @@ pub fn variance(groups: &[f64], out: &mut [f64]) {
             .map(|k| (groups[k * nb + b] - mean).powi(2))
             .sum();
         *o = g / (g - 1.0) * ss;
+    }
+}
+
+/// The group sums of one estimate and where their parts go.
+pub(crate) struct Groups<'s> {
+    pub local: &'s GroupSums,
+    pub coarse: &'s GroupSums,
+    pub expanded: &'s GroupSums,
+    /// `GROUPS` runs of bands.
+    pub out: &'s mut [f64],
+}
+
+impl Groups<'_> {
+    /// Group g's level, D_g = local_g / V + coarse_g / V' (V' = 0: no
+    /// coarse part).
+    fn level(&self, g: usize, v_local: f64, v_coarse: f64) -> f64 {
+        density(self.local.totals()[g], v_local) + density(self.coarse.totals()[g], v_coarse)
+    }
+
+    /// The grid combination L_b = D s_b: D_g s_b + D s_{g,b}, with s_{g,b}
+    /// the group's part of the grid's shares.
+    pub fn shape(self, v_local: f64, v_big: f64, shape: &[f64], shape_groups: &[f64], out: &[f64]) {
+        let nb = shape.len();
+        let level: f64 = out.iter().sum();
+        for g in 0..GROUPS {
+            let d_g = self.level(g, v_local, v_big);
+            let dev = &shape_groups[g * nb..(g + 1) * nb];
+            for ((o, s), d) in self.out[g * nb..(g + 1) * nb]
+                .iter_mut()
+                .zip(shape)
+                .zip(dev)
+            {
+                *o = d_g * s + level * d;
+            }
+        }
+    }
+
+    /// The naive and compensated combinations (`coarse`: the volume split
+    /// of `combine_with_coarse`), linearised per group.
+    pub fn ratio(
+        self,
+        mode: SpectralMode,
+        v_local: f64,
+        v_big: f64,
+        coarse: bool,
+        expanded: &BandSums,
+        out: &[f64],
+    ) {
+        let nb = out.len();
+        let v_coarse = if coarse { v_big } else { 0.0 };
+        match mode {
+            SpectralMode::Naive => {
+                for g in 0..GROUPS {
+                    let o = &mut self.out[g * nb..(g + 1) * nb];
+                    for (b, o) in o.iter_mut().enumerate() {
+                        *o = density(self.local.bands_of(g)[b], v_local)
+                            + density(self.coarse.bands_of(g)[b], v_coarse);
+                    }
+                }
+            }
+            SpectralMode::Compensated | SpectralMode::Grid => {
+                let e_total = expanded.total();
+                let level: f64 = out.iter().sum();
+                if !(e_total > 0.0 && level > 0.0 && level.is_finite()) {
+                    return;
+                }
+                for g in 0..GROUPS {
+                    let d_g = self.level(g, v_local, v_coarse);
+                    let e_g = self.expanded.totals()[g];
+                    let e_gb = self.expanded.bands_of(g);
+                    let o = &mut self.out[g * nb..(g + 1) * nb];
+                    for (b, (o, e_b)) in o.iter_mut().zip(expanded.sums()).enumerate() {
+                        let share = e_b / e_total;
+                        *o = d_g * share + level * (e_gb[b] - share * e_g) / e_total;
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -61,6 +61,19 @@ impl Setup {
         self.dir.path().join("kept.map")
     }
 
+    /// Emit `scene` into the map, on one thread.
+    fn emit(&self, scene: &Scene) -> littoral::job::report::EmitReport {
+        EmitJob {
+            scene,
+            map: self.map(),
+            threads: 1,
+            budget: MemoryBudget::new(64 * MIB),
+            scene_seconds: 0.0,
+        }
+        .run(&Silent)
+        .unwrap()
+    }
+
     fn render(&self, scene: &Scene) -> RunReport {
         RenderJob {
             scene,
@@ -179,15 +192,7 @@ fn emission_inputs_always_re_emit() {
 fn emit_job_then_render_reuses() {
     let s = Setup::new();
     let scene = s.scene(&scene_text("k = 50", ""));
-    let emitted = EmitJob {
-        scene: &scene,
-        map: s.map(),
-        threads: 1,
-        budget: MemoryBudget::new(64 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&Silent)
-    .unwrap();
+    let emitted = s.emit(&scene);
     assert_eq!(emitted.map.path.as_deref(), s.map().to_str());
     let r = s.render(&scene);
     assert!(r.reused_map);
@@ -283,15 +288,7 @@ fn every_number_in_a_report_has_a_unit() {
     }
     let s = Setup::new();
     let scene = s.scene(&scene_text("k = 50", ""));
-    let emitted = EmitJob {
-        scene: &scene,
-        map: s.map(),
-        threads: 1,
-        budget: MemoryBudget::new(64 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&Silent)
-    .unwrap();
+    let emitted = s.emit(&scene);
     let photon_map = s.render(&scene);
     let path = s.scene(&scene_text("", "[render]\nintegrator = \"path\""));
     let traced = render_job(&path, &s.dir.path().join("path"), 0);
