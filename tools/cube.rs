@@ -290,8 +290,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
         } => {
             let cube = open(&cube)?;
-            let name = hdr_name(&out)?;
-            let dir = littoral::output::parent_dir(&out);
+            let (dir, name) = cube_out(&out)?;
             let files = littoral::cube::ops::subset(&cube, (from, to), dir, &name)?;
             let summary =
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "bands": to - from + 1 });
@@ -300,8 +299,7 @@ fn run(cli: Cli) -> AnyResult<()> {
         Command::Resample { cube, sensor, out } => {
             let sensor = littoral::cube::sensor::Sensor::named(&sensor)?;
             let cube = open(&cube)?;
-            let name = hdr_name(&out)?;
-            let dir = littoral::output::parent_dir(&out);
+            let (dir, name) = cube_out(&out)?;
             let (files, made) = littoral::cube::ops::resample(&cube, &sensor, dir, &name)?;
             let band = |i: usize| {
                 let b = &sensor.bands[i];
@@ -326,8 +324,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
         } => {
             let cube = open(&cube)?;
-            let name = hdr_name(&out)?;
-            let dir = littoral::output::parent_dir(&out);
+            let (dir, name) = cube_out(&out)?;
             let files = littoral::cube::ops::convert(&cube, interleave, dir, &name)?;
             let summary = serde_json::json!({
                 "hdr": files.hdr,
@@ -380,12 +377,13 @@ fn run(cli: Cli) -> AnyResult<()> {
     }
 }
 
-/// The cube name of an `--out NAME.hdr` (a `.hdr` file name).
-fn hdr_name(out: &std::path::Path) -> AnyResult<String> {
+/// The directory and cube name of an `--out NAME.hdr` (a `.hdr` file name).
+fn cube_out(out: &std::path::Path) -> AnyResult<(&std::path::Path, String)> {
     match (out.extension().and_then(|e| e.to_str()), out.file_stem()) {
-        (Some(e), Some(stem)) if e.eq_ignore_ascii_case("hdr") => {
-            Ok(stem.to_string_lossy().into_owned())
-        }
+        (Some(e), Some(stem)) if e.eq_ignore_ascii_case("hdr") => Ok((
+            littoral::output::parent_dir(out),
+            stem.to_string_lossy().into_owned(),
+        )),
         _ => Err(Error::invalid(
             "--out",
             format!("{}: name the new cube's header, NAME.hdr", out.display()),
