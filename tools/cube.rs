@@ -138,7 +138,7 @@ enum Command {
         /// The cube's header or data file.
         cube: PathBuf,
         /// sentinel2a-msi, sentinel2b-msi, landsat8-oli, landsat9-oli,
-        /// aviris-ng, or csv:FILE (wavelength_nm,BAND,... responses on an
+        /// aviris-ng, enmap, prisma, or csv:FILE (wavelength_nm,BAND,... responses on an
         /// even grid, or band,center_nm,fwhm_nm Gaussians).
         #[arg(long)]
         sensor: String,

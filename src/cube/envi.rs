@@ -207,6 +207,34 @@ impl CubeSpec {
     }
 }
 
+impl CubeSpec {
+    /// GDAL's sidecar for the data file (`NAME.bsq.aux.xml`): each band's
+    /// unit, which GDAL's ENVI driver (3.6) takes from no header key, only
+    /// from this file's `UnitType`. It repeats the description GDAL makes
+    /// from the header (`band name (wavelength Nanometers)`), since a band
+    /// in the sidecar without one would lose it.
+    fn gdal_sidecar(&self) -> String {
+        let unit = xml_escape(&self.data_units);
+        let mut x = String::from("<PAMDataset>\n");
+        for (b, nm) in self.bands.centers_nm().iter().enumerate() {
+            x.push_str(&format!(
+                "  <PAMRasterBand band=\"{}\">\n    <Description>{nm} nm ({nm} Nanometers)</Description>\n    <UnitType>{unit}</UnitType>\n  </PAMRasterBand>\n",
+                b + 1
+            ));
+        }
+        x.push_str("</PAMDataset>\n");
+        x
+    }
+}
+
+/// `text` with XML's special characters escaped.
+fn xml_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
 /// The two files of a cube on disk.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CubeFiles {
@@ -405,6 +433,7 @@ impl EnviWriter {
     /// data file. Existing files of the same names are replaced.
     pub fn finish(self) -> Result<CubeFiles> {
         let EnviWriter {
+            spec,
             bsq,
             hdr,
             bsq_path,
@@ -416,6 +445,9 @@ impl EnviWriter {
         }
         bsq.persist(&bsq_path)
             .map_err(|e| Error::io(&bsq_path, "rename into place", e.error))?;
+        let mut sidecar = bsq_path.clone().into_os_string();
+        sidecar.push(".aux.xml");
+        crate::output::write_atomic(Path::new(&sidecar), spec.gdal_sidecar().as_bytes())?;
         hdr.persist(&hdr_path)
             .map_err(|e| Error::io(&hdr_path, "rename into place", e.error))?;
         Ok(CubeFiles {

@@ -34,7 +34,7 @@ use std::path::Path;
 pub const MIN_COVERAGE: f64 = 0.99;
 
 /// The sensors whose responses are shipped, and their tables.
-const SHIPPED: [(&str, &str); 5] = [
+const SHIPPED: [(&str, &str); 7] = [
     (
         "sentinel2a-msi",
         include_str!("../../data/srf/sentinel2a-msi.csv"),
@@ -52,11 +52,13 @@ const SHIPPED: [(&str, &str); 5] = [
         include_str!("../../data/srf/landsat9-oli.csv"),
     ),
     ("aviris-ng", include_str!("../../data/srf/aviris-ng.csv")),
+    ("enmap", include_str!("../../data/srf/enmap.csv")),
+    ("prisma", include_str!("../../data/srf/prisma.csv")),
 ];
 
 /// Sensors asked for by users whose responses no reachable package
 /// publishes; named so that the error can say so.
-const NOT_SHIPPED: [&str; 3] = ["pace-oci", "enmap", "prisma"];
+const NOT_SHIPPED: [&str; 1] = ["pace-oci"];
 
 /// Integration step over a response (nm).
 const STEP_NM: f64 = 0.05;

@@ -21,6 +21,7 @@
 //! Not for: argument parsing, progress bars or exit codes (`main`).
 
 pub mod budget;
+pub mod html;
 pub mod report;
 pub mod units;
 
@@ -137,6 +138,7 @@ impl RenderJob<'_> {
         let t_render = start.elapsed().as_secs_f64();
 
         let json = self.out_dir.join(format!("{}.json", scene.name));
+        let html = self.out_dir.join(format!("{}.html", scene.name));
         let peaks = sampler.finish();
         let ed_above = match &stage {
             Some(s) => s.emission.above_surface.Ed.clone(),
@@ -183,6 +185,7 @@ impl RenderJob<'_> {
                 png: rendered.png.display().to_string(),
                 exr: rendered.exr.display().to_string(),
                 json: json.display().to_string(),
+                html: html.display().to_string(),
                 stderr_hdr: rendered
                     .stderr
                     .as_ref()
@@ -218,6 +221,7 @@ impl RenderJob<'_> {
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::invalid("report", e.to_string()))?
             + "\n";
+        html::write(scene, &report, &html)?;
         crate::output::write_atomic(&json, text.as_bytes())?;
         Ok(report)
     }

@@ -116,6 +116,9 @@ pub struct Outputs {
     pub png: String,
     pub exr: String,
     pub json: String,
+    /// The page for people: plots, figures and settings (`job::html`).
+    #[serde(default)]
+    pub html: String,
     /// The standard-error cube (path integrator with two or more samples
     /// per pixel).
     #[serde(default, skip_serializing_if = "Option::is_none")]

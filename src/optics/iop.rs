@@ -10,7 +10,16 @@
 //!   water) unless given, and the scene's particle phase function.
 //!
 //! In explicit mode a and b are given directly (the same in every band)
-//! and all scattering uses the scene's phase function.
+//! and all scattering uses the scene's phase function. From a table
+//! (`[water] iop_file`: a, b and bb/b against wavelength, HydroLight's
+//! explicit-IOP input) each band has its own a and b, and its scattering is
+//! split between the two phase functions so that the band's backscatter
+//! fraction is the table's ([`Iop::with_backscatter_fraction`]): with
+//! fractions r_w (pure water, 0.5) and r_p (the particle phase function,
+//! 0.0183 by default), b_w = b (r - r_p) / (r_w - r_p), b_p = b - b_w. The
+//! mixture has the table's a, b and b_b exactly; its shape between the two
+//! is an assumption (a Fournier–Forand function of each band's bb/b would
+//! be another).
 //!
 //! Constituents may vary in space (`ConstituentField`). Every IOP grows
 //! with every constituent, so the per-band majorant (for delta tracking) is
@@ -182,6 +191,41 @@ pub struct Iop {
 }
 
 impl Iop {
+    /// A band's IOPs from its absorption `a`, scattering `b` and
+    /// backscatter fraction `bb_ratio`, scattering split between the
+    /// pure-water phase function (backscatter fraction `r_w`) and the
+    /// particle one (`r_p`) so that (b_w r_w + b_p r_p) / b = `bb_ratio`.
+    /// An error (what is wrong) when `bb_ratio` lies outside [r_p, r_w].
+    pub fn with_backscatter_fraction(
+        a: f64,
+        b: f64,
+        bb_ratio: f64,
+        r_w: f64,
+        r_p: f64,
+    ) -> std::result::Result<Iop, String> {
+        let (lo, hi) = (r_p.min(r_w), r_p.max(r_w));
+        // Within rounding of an end, the end itself.
+        let tol = 1e-9;
+        if !(bb_ratio >= lo - tol && bb_ratio <= hi + tol) {
+            return Err(format!(
+                "bb/b = {bb_ratio} is outside [{lo:.4}, {hi:.4}], the range a mixture of the \
+                 particle phase function (bb/b = {r_p:.4}) and pure water's ({r_w:.4}) reaches; \
+                 choose a [water.phase] with a lower bb_ratio"
+            ));
+        }
+        let share = if (r_w - r_p).abs() > 0.0 {
+            ((bb_ratio - r_p) / (r_w - r_p)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let b_w = b * share;
+        Ok(Iop {
+            a,
+            b_w,
+            b_p: b - b_w,
+        })
+    }
+
     pub fn b(&self) -> f64 {
         self.b_w + self.b_p
     }
@@ -196,6 +240,10 @@ pub enum WaterModel {
     /// a and b the same everywhere and in every band; all scattering uses
     /// the particle phase function.
     Explicit { a: f64, b: f64 },
+    /// Uniform water with its own IOPs in each band (`[water] iop_file`):
+    /// one entry per band, scattering split between the two phase
+    /// functions so that each band's backscatter fraction is the table's.
+    Bands(Vec<Iop>),
     Constituents {
         spectra: Box<BandSpectra>,
         field: ConstituentField,
@@ -214,6 +262,7 @@ impl WaterModel {
                 b_w: 0.0,
                 b_p: *b,
             },
+            WaterModel::Bands(iops) => iops[band],
             WaterModel::Constituents {
                 spectra,
                 field,
@@ -231,6 +280,7 @@ impl WaterModel {
                 let iop = self.iop(p, 0);
                 out.iter_mut().for_each(|o| *o = iop);
             }
+            WaterModel::Bands(iops) => out.copy_from_slice(iops),
             WaterModel::Constituents {
                 spectra: s,
                 field,
@@ -292,6 +342,7 @@ impl WaterModel {
     pub fn majorant(&self, band: usize) -> f64 {
         match self {
             WaterModel::Explicit { a, b } => a + b,
+            WaterModel::Bands(iops) => iops[band].c(),
             WaterModel::Constituents {
                 spectra,
                 field,
@@ -314,7 +365,7 @@ impl WaterModel {
         out: &mut [f64],
     ) -> bool {
         let layers = match self {
-            WaterModel::Explicit { .. } => &[][..],
+            WaterModel::Explicit { .. } | WaterModel::Bands(_) => &[][..],
             WaterModel::Constituents { field, .. } => match field {
                 ConstituentField::Uniform(_) => &[][..],
                 ConstituentField::Layers { layers, .. } => &layers[..],
@@ -375,6 +426,7 @@ impl WaterModel {
     pub fn scattering(&self, p: Vec3, band: usize) -> f64 {
         match self {
             WaterModel::Explicit { b, .. } => *b,
+            WaterModel::Bands(iops) => iops[band].b(),
             WaterModel::Constituents {
                 spectra,
                 field,
@@ -407,7 +459,7 @@ impl WaterModel {
     /// True when the IOPs vary with depth alone (uniform, or in layers).
     pub fn is_horizontally_uniform(&self) -> bool {
         match self {
-            WaterModel::Explicit { .. } => true,
+            WaterModel::Explicit { .. } | WaterModel::Bands(_) => true,
             WaterModel::Constituents { field, .. } => matches!(
                 field,
                 ConstituentField::Uniform(_) | ConstituentField::Layers { .. }
@@ -418,7 +470,7 @@ impl WaterModel {
     /// True when the IOPs do not depend on position.
     pub fn is_uniform(&self) -> bool {
         match self {
-            WaterModel::Explicit { .. } => true,
+            WaterModel::Explicit { .. } | WaterModel::Bands(_) => true,
             WaterModel::Constituents { field, .. } => matches!(field, ConstituentField::Uniform(_)),
         }
     }

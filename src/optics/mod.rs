@@ -6,3 +6,4 @@ pub mod phase;
 pub mod sky;
 pub mod surface;
 pub mod tables;
+pub mod water_index;

@@ -4,7 +4,7 @@ use super::file::*;
 use super::locate::{Source, Step};
 use super::*;
 use crate::geometry::{Axis, GeometryBuilder};
-use crate::optics::iop::{BandSpectra, ConstituentField, ConstituentGrid, Constituents};
+use crate::optics::iop::{BandSpectra, ConstituentField, ConstituentGrid, Constituents, Iop};
 use crate::optics::tables::{self, SolarSpectrum, Table};
 use crate::Error;
 use std::path::PathBuf;

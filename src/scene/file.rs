@@ -239,6 +239,8 @@ pub struct DomainFile {
 #[serde(deny_unknown_fields)]
 pub struct WaterFile {
     pub iop: Option<IopFile>,
+    /// CSV of explicit IOPs per wavelength: `wavelength_nm,a,b[,bb_ratio]`.
+    pub iop_file: Option<String>,
     pub phase: Option<PhaseFile>,
     pub chl: Option<f64>,
     pub cdom_440: Option<f64>,

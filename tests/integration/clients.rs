@@ -90,3 +90,103 @@ fn spectral_python_and_openexr_read_the_outputs() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The HTML report opens in headless Chromium (Debian's `chromium`,
+/// installed by `.ci/run`) with no console message at all (the page has no
+/// scripts, so any message is an error: a failed load, a parse error), and
+/// its screenshot is not blank. The page asks for nothing over the network:
+/// no scripts, no links, every image inline.
+#[test]
+fn html_report_opens_in_headless_chromium() {
+    let dir = tempdir();
+    let text = format!(
+        "{SCENE}\n[tally]\ndepths_m = [0.5, 1.5, 3.0]\n\
+         [[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [10.0, 10.0]\n"
+    );
+    let s = Scene::parse(&text, Path::new("cl.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("out"), 0);
+    let html = std::fs::read_to_string(&r.outputs.html).unwrap();
+    assert!(r.outputs.html.ends_with("cl.html"), "{}", r.outputs.html);
+    // Quicklook, R_rs, radiometers, four profiles, K_d, energy budget.
+    assert_eq!(html.matches("<svg").count(), 8, "plots in the page");
+    assert!(html.contains("src=\"data:image/png;base64,"));
+    for remote in [
+        "<script",
+        "<link",
+        "src=\"http",
+        "href=\"http",
+        "url(",
+        "@import",
+    ] {
+        assert!(
+            !html.contains(remote),
+            "the page must be self-contained: {remote}"
+        );
+    }
+    for section in [
+        "R_rs at five pixels",
+        "1 m, looking nadir",
+        "K_d",
+        "Energy budget",
+        "cache hits",
+        "estimate.k",
+    ] {
+        assert!(html.contains(section), "{section} missing from the page");
+    }
+
+    let shot = dir.path().join("shot.png");
+    let url = format!(
+        "file://{}",
+        std::fs::canonicalize(&r.outputs.html).unwrap().display()
+    );
+    let out = Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--window-size=1200,2400",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            dir.path().join("profile").display()
+        ))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(&url)
+        .output()
+        .expect("chromium (Debian's package) is installed by .ci/run");
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "chromium failed:\n{log}");
+    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:#?}");
+
+    // The screenshot: mostly white page, but plots, text and the quicklook
+    // must colour a real share of it, in many colours.
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    let pixels = &buf[..info.buffer_size()];
+    let mut coloured = 0usize;
+    let mut distinct = std::collections::HashSet::new();
+    for px in pixels.chunks_exact(channels) {
+        if px[..3].iter().any(|&c| c < 235) {
+            coloured += 1;
+        }
+        distinct.insert([px[0] >> 3, px[1] >> 3, px[2] >> 3]);
+    }
+    let n = pixels.len() / channels;
+    assert_eq!(n, 1200 * 2400, "screenshot size");
+    assert!(
+        coloured * 50 > n,
+        "only {coloured} of {n} pixels are not white"
+    );
+    assert!(distinct.len() > 50, "only {} colours", distinct.len());
+}

@@ -438,8 +438,15 @@ fn resample_into_sentinel2_bands() {
             assert!((v - want).abs() < 1e-6, "band {b} pixel {i}: {v}");
         }
     }
-    let bad = cube_tool(&["resample", p(&hdr), "--sensor", "enmap", "--out", p(&out)]);
-    assert_clean_failure(&bad, "enmap");
+    let bad = cube_tool(&[
+        "resample",
+        p(&hdr),
+        "--sensor",
+        "pace-oci",
+        "--out",
+        p(&out),
+    ]);
+    assert_clean_failure(&bad, "pace-oci");
 }
 
 /// `convert` rewrites the cube BIL and BIP with the same values (`diff`

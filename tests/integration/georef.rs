@@ -73,6 +73,18 @@ fn gdal_reads_the_map_grid_and_row_0_is_north() {
     let wkt = info["coordinateSystem"]["wkt"].as_str().unwrap();
     assert!(wkt.contains("ID[\"EPSG\",32617]"), "{wkt}");
     assert_eq!(info["bands"][1]["metadata"][""]["wavelength"], "600");
+    // Band units and names, from the sidecar NAME.bsq.aux.xml.
+    for band in info["bands"].as_array().unwrap() {
+        assert_eq!(band["unit"], "W m-2 sr-1 nm-1", "{band}");
+    }
+    assert_eq!(info["bands"][1]["description"], "600 nm (600 Nanometers)");
+    let rrs = r
+        .outputs
+        .products
+        .iter()
+        .find(|p| p.product == "rrs")
+        .unwrap();
+    assert_eq!(gdalinfo(Path::new(&rrs.bsq))["bands"][0]["unit"], "sr-1");
 
     let cog = dir.path().join("geo.tif");
     let st = Command::new("gdal_translate")
@@ -90,6 +102,7 @@ fn gdal_reads_the_map_grid_and_row_0_is_north() {
         .unwrap()
         .contains("32617"));
     assert_eq!(info["bands"][0]["metadata"][""]["wavelength"], "450");
+    assert_eq!(info["bands"][0]["unit"], "W m-2 sr-1 nm-1");
 
     // North up: rows 0-1 (y 10-20 m) see the panel, rows 2-3 the dark floor.
     let v = f32s(&r.outputs.bsq);

@@ -22,3 +22,4 @@ mod roundtrip;
 mod scenes;
 mod sky;
 mod splitting;
+mod water_optics;

@@ -218,9 +218,9 @@ fn sensor_response_writes_the_cubes_in_the_sensor_bands() {
             }
         }
     }
-    let bad = text.replace("csv:two.csv", "prisma");
+    let bad = text.replace("csv:two.csv", "pace-oci");
     let e = Scene::parse(&bad, &dir.path().join("prod.toml"), &Overrides::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("response") && e.contains("prisma"), "{e}");
+    assert!(e.contains("response") && e.contains("pace-oci"), "{e}");
 }

@@ -95,7 +95,10 @@ fn tiles_in_random_order_read_back_exactly() {
     let dir = tempfile::tempdir().unwrap();
     // 23 x 17 in 8-pixel tiles: edge tiles are 7 wide and 1 high.
     let hdr = write_cube(dir.path(), 23, 17, 5, 8, 1);
-    assert_eq!(names_in(dir.path()), ["cube.bsq", "cube.hdr"]);
+    assert_eq!(
+        names_in(dir.path()),
+        ["cube.bsq", "cube.bsq.aux.xml", "cube.hdr"]
+    );
     let cube = EnviCube::open(&hdr).unwrap();
     assert_eq!((cube.samples(), cube.lines(), cube.bands()), (23, 17, 5));
     assert_whole_cube(&cube);

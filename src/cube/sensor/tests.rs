@@ -32,6 +32,13 @@ fn shipped_sensors_have_their_published_band_centres() {
         assert!((b.centre_nm - nm).abs() < 1.5, "{band}: {}", b.centre_nm);
     }
     assert_eq!(Sensor::named("aviris-ng").unwrap().bands.len(), 425);
+    // hGRS's EnMAP (pre-launch, VNIR then SWIR) and PRISMA channels.
+    let enmap = Sensor::named("enmap").unwrap();
+    assert_eq!(enmap.bands.len(), 242);
+    assert!((enmap.bands[0].centre_nm - 423.03).abs() < 0.01);
+    let prisma = Sensor::named("prisma").unwrap();
+    assert_eq!(prisma.bands.len(), 232);
+    assert!((prisma.bands[0].centre_nm - 406.99).abs() < 0.01);
 }
 
 /// A triangle from 500 to 510 nm (peak at 505) over 1 nm bands: each

@@ -41,6 +41,97 @@ fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
     }
 }
 
+/// Explicit IOPs exclude every constituent setting.
+fn reject_constituents(ctx: &Ctx, w: &WaterFile, key: &'static str) -> Result<()> {
+    let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550]
+        .iter()
+        .any(Option::is_some)
+        || w.gradient.is_some()
+        || !w.layer.is_empty()
+        || w.grid.is_some();
+    if constituents {
+        let what = "explicit IOPs exclude constituents (chl, cdom_440, nap_440, bp_550, gradient, layer, grid)";
+        return Err(ctx.err(&[K("water"), K(key)], what));
+    }
+    Ok(())
+}
+
+/// `[water] iop_file`: a, b and (optionally) bb/b against wavelength,
+/// band-averaged like every spectrum of the scene (b_b = b bb/b averaged,
+/// so a band's bb/b is its average b_b over its average b), split between
+/// the two phase functions by [`Iop::with_backscatter_fraction`]. Without a
+/// bb_ratio column all scattering uses the particle phase function, as
+/// `iop = { a, b }` does.
+fn iop_table(
+    ctx: &Ctx,
+    file: &str,
+    water_phase: &PhaseFunction,
+    particle_phase: &PhaseFunction,
+) -> Result<Vec<Iop>> {
+    let steps = [K("water"), K("iop_file")];
+    let path = ctx.path(file);
+    let field = "water.iop_file";
+    let t = crate::csv::read(&path, field)?;
+    let col = |name: &str| t.column(name);
+    let (cx, ca, cb) = (col("wavelength_nm")?, col("a")?, col("b")?);
+    let cr = t
+        .header
+        .as_ref()
+        .is_some_and(|(_, h)| h.iter().any(|c| c == "bb_ratio"))
+        .then(|| col("bb_ratio"))
+        .transpose()?;
+    let (mut x, mut a, mut b, mut bb) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for row in &t.rows {
+        let num = |c| t.number(row, c);
+        let (nm, av, bv) = (num(cx)?, num(ca)?, num(cb)?);
+        if av < 0.0 || bv < 0.0 {
+            return Err(t.error(Some(row.line), "a and b must be >= 0 (1/m)"));
+        }
+        let r = match cr {
+            Some(c) => {
+                let r = num(c)?;
+                if !(0.0..=1.0).contains(&r) {
+                    return Err(t.error(Some(row.line), "bb_ratio must lie in [0, 1]"));
+                }
+                r
+            }
+            None => particle_phase.backscatter_fraction(),
+        };
+        x.push(nm);
+        a.push(av);
+        b.push(bv);
+        bb.push(bv * r);
+    }
+    let table = |name: &str, y: Vec<f64>| {
+        crate::optics::tables::Table::new(name, x.clone(), y)
+            .map_err(|e| ctx.err(&steps, e.to_string()))
+    };
+    let a = ctx.per_band(&table("a", a)?, &steps)?;
+    let b = ctx.per_band(&table("b", b)?, &steps)?;
+    let bb = ctx.per_band(&table("bb", bb)?, &steps)?;
+    let (r_w, r_p) = (
+        water_phase.backscatter_fraction(),
+        particle_phase.backscatter_fraction(),
+    );
+    let mut iops = Vec::with_capacity(a.len());
+    for (band, ((&a, &b), &bb)) in a.iter().zip(&b).zip(&bb).enumerate() {
+        if a + b <= 0.0 {
+            return Err(ctx.err(&steps, format!("band {band}: a + b must be > 0 (1/m)")));
+        }
+        if cr.is_none() {
+            iops.push(Iop { a, b_w: 0.0, b_p: b });
+            continue;
+        }
+        let r = if b > 0.0 { bb / b } else { r_p };
+        let nm = ctx.bands.centers_nm()[band];
+        iops.push(
+            Iop::with_backscatter_fraction(a, b, r, r_w, r_p)
+                .map_err(|e| ctx.err(&steps, format!("{file}, band {band} ({nm} nm): {e}")))?,
+        );
+    }
+    Ok(iops)
+}
+
 pub(super) fn water(
     ctx: &Ctx,
     w: &WaterFile,
@@ -48,6 +139,16 @@ pub(super) fn water(
 ) -> Result<(WaterModel, PhaseFunction)> {
     let wk = |k| [K("water"), K(k)];
     let particle_phase = phase(ctx, w.phase.as_ref())?;
+    if let Some(file) = &w.iop_file {
+        if w.iop.is_some() {
+            return Err(ctx.err(&wk("iop_file"), "give iop or iop_file, not both"));
+        }
+        let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
+            .map_err(|e| ctx.err(&wk("iop_file"), e.to_string()))?;
+        let iops = iop_table(ctx, file, &water_phase, &particle_phase)?;
+        reject_constituents(ctx, w, "iop_file")?;
+        return Ok((WaterModel::Bands(iops), particle_phase));
+    }
     if let Some(iop) = &w.iop {
         let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550]
             .iter()
@@ -56,8 +157,7 @@ pub(super) fn water(
             || !w.layer.is_empty()
             || w.grid.is_some();
         if constituents {
-            let what = "explicit IOPs exclude constituents (chl, cdom_440, nap_440, bp_550, gradient, layer, grid)";
-            return Err(ctx.err(&wk("iop"), what));
+            reject_constituents(ctx, w, "iop")?;
         }
         if !finite_in(iop.a, 0.0, 1e4) || iop.a <= 0.0 && iop.b <= 0.0 {
             return Err(ctx.err(

@@ -1,0 +1,695 @@
+//! The run's HTML report, `NAME.html` beside the JSON: one self-contained
+//! page (no scripts, no network: the quicklook is a data URI, the plots
+//! inline SVG drawn by plotters) for a person to look at.
+//!
+//! It shows the quicklook; R_rs at five pixels (the centre and the four
+//! quarter points) and L / E_d(0+) at each radiometer, each with a band of
+//! plus and minus one standard error; E_d, E_u, E_ou and L_u against depth
+//! and K_d per band (photon-map runs: the emission's tallies); the energy
+//! budget per band as fractions of the emitted power; the cache, timing and
+//! memory figures; and the run's settings.
+//!
+//! Choices: a pixel's R_rs standard error is the L_t standard-error cube
+//! over E_d(0+) (the surface-reflected part adds only sampling noise of
+//! its own, which that cube also holds). Profiles show at most five bands,
+//! evenly spread over the grid. Text in the SVG is laid out with DejaVu
+//! Sans (embedded, `data/fonts`) and drawn by the browser's sans-serif.
+//!
+//! Not for: numbers a program reads (the JSON report has them all).
+
+use super::report::RunReport;
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use base64::Engine;
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::Once;
+
+/// The font plotters measures text with.
+static FONT: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+const WIDTH: u32 = 720;
+const HEIGHT: u32 = 380;
+/// Line colours (Okabe–Ito, distinguishable with colour-blindness).
+const COLOURS: [RGBColor; 7] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+];
+
+/// One curve: a label, x values, y values and an optional half-width band.
+struct Curve {
+    label: String,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    err: Option<Vec<f64>>,
+}
+
+/// Axes of one plot.
+struct Axes<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    /// Depth plots put x (the quantity) on a log scale and y (depth) down.
+    depth: bool,
+}
+
+/// Write `NAME.html` for a finished render at `path`.
+pub fn write(scene: &Scene, report: &RunReport, path: &Path) -> Result<()> {
+    let page = page(scene, report)?;
+    crate::output::write_atomic(path, page.as_bytes())
+}
+
+/// The page's HTML.
+pub fn page(scene: &Scene, report: &RunReport) -> Result<String> {
+    let nm: Vec<f64> = scene.bands.centers_nm().iter().map(|&c| c as f64).collect();
+    let mut h = String::new();
+    let title = format!("littoral: {}", scene.name);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{}</h1>\n<p>{}</p>\n",
+        esc(&title),
+        esc(&title),
+        esc(&report.summary())
+    );
+
+    // The quicklook.
+    let png = std::fs::read(&report.outputs.png)
+        .map_err(|e| Error::io(&report.outputs.png, "read", e))?;
+    let _ = write!(
+        h,
+        "<h2>Quicklook</h2>\n<img alt=\"quicklook of {}\" src=\"data:image/png;base64,{}\">\n\
+         <p class=\"note\">Row 0 (top) is the high-y (north) edge of the scene.</p>\n",
+        esc(&scene.name),
+        base64::engine::general_purpose::STANDARD.encode(png)
+    );
+
+    // R_rs at pixels, L / E_d(0+) at radiometers.
+    h.push_str("<h2>Remote-sensing reflectance</h2>\n");
+    h.push_str(&plot(
+        &Axes {
+            title: "R_rs at five pixels (± 1 standard error)",
+            x_label: "wavelength (nm)",
+            y_label: "R_rs (sr^-1)",
+            depth: false,
+        },
+        &pixel_rrs(report, &nm)?,
+    )?);
+    if report.radiometers.is_empty() {
+        h.push_str("<p class=\"note\">The scene has no radiometers.</p>\n");
+    } else {
+        let curves: Vec<Curve> = report
+            .radiometers
+            .iter()
+            .map(|r| Curve {
+                label: format!(
+                    "{} m, looking {} at ({}, {}) m",
+                    r.depth_m, r.view, r.position_m[0], r.position_m[1]
+                ),
+                x: nm.clone(),
+                y: per_ed(&r.L, &report.Ed_above_surface),
+                err: Some(per_ed(&r.stderr, &report.Ed_above_surface)),
+            })
+            .collect();
+        h.push_str(&plot(
+            &Axes {
+                title: "Radiometers: L / E_d(0+) (± 1 standard error)",
+                x_label: "wavelength (nm)",
+                y_label: "L / E_d(0+) (sr^-1)",
+                depth: false,
+            },
+            &curves,
+        )?);
+    }
+
+    // Profiles, K_d and the energy budget: the emission's tallies.
+    match &report.emission {
+        Some(e) => {
+            h.push_str("<h2>Light field against depth</h2>\n");
+            if e.tally.is_empty() {
+                h.push_str(
+                    "<p class=\"note\">The scene sets no <code>[tally] depths_m</code>, so \
+                     this run has no depth profiles or K_d.</p>\n",
+                );
+            } else {
+                profiles(&mut h, e, &nm)?;
+            }
+            h.push_str("<h2>Energy budget</h2>\n");
+            let en = &e.energy;
+            let parts: [(&str, &[f64]); 5] = [
+                ("escaped", &en.escaped),
+                ("absorbed in water", &en.absorbed_water),
+                ("absorbed by floor and targets", &en.absorbed_surfaces),
+                ("lost at the edges", &en.lost_edges),
+                ("residual", &en.residual),
+            ];
+            let curves: Vec<Curve> = parts
+                .iter()
+                .map(|(label, v)| Curve {
+                    label: (*label).into(),
+                    x: nm.clone(),
+                    y: v.iter().zip(&en.emitted).map(|(p, t)| p / t).collect(),
+                    err: None,
+                })
+                .collect();
+            h.push_str(&plot(
+                &Axes {
+                    title: "Where the emitted power went, per band",
+                    x_label: "wavelength (nm)",
+                    y_label: "fraction of the emitted power",
+                    depth: false,
+                },
+                &curves,
+            )?);
+            let _ = writeln!(
+                h,
+                "<p>Energy closure: largest |residual| over the bands {:.2} standard errors.</p>",
+                en.closure_sigma
+            );
+        }
+        None => h.push_str(
+            "<h2>Light field against depth</h2>\n<p class=\"note\">The path integrator traces \
+             no photons, so this run has no depth tallies, K_d or energy budget.</p>\n",
+        ),
+    }
+
+    // Figures and settings.
+    h.push_str("<h2>Run</h2>\n");
+    h.push_str(&table("Timing", &timing_rows(report)));
+    h.push_str(&table("Memory and photon cache", &memory_rows(report)));
+    h.push_str(&table("Settings", &settings_rows(scene, report)?));
+    h.push_str("<h2>Files</h2>\n");
+    h.push_str(&table("Outputs", &flatten_json(&report.outputs)?));
+    h.push_str("</body>\n</html>\n");
+    Ok(h)
+}
+
+/// E_d, E_u, E_ou and L_u against depth at a few bands, and K_d per band.
+fn profiles(h: &mut String, e: &crate::emit::report::EmissionReport, nm: &[f64]) -> Result<()> {
+    let shown = shown_bands(nm.len());
+    type Field = fn(&crate::emit::report::DepthTally) -> &[f64];
+    let quantities: [(&str, &str, Field); 4] = [
+        ("E_d", "W m^-2 nm^-1", |d| &d.Ed),
+        ("E_u", "W m^-2 nm^-1", |d| &d.Eu),
+        ("E_ou", "W m^-2 nm^-1", |d| &d.Eou),
+        ("L_u", "W m^-2 sr^-1 nm^-1", |d| &d.Lu),
+    ];
+    h.push_str("<div class=\"grid\">\n");
+    for (name, unit, get) in quantities {
+        let curves: Vec<Curve> = shown
+            .iter()
+            .map(|&b| Curve {
+                label: format!("{:.0} nm", nm[b]),
+                x: e.tally.iter().map(|d| get(d)[b]).collect(),
+                y: e.tally.iter().map(|d| d.depth_m).collect(),
+                err: None,
+            })
+            .collect();
+        let title = format!("{name} against depth");
+        let x_label = format!("{name} ({unit})");
+        h.push_str(&plot(
+            &Axes {
+                title: &title,
+                x_label: &x_label,
+                y_label: "depth (m)",
+                depth: true,
+            },
+            &curves,
+        )?);
+    }
+    h.push_str("</div>\n");
+    let kd: Vec<Curve> =
+        e.kd.iter()
+            .map(|k| Curve {
+                label: format!("{} to {} m", k.from_m, k.to_m),
+                x: nm.to_vec(),
+                y: k.Kd.clone(),
+                err: None,
+            })
+            .collect();
+    h.push_str(&plot(
+        &Axes {
+            title: "Diffuse attenuation K_d per band",
+            x_label: "wavelength (nm)",
+            y_label: "K_d (m^-1)",
+            depth: false,
+        },
+        &kd,
+    )?);
+    Ok(())
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1500px;margin:1em auto;padding:0 1em;\
+color:#222}h1{font-size:1.5em}h2{margin-top:1.6em;border-bottom:1px solid #ccc}\
+img{image-rendering:pixelated;width:512px;max-width:100%;border:1px solid #ccc}\
+.grid{display:flex;flex-wrap:wrap;gap:8px}svg{border:1px solid #eee}\
+table{border-collapse:collapse;margin:0.6em 0 1.2em 0}td,th{border:1px solid #ccc;\
+padding:2px 8px;text-align:left;font-size:0.9em}caption{text-align:left;font-weight:bold}\
+.note{color:#555;font-size:0.9em}";
+
+/// R_rs at the centre and the quarter points, from the `rrs` product cube,
+/// with the L_t standard-error cube over E_d(0+) as the band.
+fn pixel_rrs(report: &RunReport, nm: &[f64]) -> Result<Vec<Curve>> {
+    let rrs = report
+        .outputs
+        .products
+        .iter()
+        .find(|p| p.product == "rrs")
+        .ok_or_else(|| Error::invalid("report", "no rrs product cube"))?;
+    let cube = crate::cube::EnviCube::open(Path::new(&rrs.hdr))?;
+    let stderr = match &report.outputs.stderr_hdr {
+        Some(p) => Some(crate::cube::EnviCube::open(Path::new(p))?),
+        None => None,
+    };
+    let (w, l) = (cube.samples(), cube.lines());
+    let points = [
+        (w / 2, l / 2),
+        (w / 4, l / 4),
+        (3 * w / 4, l / 4),
+        (w / 4, 3 * l / 4),
+        (3 * w / 4, 3 * l / 4),
+    ];
+    let mut curves = Vec::new();
+    for (x, y) in points {
+        let err = match &stderr {
+            Some(s) => {
+                let e: Vec<f64> = s.spectrum(x, y)?.iter().map(|&v| v as f64).collect();
+                Some(per_ed(&e, &report.Ed_above_surface))
+            }
+            None => None,
+        };
+        curves.push(Curve {
+            label: format!("pixel ({x}, {y})"),
+            x: nm.to_vec(),
+            y: cube.spectrum(x, y)?.iter().map(|&v| v as f64).collect(),
+            err,
+        });
+    }
+    Ok(curves)
+}
+
+/// `v / ed`, band by band.
+fn per_ed(v: &[f64], ed: &[f64]) -> Vec<f64> {
+    v.iter().zip(ed).map(|(v, e)| v / e).collect()
+}
+
+/// At most five band indices, evenly spread over `n` bands.
+fn shown_bands(n: usize) -> Vec<usize> {
+    let k = n.min(5);
+    if k <= 1 {
+        return vec![0; k];
+    }
+    (0..k).map(|i| i * (n - 1) / (k - 1)).collect()
+}
+
+/// One SVG plot of `curves` (non-finite points left out; on a log axis,
+/// non-positive ones too).
+fn plot(axes: &Axes, curves: &[Curve]) -> Result<String> {
+    REGISTER.call_once(|| {
+        // The font is part of the binary; a failure here is a build defect.
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .unwrap_or_else(|_| panic!("the embedded DejaVu Sans font does not parse"));
+    });
+    let usable = |x: f64, y: f64| x.is_finite() && y.is_finite() && (!axes.depth || x > 0.0);
+    let mut xs = Vec::new();
+    let mut ys = Vec::new();
+    for c in curves {
+        for (i, (&x, &y)) in c.x.iter().zip(&c.y).enumerate() {
+            if !usable(x, y) {
+                continue;
+            }
+            xs.push(x);
+            ys.push(y);
+            if let Some(e) = c
+                .err
+                .as_ref()
+                .and_then(|e| e.get(i))
+                .filter(|e| e.is_finite())
+            {
+                ys.push(y - e);
+                ys.push(y + e);
+            }
+        }
+    }
+    if xs.is_empty() {
+        return Ok(format!(
+            "<p class=\"note\">{}: no finite values to plot.</p>\n",
+            esc(axes.title)
+        ));
+    }
+    let (x0, x1) = span(&xs, axes.depth);
+    let (y0, y1) = span(&ys, false);
+    let mut svg = String::new();
+    let drawn = (|| -> std::result::Result<(), Box<dyn std::error::Error>> {
+        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(axes.title, ("sans-serif", 17))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70);
+        if axes.depth {
+            // Depth grows downward: y runs from the deepest (bottom) to 0.
+            let mut chart = builder.build_cartesian_2d((x0..x1).log_scale(), -y1..-y0)?;
+            chart
+                .configure_mesh()
+                .x_desc(axes.x_label)
+                .y_desc(axes.y_label)
+                .y_label_formatter(&|v| format!("{:.0}", -v + 0.0))
+                .x_label_formatter(&|v| format!("{v:.2e}"))
+                .draw()?;
+            for (i, c) in curves.iter().enumerate() {
+                let colour = COLOURS[i % COLOURS.len()];
+                let pts: Vec<(f64, f64)> =
+                    c.x.iter()
+                        .zip(&c.y)
+                        .filter(|&(&x, &y)| usable(x, y))
+                        .map(|(&x, &y)| (x, -y))
+                        .collect();
+                chart
+                    .draw_series(LineSeries::new(pts, colour.stroke_width(2)))?
+                    .label(c.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                    });
+            }
+            legend(&mut chart)?;
+        } else {
+            let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
+            chart
+                .configure_mesh()
+                .x_desc(axes.x_label)
+                .y_desc(axes.y_label)
+                .y_label_formatter(&|v| format!("{v:.3e}"))
+                .draw()?;
+            for (i, c) in curves.iter().enumerate() {
+                let colour = COLOURS[i % COLOURS.len()];
+                let pts: Vec<(f64, f64, f64)> =
+                    c.x.iter()
+                        .zip(&c.y)
+                        .enumerate()
+                        .filter(|&(_, (&x, &y))| usable(x, y))
+                        .map(|(j, (&x, &y))| {
+                            let e = c.err.as_ref().and_then(|e| e.get(j)).copied();
+                            (x, y, e.filter(|e| e.is_finite()).unwrap_or(0.0))
+                        })
+                        .collect();
+                if c.err.is_some() && pts.len() > 1 {
+                    let mut band: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1 + p.2)).collect();
+                    band.extend(pts.iter().rev().map(|p| (p.0, p.1 - p.2)));
+                    chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
+                }
+                let line = pts.iter().map(|p| (p.0, p.1));
+                chart
+                    .draw_series(LineSeries::new(line, colour.stroke_width(2)))?
+                    .label(c.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                    });
+            }
+            legend(&mut chart)?;
+        }
+        root.present()?;
+        Ok(())
+    })();
+    drawn.map_err(|e| Error::invalid("HTML report", format!("plot '{}': {e}", axes.title)))?;
+    Ok(svg + "\n")
+}
+
+/// The legend box, top right.
+fn legend<'a, X: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .label_font(("sans-serif", 12))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string().into())
+}
+
+/// The range of `v` with a margin (a log axis keeps its lower bound
+/// positive); a single value gets a range around it.
+fn span(v: &[f64], log: bool) -> (f64, f64) {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if log {
+        return if hi > lo {
+            (lo / 1.2, hi * 1.2)
+        } else {
+            (lo / 2.0, lo * 2.0)
+        };
+    }
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.5 * lo.abs().max(1e-12)
+    };
+    (lo - pad, hi + pad)
+}
+
+/// An HTML table of name/value rows under a caption.
+fn table(caption: &str, rows: &[(String, String)]) -> String {
+    let mut t = format!("<table>\n<caption>{}</caption>\n", esc(caption));
+    for (k, v) in rows {
+        let _ = writeln!(t, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(v));
+    }
+    t.push_str("</table>\n");
+    t
+}
+
+fn timing_rows(r: &RunReport) -> Vec<(String, String)> {
+    let t = &r.timings_s;
+    vec![
+        ("load the scene (s)".into(), format!("{:.2}", t.scene)),
+        (
+            if r.reused_map {
+                "open the reused map (s)".into()
+            } else {
+                "emit photons (s)".into()
+            },
+            format!("{:.2}", t.emit),
+        ),
+        ("render (s)".into(), format!("{:.2}", t.render)),
+        ("total (s)".into(), format!("{:.2}", t.total)),
+    ]
+}
+
+fn memory_rows(r: &RunReport) -> Vec<(String, String)> {
+    let mib = |b: u64| format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64);
+    let c = &r.cache;
+    let mut rows = vec![
+        ("memory budget".into(), mib(r.memory.budget_bytes)),
+        (
+            "peak anonymous memory (bounded by the budget)".into(),
+            mib(r.peak_memory.anon_bytes),
+        ),
+        (
+            "peak mapped file pages (the photon map; not charged)".into(),
+            mib(r.peak_memory.file_bytes),
+        ),
+        ("tile cache share".into(), mib(r.memory.tile_cache_bytes)),
+        ("cache hits".into(), c.hits.to_string()),
+        ("cache misses".into(), c.misses.to_string()),
+        ("cache evictions".into(), c.evictions.to_string()),
+        ("tiles decoded".into(), c.decodes.to_string()),
+        ("decoded photon bytes".into(), mib(c.decoded_bytes)),
+        ("peak resident tiles".into(), mib(c.peak_resident_bytes)),
+    ];
+    if let Some(m) = &r.map {
+        rows.push(("map photons".into(), m.photons.to_string()));
+        rows.push(("map tiles".into(), m.tiles.to_string()));
+        rows.push(("map size on disk".into(), mib(m.file_bytes)));
+        rows.push((
+            "bytes per photon".into(),
+            format!("{:.2}", m.bytes_per_photon),
+        ));
+        rows.push(("map reused".into(), r.reused_map.to_string()));
+    }
+    rows
+}
+
+fn settings_rows(scene: &Scene, r: &RunReport) -> Result<Vec<(String, String)>> {
+    let bands = &scene.bands;
+    let mut rows = vec![
+        ("scene".to_string(), scene.name.clone()),
+        (
+            "scene files".into(),
+            scene
+                .inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+        ),
+        ("integrator".into(), format!("{:?}", r.integrator)),
+        ("seed".into(), scene.seed.to_string()),
+        ("photons".into(), scene.photons.to_string()),
+        ("upward split".into(), scene.upward_split.to_string()),
+        (
+            "bands".into(),
+            format!(
+                "{} from {:.1} to {:.1} nm",
+                bands.len(),
+                bands.centers_nm().first().copied().unwrap_or(f32::NAN),
+                bands.centers_nm().last().copied().unwrap_or(f32::NAN)
+            ),
+        ),
+        (
+            "sun zenith, azimuth (deg)".into(),
+            format!(
+                "{:.2}, {:.2}",
+                scene.sun.zenith_rad.to_degrees(),
+                scene.sun.azimuth_rad.to_degrees()
+            ),
+        ),
+        ("sky".into(), format!("{:?}", scene.sky.model)),
+        (
+            "surface".into(),
+            format!(
+                "refractive index {}, slope variance {}",
+                scene.surface.n_water, scene.surface.slope_variance
+            ),
+        ),
+        (
+            "domain (m)".into(),
+            format!(
+                "{} x {}{}",
+                scene.domain.size_m[0],
+                scene.domain.size_m[1],
+                if scene.domain.periodic {
+                    ", periodic"
+                } else {
+                    ""
+                }
+            ),
+        ),
+    ];
+    for (k, v) in flatten_json(&r.estimate)? {
+        rows.push((format!("estimate.{k}"), v));
+    }
+    for (k, v) in flatten_json(&r.sensor)? {
+        rows.push((format!("sensor.{k}"), v));
+    }
+    Ok(rows)
+}
+
+/// `value` as rows of dotted field path and JSON text.
+fn flatten_json<T: serde::Serialize>(value: &T) -> Result<Vec<(String, String)>> {
+    fn walk(prefix: &str, v: &serde_json::Value, rows: &mut Vec<(String, String)>) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, v) in m {
+                    let p = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    walk(&p, v, rows);
+                }
+            }
+            serde_json::Value::String(s) => rows.push((prefix.into(), s.clone())),
+            other => rows.push((prefix.into(), other.to_string())),
+        }
+    }
+    let v = serde_json::to_value(value).map_err(|e| Error::invalid("report", e.to_string()))?;
+    let mut rows = Vec::new();
+    walk("", &v, &mut rows);
+    Ok(rows)
+}
+
+/// Escape text for HTML.
+fn esc(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            _ => o.push(c),
+        }
+    }
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_shown_are_spread_and_in_range() {
+        assert_eq!(shown_bands(0), Vec::<usize>::new());
+        assert_eq!(shown_bands(1), vec![0]);
+        assert_eq!(shown_bands(3), vec![0, 1, 2]);
+        assert_eq!(shown_bands(41), vec![0, 10, 20, 30, 40]);
+    }
+
+    #[test]
+    fn text_is_escaped() {
+        assert_eq!(
+            esc("<a href=\"x\">&</a>"),
+            "&lt;a href=&quot;x&quot;&gt;&amp;&lt;/a&gt;"
+        );
+    }
+
+    #[test]
+    fn spans_cover_their_values() {
+        let (a, b) = span(&[1.0, 3.0], false);
+        assert!(a < 1.0 && b > 3.0);
+        let (a, b) = span(&[2.0], false);
+        assert!(a < 2.0 && b > 2.0);
+        let (a, b) = span(&[1e-3, 10.0], true);
+        assert!(a > 0.0 && a < 1e-3 && b > 10.0);
+    }
+
+    #[test]
+    fn a_plot_is_svg_with_its_labels_and_skips_non_finite_points() {
+        let curve = Curve {
+            label: "pixel (1, 2)".into(),
+            x: vec![400.0, 500.0, 600.0],
+            y: vec![0.01, f64::NAN, 0.004],
+            err: Some(vec![0.001, 0.001, f64::INFINITY]),
+        };
+        let svg = plot(
+            &Axes {
+                title: "R_rs",
+                x_label: "wavelength (nm)",
+                y_label: "R_rs (sr^-1)",
+                depth: false,
+            },
+            &[curve],
+        )
+        .unwrap();
+        assert!(svg.starts_with("<svg"), "{}", &svg[..80.min(svg.len())]);
+        assert!(svg.contains("pixel (1, 2)") && svg.contains("wavelength (nm)"));
+        assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        let empty = plot(
+            &Axes {
+                title: "nothing",
+                x_label: "x",
+                y_label: "y",
+                depth: true,
+            },
+            &[Curve {
+                label: "none".into(),
+                x: vec![0.0, -1.0],
+                y: vec![1.0, 2.0],
+                err: None,
+            }],
+        )
+        .unwrap();
+        assert!(empty.contains("no finite values"));
+    }
+}
