@@ -135,7 +135,9 @@ pub fn trace(
         Source::Sky => scene.sky.model.sample_travel(rng),
     };
     tally.add_above_down();
-    let ev = scene.surface.interact(dir, rng);
+    // The surface at this band's refractive index.
+    let surface = scene.surface_in(band);
+    let ev = surface.interact(dir, rng);
     if !ev.transmitted {
         tally.add_above_up(1.0);
         path.end(Fate::Escaped, 1.0);
@@ -238,7 +240,7 @@ impl Path<'_> {
                         tally.add(0, LU, w);
                     }
                 }
-                let ev = scene.surface.interact(b.dir, rng);
+                let ev = scene.surface_in(self.band).interact(b.dir, rng);
                 self.events += 1;
                 if ev.transmitted {
                     tally.add_above_up(b.weight);

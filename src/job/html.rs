@@ -558,8 +558,18 @@ fn settings_rows(scene: &Scene, r: &RunReport) -> Result<Vec<(String, String)>> 
         (
             "surface".into(),
             format!(
-                "refractive index {}, slope variance {}",
-                scene.surface.n_water, scene.surface.slope_variance
+                "refractive index {:.5} to {:.5} over the bands, slope variance {}",
+                scene
+                    .water_index
+                    .iter()
+                    .copied()
+                    .fold(f64::INFINITY, f64::min),
+                scene
+                    .water_index
+                    .iter()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max),
+                scene.surface.slope_variance
             ),
         ),
         (

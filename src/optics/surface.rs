@@ -18,6 +18,13 @@
 //! surface — up to 16 times, after which the mean flat surface is used.
 //! Shadowing of one facet by another is not modelled.
 //!
+//! Refractive index per band: a `SeaSurface` has one index. Emission
+//! gives each photon its band's surface (`Scene::surface_in`); the
+//! renderers draw one set of facets and directions at the scene's reference
+//! index and reweight each band's Fresnel choices to its own index
+//! ([`SurfaceEvent::weight_for`]), neglecting only the dispersion of the
+//! refracted direction (under 0.3 degrees across 400-700 nm).
+//!
 //! Not for: radiance transfer factors (the renderer applies n^2 itself).
 
 use crate::rng::Pcg32;
@@ -75,6 +82,69 @@ pub struct SurfaceEvent {
     pub transmitted: bool,
     /// Facets met (1 unless the ray left a facet back into the surface).
     pub facets: u32,
+    /// The Fresnel choices made on the way, for reweighting to another
+    /// refractive index ([`SurfaceEvent::weight_for`]).
+    pub trail: FresnelTrail,
+}
+
+/// The Fresnel choices of one [`SeaSurface::interact`]: per facet, the
+/// incidence cosine, the side the ray came from and whether it reflected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FresnelTrail {
+    len: u8,
+    cos_i: [f32; MAX_SURFACE_BOUNCES],
+    /// Bit 0: came from the air; bit 1: reflected.
+    flags: [u8; MAX_SURFACE_BOUNCES],
+}
+
+impl FresnelTrail {
+    const EMPTY: FresnelTrail = FresnelTrail {
+        len: 0,
+        cos_i: [0.0; MAX_SURFACE_BOUNCES],
+        flags: [0; MAX_SURFACE_BOUNCES],
+    };
+
+    fn push(&mut self, cos_i: f64, from_above: bool, reflected: bool) {
+        let k = self.len as usize;
+        if k < MAX_SURFACE_BOUNCES {
+            self.cos_i[k] = cos_i as f32;
+            self.flags[k] = from_above as u8 | (reflected as u8) << 1;
+            self.len += 1;
+        }
+    }
+}
+
+impl SurfaceEvent {
+    /// The probability of this event's Fresnel choices with water of index
+    /// `n_band` over their probability with the index `n_ref` they were
+    /// drawn with: the weight that makes the event, drawn once, an
+    /// unbiased sample for a band of another index (the facets and
+    /// directions stay those drawn at `n_ref`). 1 when the two are equal.
+    pub fn weight_for(&self, n_band: f64, n_ref: f64) -> f64 {
+        if n_band == n_ref {
+            return 1.0;
+        }
+        let mut w = 1.0;
+        for k in 0..self.trail.len as usize {
+            let cos_i = self.trail.cos_i[k] as f64;
+            let from_above = self.trail.flags[k] & 1 != 0;
+            let reflected = self.trail.flags[k] & 2 != 0;
+            let r = |n: f64| {
+                if from_above {
+                    fresnel_reflectance(cos_i, 1.0, n)
+                } else {
+                    fresnel_reflectance(cos_i, n, 1.0)
+                }
+            };
+            let (rb, rr) = (r(n_band), r(n_ref));
+            w *= if reflected {
+                rb / rr
+            } else {
+                (1.0 - rb) / (1.0 - rr)
+            };
+        }
+        w
+    }
 }
 
 const MAX_SURFACE_BOUNCES: usize = 16;
@@ -103,6 +173,7 @@ impl SeaSurface {
         // Which side the ray is on now; it flips when it is transmitted.
         let mut from_above = d.z < 0.0;
         let start_above = from_above;
+        let mut trail = FresnelTrail::EMPTY;
         for bounce in 0..MAX_SURFACE_BOUNCES {
             let n_up = self.sample_facet(d, rng);
             let (n1, n2) = if from_above {
@@ -122,6 +193,7 @@ impl SeaSurface {
                     None => (reflect(d, n), false),
                 }
             };
+            trail.push(cos_i, from_above, !crossed);
             if crossed {
                 from_above = !from_above;
             }
@@ -133,6 +205,7 @@ impl SeaSurface {
                     direction: d.as_vec3(),
                     transmitted: from_above != start_above,
                     facets: bounce as u32 + 1,
+                    trail,
                 };
             }
         }
@@ -143,6 +216,7 @@ impl SeaSurface {
             direction: d.normalize().as_vec3(),
             transmitted: from_above != start_above,
             facets: MAX_SURFACE_BOUNCES as u32 + 1,
+            trail,
         }
     }
 
@@ -156,6 +230,7 @@ impl SeaSurface {
         let n = self.sample_facet(d, rng);
         let cos_i = -d.dot(n);
         SurfaceSplit {
+            cos_i,
             reflectance: fresnel_reflectance(cos_i, 1.0, self.n_water),
             reflected: reflect(d, n).normalize().as_vec3(),
             refracted: refract(d, n, 1.0, self.n_water)
@@ -212,6 +287,12 @@ impl SeaSurface {
     /// |i - n o|^2), Z = [`Self::facing_normalisation`]. None when no facet
     /// refracts `i` into `o`.
     pub fn beam_transmission_density(&self, i: DVec3, o: DVec3, z_norm: f64) -> Option<(f64, f64)> {
+        self.beam_transmission(i, o, z_norm).map(|b| (b.0, b.1))
+    }
+
+    /// [`Self::beam_transmission_density`] and the facet's incidence
+    /// cosine (-i . m), for its transmittance at another index.
+    pub fn beam_transmission(&self, i: DVec3, o: DVec3, z_norm: f64) -> Option<(f64, f64, f64)> {
         let n = self.n_water;
         let h = i - n * o;
         let len = h.length();
@@ -230,7 +311,7 @@ impl SeaSurface {
             return None;
         }
         let density = p * cos_im * n * n * (-cos_om) / (z_norm * m.z.powi(4) * len * len);
-        Some((density, 1.0 - fresnel_reflectance(cos_im, 1.0, n)))
+        Some((density, 1.0 - fresnel_reflectance(cos_im, 1.0, n), cos_im))
     }
 
     /// A facet normal (up) drawn for a ray from the air along `d` exactly
@@ -267,6 +348,8 @@ impl SeaSurface {
 /// One facet's split of a ray from the air (see `SeaSurface::split_from_above`).
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceSplit {
+    /// Incidence cosine on the facet (for the reflectance at another index).
+    pub cos_i: f64,
     /// Fresnel reflectance of the facet.
     pub reflectance: f64,
     /// Reflected direction (in the air unless it heads down).

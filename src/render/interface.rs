@@ -76,6 +76,15 @@ pub fn from_air_parts(
     let p = ray.origin + d * (-ray.origin.z / d.z);
     let p = Vec3::new(p.x, p.y, 0.0);
     let split = scene.surface.split_from_above(d, rng);
+    // Each band's facet reflectance at its own refractive index.
+    let nb = sky_l.len();
+    let r: Vec<f64> = if scene.dispersive() {
+        (0..nb)
+            .map(|b| fresnel_reflectance(split.cos_i, 1.0, scene.water_index[b]))
+            .collect()
+    } else {
+        vec![split.reflectance; nb]
+    };
     let mut part = vec![0.0; out.len()];
     let reflected_from_water =
         leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
@@ -89,16 +98,16 @@ pub fn from_air_parts(
         &mut part,
         in_water,
     )?;
-    let r = split.reflectance;
     for (b, w) in water.iter_mut().enumerate() {
         if reflected_from_water {
-            *w += r * out[b];
+            *w += r[b] * out[b];
         }
         if refracted_from_water {
-            *w += (1.0 - r) * part[b];
+            *w += (1.0 - r[b]) * part[b];
         }
     }
-    for (o, t) in out.iter_mut().zip(&part) {
+    for (k, (o, t)) in out.iter_mut().zip(&part).enumerate() {
+        let r = r[k % nb];
         *o = r * *o + (1.0 - r) * t;
     }
     add_glint(scene, -d, out);
@@ -107,7 +116,8 @@ pub fn from_air_parts(
 
 /// Radiance reaching the surface point `p` along `-dir`, for a ray leaving
 /// it along `dir` into the water (`in_water`) or the air; a ray heading back
-/// into the surface meets it again. Radiance leaving the water drops by n^2.
+/// into the surface meets it again (its Fresnel choices reweighted to each
+/// band's index). Radiance leaving the water drops by each band's n^2.
 /// True when the ray went into the water.
 #[allow(clippy::too_many_arguments)]
 fn leave_surface(
@@ -120,18 +130,34 @@ fn leave_surface(
     out: &mut [f64],
     in_water: &mut InWater,
 ) -> Result<bool> {
-    let (dir, into_water) = if (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0) {
-        (dir, into_water)
+    let (dir, into_water, event) = if (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0) {
+        (dir, into_water, None)
     } else {
         let ev = scene.surface.interact(dir, rng);
-        (ev.direction, into_water != ev.transmitted)
+        (ev.direction, into_water != ev.transmitted, Some(ev))
     };
     if into_water {
-        let n2 = scene.surface.n_water * scene.surface.n_water;
         in_water(p + dir * 1e-4, dir, rng, out)?;
-        out.iter_mut().for_each(|o| *o /= n2);
     } else {
         set_sky(scene, sky_l, dir, out);
+    }
+    let nb = sky_l.len();
+    let n_ref = scene.surface.n_water;
+    // Per band: the Fresnel reweighting of a second meeting, then n^2.
+    if let Some(ev) = event.filter(|_| scene.dispersive()) {
+        let w: Vec<f64> = scene.water_index[..nb]
+            .iter()
+            .map(|&n| ev.weight_for(n, n_ref))
+            .collect();
+        for (k, o) in out.iter_mut().enumerate() {
+            *o *= w[k % nb];
+        }
+    }
+    if into_water {
+        for (k, o) in out.iter_mut().enumerate() {
+            let n = scene.water_index[k % nb];
+            *o /= n * n;
+        }
     }
     Ok(into_water)
 }
@@ -162,9 +188,19 @@ pub fn add_glint(scene: &Scene, v: Vec3, out: &mut [f64]) {
     }
     let (zx, zy) = (-h.x / h.z, -h.y / h.z);
     let p = (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2);
-    let rho = fresnel_reflectance(h.dot(v), 1.0, scene.surface.n_water);
-    let g = rho * p / (4.0 * v.z * h.z.powi(4));
-    for (o, e) in out.iter_mut().zip(&scene.sun.irradiance) {
-        *o += e * g;
+    let g = p / (4.0 * v.z * h.z.powi(4));
+    let n_ref = scene.surface.n_water;
+    let rho_ref = fresnel_reflectance(h.dot(v), 1.0, n_ref);
+    for ((o, e), &n) in out
+        .iter_mut()
+        .zip(&scene.sun.irradiance)
+        .zip(&scene.water_index)
+    {
+        let rho = if n == n_ref {
+            rho_ref
+        } else {
+            fresnel_reflectance(h.dot(v), 1.0, n)
+        };
+        *o += e * rho * g;
     }
 }

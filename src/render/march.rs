@@ -56,14 +56,14 @@ impl<'a> RayMarcher<'a> {
         let cos_s = -d.z;
         let sun_w = refract(d, DVec3::Z, 1.0, n).unwrap_or(DVec3::NEG_Z);
         let cos_w = -sun_w.z;
-        let t = 1.0 - fresnel_reflectance(cos_s, 1.0, n);
-        // Horizontal irradiance is kept (times Fresnel transmittance); the
-        // beam narrows by cos_w / cos_s.
+        // Horizontal irradiance is kept (times each band's Fresnel
+        // transmittance); the beam narrows by cos_w / cos_s.
         let e_w = scene
             .sun
             .irradiance
             .iter()
-            .map(|e| e * t * cos_s / cos_w)
+            .zip(&scene.water_index)
+            .map(|(e, &n_b)| e * (1.0 - fresnel_reflectance(cos_s, 1.0, n_b)) * cos_s / cos_w)
             .collect();
         let sky_l = sky_radiance(scene);
         RayMarcher {
@@ -223,10 +223,11 @@ impl<'a> RayMarcher<'a> {
             // Looking up through the surface: the transmitted sky, n^2
             // brighter, from the direction the ray leaves the water in.
             let n = scene.surface.n_water;
-            let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
             let g = crate::optics::surface::refract(dir.as_dvec3(), glam::DVec3::NEG_Z, n, 1.0)
                 .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
             for b in 0..nb {
+                let n = scene.water_index[b];
+                let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
                 out[b] += tr[b] * t * n * n * g * self.sky_l[b];
             }
         }

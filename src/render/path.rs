@@ -103,6 +103,36 @@ struct SunSample {
     /// Light-sampling pdf of `-dir` per sr in the water (infinite under a
     /// rough surface, where it is not computed and no MIS is done).
     pdf: f64,
+    /// How the beam crossed the surface, for each band's own Fresnel
+    /// transmittance ([`Crossing::band_factor`]).
+    crossing: Crossing,
+}
+
+/// How sunlight crossed the surface into the water, drawn at the reference
+/// refractive index.
+#[derive(Clone, Copy)]
+enum Crossing {
+    /// Through one facet (or the flat surface) at this incidence cosine.
+    Facet(f64),
+    /// Through the facets `interact` met.
+    Event(crate::optics::surface::SurfaceEvent),
+}
+
+impl Crossing {
+    /// A band's transmittance over the one the sample carries: 1 unless
+    /// the water's index varies between bands.
+    fn band_factor(&self, n_band: f64, n_ref: f64) -> f64 {
+        if n_band == n_ref {
+            return 1.0;
+        }
+        match self {
+            Crossing::Facet(cos_i) => {
+                (1.0 - fresnel_reflectance(*cos_i, 1.0, n_band))
+                    / (1.0 - fresnel_reflectance(*cos_i, 1.0, n_ref))
+            }
+            Crossing::Event(ev) => ev.weight_for(n_band, n_ref),
+        }
+    }
 }
 
 /// The path integrator of one scene.
@@ -245,6 +275,7 @@ impl<'a> PathTracer<'a> {
                         dir: d_w.as_vec3(),
                         g: t * cos_a / (cos_s * cos_w),
                         pdf: n * n * cos_w / (cos_a * Self::disc_solid_angle()),
+                        crossing: Crossing::Facet(cos_a),
                     }
                 });
             return [single, None];
@@ -253,11 +284,12 @@ impl<'a> PathTracer<'a> {
         let i = self.scene.sun.direction.as_dvec3();
         let m = surface.sample_facet_from_above(i, rng);
         let single = refract(i, m, 1.0, n).filter(|o| o.z < 0.0).and_then(|o| {
-            let (pdf, t) = surface.beam_transmission_density(i, o, z_norm)?;
+            let (pdf, t, cos_im) = surface.beam_transmission(i, o, z_norm)?;
             Some(SunSample {
                 dir: o.as_vec3(),
                 g: t / -o.z,
                 pdf,
+                crossing: Crossing::Facet(cos_im),
             })
         });
         let ev = surface.interact(self.scene.sun.direction, rng);
@@ -266,6 +298,7 @@ impl<'a> PathTracer<'a> {
                 dir: ev.direction,
                 g: 1.0 / -(ev.direction.z as f64),
                 pdf: f64::INFINITY,
+                crossing: Crossing::Event(ev),
             });
         [single, multiple]
     }
@@ -274,8 +307,9 @@ impl<'a> PathTracer<'a> {
     /// sun's radiance along it divided by the sun's horizontal irradiance,
     /// and the MIS light-sampling pdf of that direction per sr; None when
     /// `next` sees no direct sun (the disc through a flat surface, the
-    /// first-facet transmission through a rough one).
-    fn sun_seen(&self, next: Vec3) -> Option<(f64, f64)> {
+    /// first-facet transmission through a rough one), with how the light
+    /// crossed the surface.
+    fn sun_seen(&self, next: Vec3) -> Option<(f64, f64, Crossing)> {
         if next.z <= 0.0 {
             return None;
         }
@@ -283,8 +317,8 @@ impl<'a> PathTracer<'a> {
         if let Some(z_norm) = self.rough_norm {
             let o = -next.as_dvec3();
             let i = self.scene.sun.direction.as_dvec3();
-            let (pdf, t) = self.scene.surface.beam_transmission_density(i, o, z_norm)?;
-            return Some((t * pdf / -o.z, pdf));
+            let (pdf, t, cos_im) = self.scene.surface.beam_transmission(i, o, z_norm)?;
+            return Some((t * pdf / -o.z, pdf, Crossing::Facet(cos_im)));
         }
         let up_a = refract(next.as_dvec3(), DVec3::NEG_Z, n, 1.0)?;
         let to_sun = -self.scene.sun.direction.as_dvec3();
@@ -294,7 +328,11 @@ impl<'a> PathTracer<'a> {
         let (cos_a, cos_w, cos_s) = (up_a.z, next.z as f64, to_sun.z);
         let omega = Self::disc_solid_angle();
         let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
-        Some((n * n * t / (cos_s * omega), n * n * cos_w / (cos_a * omega)))
+        Some((
+            n * n * t / (cos_s * omega),
+            n * n * cos_w / (cos_a * omega),
+            Crossing::Facet(cos_a),
+        ))
     }
 
     /// Transmittance per band from `x` along `up` to the surface, into `tr`
@@ -392,7 +430,7 @@ impl<'a> PathTracer<'a> {
         let scene = self.scene;
         let domain = &scene.domain;
         let n_w = scene.surface.n_water;
-        let n2 = n_w * n_w;
+        let dispersive = scene.dispersive();
         let c_bar = self.c_bar;
         out.iter_mut().for_each(|o| *o = 0.0);
         let Some(mut pos) = domain.image(p0) else {
@@ -426,13 +464,15 @@ impl<'a> PathTracer<'a> {
                 // Floor or target: the sun directly, then a Lambertian bounce.
                 pos = h.position;
                 let n = h.normal;
-                for SunSample { dir: s_w, g, .. } in self.sample_sun(rng).into_iter().flatten() {
+                for sun in self.sample_sun(rng).into_iter().flatten() {
+                    let (s_w, g) = (sun.dir, sun.g);
                     let cos_n = (-s_w).dot(n) as f64;
                     if cos_n > 0.0 {
                         self.transmittance(pos + n * 1e-3, -s_w, rng, tmp, tr);
                         for b in 0..out.len() {
                             let r = scene.reflectance(h.surface, pos, b);
-                            out[b] += w[b] * r / PI * cos_n * g * self.sun_h[b] * tr[b];
+                            let t = sun.crossing.band_factor(scene.water_index[b], n_w);
+                            out[b] += w[b] * r / PI * cos_n * g * t * self.sun_h[b] * tr[b];
                         }
                     }
                 }
@@ -455,20 +495,27 @@ impl<'a> PathTracer<'a> {
                     pos = p;
                 }
                 if scene.surface.slope_variance <= 0.0 {
-                    let r = fresnel_reflectance(dir.z as f64, n_w, 1.0);
                     let g = refract(dir.as_dvec3(), DVec3::NEG_Z, n_w, 1.0)
                         .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
                     for b in 0..out.len() {
-                        out[b] += w[b] * (1.0 - r) * n2 * g * self.sky_l[b];
+                        let n = scene.water_index[b];
+                        let r = fresnel_reflectance(dir.z as f64, n, 1.0);
+                        out[b] += w[b] * (1.0 - r) * (n * n) * g * self.sky_l[b];
                         w[b] *= r;
                     }
                     dir = Vec3::new(dir.x, dir.y, -dir.z);
                 } else {
                     let ev = scene.surface.interact(dir, rng);
+                    if dispersive {
+                        for (b, x) in w.iter_mut().enumerate() {
+                            *x *= ev.weight_for(scene.water_index[b], n_w);
+                        }
+                    }
                     if ev.transmitted {
                         let g = scene.sky.model.relative(ev.direction);
                         for b in 0..out.len() {
-                            out[b] += w[b] * n2 * g * self.sky_l[b];
+                            let n = scene.water_index[b];
+                            out[b] += w[b] * (n * n) * g * self.sky_l[b];
                         }
                         return;
                     }
@@ -555,8 +602,10 @@ impl<'a> PathTracer<'a> {
                     let iop = iops[b];
                     let bb = iop.b();
                     if bb > 0.0 && tr[b] > 0.0 {
+                        let t = sun.crossing.band_factor(scene.water_index[b], n_w);
                         out[b] += w[b] * (iop.b_w * fw + iop.b_p * fp) / bb
                             * sun.g
+                            * t
                             * mis
                             * self.sun_h[b]
                             * tr[b];
@@ -608,11 +657,12 @@ impl<'a> PathTracer<'a> {
             }
             // The sun's disc found by the drawn direction (flat surface),
             // weighed against light sampling.
-            if let Some((l_over_e, light_pdf)) = self.sun_seen(next) {
+            if let Some((l_over_e, light_pdf, crossing)) = self.sun_seen(next) {
                 self.transmittance(pos, next, rng, tmp, tr);
                 let mis = pdf / (pdf + light_pdf);
                 for b in 0..out.len() {
-                    out[b] += w[b] * l_over_e * mis * self.sun_h[b] * tr[b];
+                    let t = crossing.band_factor(scene.water_index[b], n_w);
+                    out[b] += w[b] * l_over_e * t * mis * self.sun_h[b] * tr[b];
                 }
             }
             dir = next;

@@ -172,7 +172,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     let sun = light::sun(&ctx, &f.sun)?;
     let sky = light::sky(&ctx, &f.sky, &sun)?;
-    let surface = light::surface(&ctx, &f.surface)?;
+    let (surface, water_index) = light::surface(&ctx, &f.surface)?;
 
     // Domain.
     let size = f.domain.size_m;
@@ -247,6 +247,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         sun,
         sky,
         surface,
+        water_index,
         domain,
         water,
         particle_phase,

@@ -225,7 +225,20 @@ pub enum SkyDistribution {
 pub struct SurfaceFile {
     pub kind: Option<SurfaceKind>,
     pub wind_speed: Option<f64>,
-    pub refractive_index: Option<f64>,
+    pub refractive_index: Option<RefractiveIndex>,
+    /// Water temperature (°C) for `refractive_index = "quan-fry"`.
+    pub temperature_c: Option<f64>,
+    /// Salinity (PSU) for `refractive_index = "quan-fry"`.
+    pub salinity_psu: Option<f64>,
+}
+
+/// `[surface] refractive_index`: a number, the same in every band, or a
+/// named model of n(wavelength, temperature, salinity).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum RefractiveIndex {
+    Constant(f64),
+    Named(String),
 }
 
 #[derive(Debug, Deserialize)]

@@ -200,7 +200,12 @@ pub struct Scene {
     pub bands: BandGrid,
     pub sun: Sun,
     pub sky: Sky,
+    /// The sea surface, its index the reference the renderers trace
+    /// geometry with (the mean of `water_index`).
     pub surface: SeaSurface,
+    /// Refractive index of the water per band (`[surface]
+    /// refractive_index`: constant, or Quan & Fry 1995).
+    pub water_index: Vec<f64>,
     pub domain: Domain,
     pub water: WaterModel,
     /// Phase function of particle scattering (all scattering in explicit-IOP mode).
@@ -329,6 +334,19 @@ impl Scene {
     }
 
     /// Total horizontal spectral irradiance (sun + sky) per band above the surface.
+    /// The sea surface as light of `band` meets it: its own refractive index.
+    pub fn surface_in(&self, band: usize) -> SeaSurface {
+        SeaSurface {
+            n_water: self.water_index[band],
+            ..self.surface
+        }
+    }
+
+    /// True when the refractive index varies between bands.
+    pub fn dispersive(&self) -> bool {
+        self.water_index.iter().any(|&n| n != self.surface.n_water)
+    }
+
     pub fn incident_irradiance(&self, band: usize) -> f64 {
         self.sun.horizontal_irradiance(band) + self.sky.irradiance[band]
     }

@@ -26,11 +26,12 @@ impl Scene {
             .value("store_direct", self.store_direct)
             .value("upward_split", self.upward_split)
             .value("tally_depths_m", &self.tally_depths);
-        let parts: [(&str, String); 11] = [
+        let parts: [(&str, String); 12] = [
             ("band_grid", format!("{:?}", self.bands)),
             ("sun", format!("{:?}", self.sun)),
             ("sky", format!("{:?}", self.sky)),
             ("surface", format!("{:?}", self.surface)),
+            ("water_index", format!("{:?}", self.water_index)),
             ("domain", format!("{:?}", self.domain)),
             ("water", format!("{:?}", self.water)),
             ("particle_phase", format!("{:?}", self.particle_phase)),

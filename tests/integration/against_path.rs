@@ -1,6 +1,8 @@
 //! The photon map against the path integrator, the unbiased reference, in
 //! six small scenes: deep water, a floor, layered water, a submerged
-//! target, a rough surface, and radiometers at and near a floor.
+//! target, a rough surface (with the water's index per band after Quan &
+//! Fry, so the photons' per-band refraction meets the integrators'
+//! reweighted Fresnel choices), and radiometers at and near a floor.
 //!
 //! Every radiometer band is held to 3 sigma plus 2 %, sigma combining the
 //! photon map's standard error (photon groups and jittered samples) and
@@ -86,8 +88,8 @@ fn scenes() -> Vec<(&'static str, String)> {
             base(
                 "rough",
                 &format!(
-                    "[surface]\nkind = \"cox-munk\"\nwind_speed = 8.0\n{water}[bottom]\ndepth_m = 5.0\n\
-                     reflectance = \"sand\"\n"
+                    "[surface]\nkind = \"cox-munk\"\nwind_speed = 8.0\nrefractive_index = \"quan-fry\"\n\
+                     {water}[bottom]\ndepth_m = 5.0\nreflectance = \"sand\"\n"
                 ),
                 &[1.0, 4.0, -1.0],
             ),

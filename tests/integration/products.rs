@@ -119,6 +119,42 @@ fn total_radiance_is_water_leaving_plus_surface_reflected() {
     }
 }
 
+/// With the water's index after Quan & Fry (1995), each band's
+/// surface-reflected sky is the Fresnel reflectance at that band's own
+/// index (flat surface, nadir view), for both integrators, and L_t = L_w +
+/// surface still holds term by term.
+#[test]
+fn surface_reflectance_follows_each_bands_refractive_index() {
+    let dir = tempdir();
+    let text = scene(0.5).replace(
+        &format!("refractive_index = {N_WATER}"),
+        "refractive_index = \"quan-fry\"\ntemperature_c = 15.0\nsalinity_psu = 30.0",
+    );
+    let nm = [450.0, 550.0, 650.0];
+    let n: Vec<f64> = nm
+        .iter()
+        .map(|&l| littoral::optics::water_index::quan_fry(l, 15.0, 30.0))
+        .collect();
+    assert!(n[0] - n[2] > 5e-3, "dispersion across the bands: {n:?}");
+    for integrator in [IntegratorMode::PhotonMap, IntegratorMode::Path] {
+        let out = dir.path().join(format!("qf-{integrator:?}"));
+        let [lt, lw, surface, _] = render(&text, integrator, &out);
+        let pixels = lt.len() / 3;
+        for i in 0..lt.len() {
+            let want = fresnel_reflectance(1.0, 1.0, n[i / pixels]) * SKY;
+            assert!(
+                (surface[i] - want).abs() <= 1e-4 * want,
+                "{integrator:?} band {}: surface {} against rho(n_b) L_sky {want}",
+                i / pixels,
+                surface[i]
+            );
+            assert!((lt[i] - lw[i] - surface[i]).abs() <= 1e-6 * lt[i]);
+        }
+        // The 450 nm band reflects more than the 650 nm one (n 1.3409 against 1.3365).
+        assert!(surface[0] > surface[2 * pixels] * 1.005);
+    }
+}
+
 /// The depth profiles and Kd as CSV beside the report: one row per tally
 /// depth and band with the report's values, and Kd = ln(Ed(z1) / Ed(z2)) /
 /// (z2 - z1) from those rows.

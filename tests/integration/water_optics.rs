@@ -2,7 +2,8 @@
 //! like every spectrum, each band attenuating by its own a (Beer–Lambert),
 //! identical to `iop = { a, b }` when the table is flat, and scattering
 //! split to the table's backscatter fraction; and the errors a bad table
-//! gets.
+//! gets. The water's refractive index per band (Quan & Fry 1995): emission
+//! transmits each band by its own Fresnel factor.
 
 use littoral::emit::tally::{Totals, ED, EU};
 use littoral::emit::Emitter;
@@ -95,7 +96,10 @@ fn a_flat_table_is_the_explicit_iop() {
     let p = glam::Vec3::new(1.0, 2.0, -3.0);
     for band in 0..3 {
         let (x, y) = (table.water.iop(p, band), explicit.water.iop(p, band));
-        assert!((x.a - y.a).abs() < 1e-12 && (x.b_p - y.b_p).abs() < 1e-12, "{x:?} {y:?}");
+        assert!(
+            (x.a - y.a).abs() < 1e-12 && (x.b_p - y.b_p).abs() < 1e-12,
+            "{x:?} {y:?}"
+        );
         assert_eq!(x.b_w, 0.0);
     }
     let (a, b) = (run(&table), run(&explicit));
@@ -193,4 +197,61 @@ fn bad_iop_tables_are_refused_with_the_file_and_band() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("iop_file") && e.contains("not both"), "{e}");
+}
+
+/// With `refractive_index = "quan-fry"` the photons of each band cross a
+/// flat surface with that band's Fresnel transmittance (sun at 75 degrees,
+/// where R is about 0.18 and its spread over 400-700 nm several standard
+/// errors), and the index is recorded per band.
+#[test]
+fn each_band_crosses_the_surface_at_its_own_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = |extra: &str| {
+        format!(
+            "[spectral]\nstart_nm = 400.0\nend_nm = 700.0\nbands = 3\n[sun]\nzenith_deg = 75.0\n\
+             irradiance = 1.0\n[surface]\n{extra}\n[domain]\nsize_m = [10.0, 10.0]\n[water]\n\
+             iop = {{ a = 0.1, b = 0.0 }}\n[photons]\ncount = 1500000\n[tally]\ndepths_m = [0.0]\n"
+        )
+    };
+    let path = dir.path().join("s.toml");
+    let s = Scene::parse(
+        &text("refractive_index = \"quan-fry\"\ntemperature_c = 10.0\nsalinity_psu = 0.0"),
+        &path,
+        &Overrides::default(),
+    )
+    .unwrap();
+    let cos = 75f64.to_radians().cos();
+    let t = run(&s);
+    let mut through = Vec::new();
+    for (band, nm) in [400.0, 550.0, 700.0].iter().enumerate() {
+        let n = littoral::optics::water_index::quan_fry(*nm, 10.0, 0.0);
+        assert!((s.water_index[band] - n).abs() < 1e-12);
+        let want = 1.0 - littoral::optics::surface::fresnel_reflectance(cos, 1.0, n);
+        // Transmitted over arriving, this band's photons only.
+        let (down, _) = t.mean_and_stderr(t.above_slots().0, band);
+        let photons = down * t.traced as f64;
+        let (got, _) = t.mean_and_stderr(t.slot(0, ED), band);
+        let got = got / down;
+        let se = (want * (1.0 - want) / photons).sqrt();
+        assert!(
+            (got - want).abs() < 4.0 * se,
+            "band {band}: {got} vs {want} (se {se})"
+        );
+        through.push((want, se));
+    }
+    // The test can tell the bands apart.
+    assert!(
+        through[2].0 - through[0].0 > 6.0 * through[0].1,
+        "{through:?}"
+    );
+    // A name that is not a model, and temperature without the model.
+    for (extra, needle) in [
+        ("refractive_index = \"seawater\"", "quan-fry"),
+        ("temperature_c = 10.0", "temperature_c"),
+    ] {
+        let e = Scene::parse(&text(extra), &path, &Overrides::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(needle), "{e}");
+    }
 }

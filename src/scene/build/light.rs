@@ -97,15 +97,78 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
     Ok(sky)
 }
 
-/// The sea surface: refractive index and roughness.
-pub(super) fn surface(ctx: &Ctx, s: &SurfaceFile) -> Result<SeaSurface> {
-    let n_water = s.refractive_index.unwrap_or(1.34);
-    if !finite_in(n_water, 1.0, 2.0) {
-        return Err(ctx.err(
-            &[K("surface"), K("refractive_index")],
-            "must be between 1 and 2",
-        ));
+/// Quan & Fry's defaults: a temperate ocean.
+const DEFAULT_TEMPERATURE_C: f64 = 20.0;
+const DEFAULT_SALINITY_PSU: f64 = 35.0;
+
+/// The water's refractive index per band: a constant (1.34 by default), or
+/// Quan & Fry (1995) at each band's centre for the scene's temperature and
+/// salinity.
+fn water_index(ctx: &Ctx, s: &SurfaceFile) -> Result<Vec<f64>> {
+    let key = |k| [K("surface"), K(k)];
+    let named = match &s.refractive_index {
+        None => None,
+        Some(RefractiveIndex::Constant(n)) => Some(Err(*n)),
+        Some(RefractiveIndex::Named(name)) if name == "quan-fry" => Some(Ok(())),
+        Some(RefractiveIndex::Named(name)) => {
+            return Err(ctx.err(
+                &key("refractive_index"),
+                format!("'{name}' is not a model: give a number (1-2) or \"quan-fry\""),
+            ))
+        }
+    };
+    if !matches!(named, Some(Ok(()))) {
+        for k in ["temperature_c", "salinity_psu"] {
+            let set = if k == "temperature_c" {
+                s.temperature_c.is_some()
+            } else {
+                s.salinity_psu.is_some()
+            };
+            if set {
+                return Err(ctx.err(&key(k), "only used with refractive_index = \"quan-fry\""));
+            }
+        }
     }
+    let bands = ctx.bands.len();
+    match named {
+        None => Ok(vec![1.34; bands]),
+        Some(Err(n)) => {
+            if !finite_in(n, 1.0, 2.0) {
+                return Err(ctx.err(&key("refractive_index"), "must be between 1 and 2"));
+            }
+            Ok(vec![n; bands])
+        }
+        Some(Ok(())) => {
+            let t = s.temperature_c.unwrap_or(DEFAULT_TEMPERATURE_C);
+            if !finite_in(t, -2.0, 40.0) {
+                return Err(ctx.err(&key("temperature_c"), "must be between -2 and 40 degrees C"));
+            }
+            let sal = s.salinity_psu.unwrap_or(DEFAULT_SALINITY_PSU);
+            if !finite_in(sal, 0.0, 45.0) {
+                return Err(ctx.err(&key("salinity_psu"), "must be between 0 and 45 PSU"));
+            }
+            Ok(ctx
+                .bands
+                .centers_nm()
+                .iter()
+                .map(|&nm| crate::optics::water_index::quan_fry(nm as f64, t, sal))
+                .collect())
+        }
+    }
+}
+
+/// The sea surface: refractive index and roughness. The surface carries
+/// the reference index (the mean over the bands) the renderers trace
+/// geometry with; the second value is the index per band.
+pub(super) fn surface(ctx: &Ctx, s: &SurfaceFile) -> Result<(SeaSurface, Vec<f64>)> {
+    let index = water_index(ctx, s)?;
+    let n_water = index.iter().sum::<f64>() / index.len().max(1) as f64;
+    // A constant index is its own mean, bit for bit.
+    let n_water = if index.iter().all(|&n| n == index[0]) {
+        index[0]
+    } else {
+        n_water
+    };
     let wind = s.wind_speed.unwrap_or(0.0);
     if !finite_in(wind, 0.0, 30.0) {
         return Err(ctx.err(
@@ -117,5 +180,5 @@ pub(super) fn surface(ctx: &Ctx, s: &SurfaceFile) -> Result<SeaSurface> {
         SurfaceKind::Flat => SeaSurface::flat(n_water),
         SurfaceKind::CoxMunk => SeaSurface::cox_munk(n_water, wind),
     };
-    Ok(surface)
+    Ok((surface, index))
 }

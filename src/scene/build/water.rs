@@ -119,7 +119,11 @@ fn iop_table(
             return Err(ctx.err(&steps, format!("band {band}: a + b must be > 0 (1/m)")));
         }
         if cr.is_none() {
-            iops.push(Iop { a, b_w: 0.0, b_p: b });
+            iops.push(Iop {
+                a,
+                b_w: 0.0,
+                b_p: b,
+            });
             continue;
         }
         let r = if b > 0.0 { bb / b } else { r_p };
