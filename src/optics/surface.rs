@@ -11,12 +11,22 @@
 //! facets in proportion to their projected area along the ray, so a slope
 //! drawn from the distribution is accepted with probability proportional to
 //! max(0, -d . n) / n_z (rejection sampling; slopes are truncated at 6
-//! standard deviations, a probability below 1e-8). Choices for the awkward
-//! cases: a ray that leaves a facet into the wrong half-space (a reflection
-//! pointing back into the surface, or a refraction pointing back out) meets
-//! the surface again at a freshly drawn facet — multiple scattering at the
-//! surface — up to 16 times, after which the mean flat surface is used.
-//! Shadowing of one facet by another is not modelled.
+//! standard deviations, a probability below 1e-8).
+//!
+//! Shadowing (Smith 1967, "Geometrical shadowing of a random rough
+//! surface", IEEE Trans. Antennas Propag. 15: 668): a ray leaving a facet
+//! escapes the surface with probability G1 = 1 / (1 + Lambda(mu)), Lambda =
+//! [exp(-nu^2) / (sqrt(pi) nu) - erfc(nu)] / 2 with nu = mu / (sigma
+//! sqrt(1 - mu^2)) and mu its cosine to the vertical ([`smith_lambda`]);
+//! otherwise it meets another facet, drawn as the first was (by projected
+//! area along its new direction, from the side it is on): multiple
+//! scattering at the surface, up to 16 facets, after which the mean flat
+//! surface is used. A ray leaving into the wrong half-space (a reflection
+//! pointing back into the surface, a refraction pointing back out) always
+//! meets another facet. Smith's function is exactly the one for which the
+//! projected-area normalisation of the facet sampler is cos(theta) (1 +
+//! Lambda) (tested), so a beam's single-facet reflection is the Cox–Munk
+//! glint times G1(sun) G1(view), what `render::interface::add_glint` adds.
 //!
 //! Refractive index per band: a `SeaSurface` has one index. Emission
 //! gives each photon its band's surface (`Scene::surface_in`); the
@@ -169,13 +179,29 @@ impl SeaSurface {
     /// A ray travelling along `d` meets the surface from above (`d.z < 0`)
     /// or below (`d.z > 0`): reflect or refract it, choosing by Fresnel.
     pub fn interact(&self, d: Vec3, rng: &mut Pcg32) -> SurfaceEvent {
+        self.interact_from(d, d.z < 0.0, rng)
+    }
+
+    /// [`Self::interact`] for a ray on a given side: in the air
+    /// (`from_above`) or in the water, whichever way it travels (a ray that
+    /// left a facet and was shadowed by another may travel away from the
+    /// mean surface). `transmitted` says whether it ends on the other side.
+    pub fn interact_from(&self, d: Vec3, from_above: bool, rng: &mut Pcg32) -> SurfaceEvent {
         let mut d = d.as_dvec3();
         // Which side the ray is on now; it flips when it is transmitted.
-        let mut from_above = d.z < 0.0;
+        let mut from_above = from_above;
         let start_above = from_above;
         let mut trail = FresnelTrail::EMPTY;
         for bounce in 0..MAX_SURFACE_BOUNCES {
-            let n_up = self.sample_facet(d, rng);
+            let Some(n_up) = self.sample_facet_from(d, from_above, rng) else {
+                // No facet faces a shadowed ray this steep: it leaves as it is.
+                return SurfaceEvent {
+                    direction: d.as_vec3(),
+                    transmitted: from_above != start_above,
+                    facets: bounce as u32,
+                    trail,
+                };
+            };
             let (n1, n2) = if from_above {
                 (1.0, self.n_water)
             } else {
@@ -198,9 +224,10 @@ impl SeaSurface {
                 from_above = !from_above;
             }
             d = next;
-            // Leaving into the right half-space ends the interaction.
+            // Leaving into the right half-space, unshadowed, ends the
+            // interaction.
             let leaving = if from_above { d.z > 0.0 } else { d.z < 0.0 };
-            if leaving {
+            if leaving && (self.slope_variance <= 0.0 || rng.uniform_f64() < self.masking(d)) {
                 return SurfaceEvent {
                     direction: d.as_vec3(),
                     transmitted: from_above != start_above,
@@ -209,9 +236,10 @@ impl SeaSurface {
                 };
             }
         }
-        // Give up on the rough surface: the mean plane decides.
+        // Give up on the rough surface: the mean plane reflects a ray
+        // heading into it, and lets one heading away go.
         let n = if from_above { DVec3::Z } else { -DVec3::Z };
-        let d = if d.dot(n) >= 0.0 { reflect(d, n) } else { d };
+        let d = if d.dot(n) < 0.0 { reflect(d, n) } else { d };
         SurfaceEvent {
             direction: d.normalize().as_vec3(),
             transmitted: from_above != start_above,
@@ -320,16 +348,42 @@ impl SeaSurface {
         self.sample_facet(d, rng)
     }
 
-    /// Upward facet normal met by a ray along `d` (flat: +z).
-    fn sample_facet(&self, d: DVec3, rng: &mut Pcg32) -> DVec3 {
+    /// The probability that a ray leaving the surface along `d` is not
+    /// shadowed by another facet: Smith's G1 = 1 / (1 + Lambda) (1 on a
+    /// flat surface; 0 for a ray along the mean surface).
+    pub fn masking(&self, d: DVec3) -> f64 {
         if self.slope_variance <= 0.0 {
-            return DVec3::Z;
+            return 1.0;
+        }
+        1.0 / (1.0 + smith_lambda(d.z.abs() / d.length(), self.slope_variance))
+    }
+
+    /// Upward facet normal met by a ray along `d` from the side `d.z` says
+    /// (flat: +z).
+    fn sample_facet(&self, d: DVec3, rng: &mut Pcg32) -> DVec3 {
+        self.sample_facet_from(d, d.z < 0.0, rng)
+            .unwrap_or(DVec3::Z)
+    }
+
+    /// Upward facet normal met by a ray along `d` from the air
+    /// (`from_above`) or the water, by projected area along the ray (flat:
+    /// +z). None when no facet within the truncation faces the ray, or
+    /// after 2^20 rejected draws (a shadowed ray so steep that almost none
+    /// does).
+    fn sample_facet_from(&self, d: DVec3, from_above: bool, rng: &mut Pcg32) -> Option<DVec3> {
+        if self.slope_variance <= 0.0 {
+            return Some(DVec3::Z);
         }
         let s = (0.5 * self.slope_variance).sqrt();
         let s_max = 6.0 * s;
-        // Bound of -d . (-zx, -zy, 1) over slopes within 6 sigma (per axis).
-        let bound = d.z.abs() + (d.x.abs() + d.y.abs()) * s_max;
-        loop {
+        // Bound of +-d . (-zx, -zy, 1) over slopes within 6 sigma (per axis).
+        let tilt = (d.x.abs() + d.y.abs()) * s_max;
+        let bound = d.z.abs() + tilt;
+        let toward = if from_above { -d.z } else { d.z };
+        if toward <= 0.0 && tilt <= -toward {
+            return None;
+        }
+        for _ in 0..1 << 20 {
             let (zx, zy) = gaussian_pair(rng);
             let (zx, zy) = (zx * s, zy * s);
             if zx.abs() > s_max || zy.abs() > s_max {
@@ -337,11 +391,12 @@ impl SeaSurface {
             }
             let m = DVec3::new(-zx, -zy, 1.0);
             // Projected area along the ray relative to the facet's horizontal area.
-            let facing = if d.z < 0.0 { -d.dot(m) } else { d.dot(m) };
+            let facing = if from_above { -d.dot(m) } else { d.dot(m) };
             if facing > 0.0 && rng.uniform_f64() * bound < facing {
-                return m.normalize();
+                return Some(m.normalize());
             }
         }
+        None
     }
 }
 
@@ -356,6 +411,27 @@ pub struct SurfaceSplit {
     pub reflected: Vec3,
     /// Refracted direction (in the water unless it heads up).
     pub refracted: Vec3,
+}
+
+/// Smith's (1967) shadowing function Lambda for a direction of cosine
+/// `mu` (to the vertical, 0..=1) over isotropic Gaussian slopes of total
+/// variance `slope_variance`: [exp(-nu^2) / (sqrt(pi) nu) - erfc(nu)] / 2,
+/// nu = mu / (sigma sqrt(1 - mu^2)). 0 looking straight up or down,
+/// growing without bound toward the horizon.
+pub fn smith_lambda(mu: f64, slope_variance: f64) -> f64 {
+    let mu = mu.clamp(0.0, 1.0);
+    let sin = (1.0 - mu * mu).sqrt();
+    if sin <= 0.0 {
+        return 0.0;
+    }
+    let nu = mu / (slope_variance.sqrt() * sin);
+    if nu <= 0.0 {
+        return f64::INFINITY;
+    }
+    if nu > 26.0 {
+        return 0.0; // exp(-nu^2) underflows
+    }
+    0.5 * ((-nu * nu).exp() / (std::f64::consts::PI.sqrt() * nu) - libm::erfc(nu)).max(0.0)
 }
 
 /// Two independent standard normal deviates (Box–Muller).

@@ -5,8 +5,8 @@
 //! branches are followed, weighted by Fresnel — choosing one would make the
 //! bright reflected sky speckle: the reflected ray sees the sky, the
 //! refracted one the water (whose radiance drops by n^2 leaving it). A ray
-//! that leaves its facet back into the surface meets it again
-//! (`SeaSurface::interact`). Sun glint on a rough surface is added
+//! that leaves its facet back into the surface, or is shadowed by another
+//! facet (Smith), meets it again (`SeaSurface::interact_from`). Sun glint on a rough surface is added
 //! analytically from the Cox–Munk slope density, since a point sun cannot
 //! be found by sampling directions.
 //!
@@ -116,8 +116,8 @@ pub fn from_air_parts(
 
 /// Radiance reaching the surface point `p` along `-dir`, for a ray leaving
 /// it along `dir` into the water (`in_water`) or the air; a ray heading back
-/// into the surface meets it again (its Fresnel choices reweighted to each
-/// band's index). Radiance leaving the water drops by each band's n^2.
+/// into the surface, or shadowed by another facet, meets it again (its
+/// Fresnel choices reweighted to each band's index). Radiance leaving the water drops by each band's n^2.
 /// True when the ray went into the water.
 #[allow(clippy::too_many_arguments)]
 fn leave_surface(
@@ -130,10 +130,14 @@ fn leave_surface(
     out: &mut [f64],
     in_water: &mut InWater,
 ) -> Result<bool> {
-    let (dir, into_water, event) = if (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0) {
+    let surface = &scene.surface;
+    let away = (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0);
+    let unshadowed = away
+        && (surface.slope_variance <= 0.0 || rng.uniform_f64() < surface.masking(dir.as_dvec3()));
+    let (dir, into_water, event) = if unshadowed {
         (dir, into_water, None)
     } else {
-        let ev = scene.surface.interact(dir, rng);
+        let ev = surface.interact_from(dir, !into_water, rng);
         (ev.direction, into_water != ev.transmitted, Some(ev))
     };
     if into_water {
@@ -174,7 +178,9 @@ fn set_sky(scene: &Scene, sky_l: &[f64], s: Vec3, out: &mut [f64]) {
 }
 
 /// Sun glint on a Cox–Munk surface seen from direction `v` (up), added to
-/// `out`: L = E_sun rho p(zx, zy) / (4 cos(theta_v) cos^4(beta)).
+/// `out`: L = E_sun rho p(zx, zy) G1(sun) G1(v) / (4 cos(theta_v)
+/// cos^4(beta)), with Smith's unshadowed fractions G1 of both directions
+/// (`optics::surface`).
 pub fn add_glint(scene: &Scene, v: Vec3, out: &mut [f64]) {
     let s2 = scene.surface.slope_variance;
     if s2 <= 0.0 {
@@ -188,7 +194,8 @@ pub fn add_glint(scene: &Scene, v: Vec3, out: &mut [f64]) {
     }
     let (zx, zy) = (-h.x / h.z, -h.y / h.z);
     let p = (-(zx * zx + zy * zy) / s2).exp() / (std::f64::consts::PI * s2);
-    let g = p / (4.0 * v.z * h.z.powi(4));
+    let shadowing = scene.surface.masking(v) * scene.surface.masking(s);
+    let g = p * shadowing / (4.0 * v.z * h.z.powi(4));
     let n_ref = scene.surface.n_water;
     let rho_ref = fresnel_reflectance(h.dot(v), 1.0, n_ref);
     for ((o, e), &n) in out

@@ -32,8 +32,9 @@
 //! a point and its beam is refracted by the facets: the first facet drawn
 //! as `SeaSurface::interact` draws it, with the analytic density of the
 //! refracted direction (`SeaSurface::beam_transmission_density`) for MIS
-//! and the Fresnel factor as a weight; the rarer beams that meet more
-//! than one facet are drawn by `interact` itself and added without MIS,
+//! and the Fresnel factor and Smith's unshadowed fraction as weights; the
+//! rarer beams that meet more than one facet (shadowed, or sent back into
+//! the surface) are drawn by `interact` itself and added without MIS,
 //! so the sum is exactly the beam the photons see. Floor and target
 //! vertices take the same samples without MIS (a Lambertian surface has no
 //! peak). Transmittance toward the surface is exact in uniform water and
@@ -65,10 +66,9 @@
 //! **Known limits.** With a forward-peaked phase function the estimate is
 //! heavy-tailed: paths that turn toward the sun see its bright aureole
 //! (see `benches/README.md` for the per-path deviations). The rough
-//! surface is run backwards by the same facet sampling that runs it
-//! forwards; without shadowing the model is reciprocal except through the
-//! projected-area normalisation, which departs from one only at grazing
-//! angles.
+//! surface is run backwards by the same facet sampling and shadowing that
+//! run it forwards; with Smith's shadowing the single-facet part is
+//! reciprocal (G1 of both directions).
 //!
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
@@ -285,9 +285,10 @@ impl<'a> PathTracer<'a> {
         let m = surface.sample_facet_from_above(i, rng);
         let single = refract(i, m, 1.0, n).filter(|o| o.z < 0.0).and_then(|o| {
             let (pdf, t, cos_im) = surface.beam_transmission(i, o, z_norm)?;
+            // The refracted beam escapes the facets unshadowed (Smith).
             Some(SunSample {
                 dir: o.as_vec3(),
-                g: t / -o.z,
+                g: t * surface.masking(o) / -o.z,
                 pdf,
                 crossing: Crossing::Facet(cos_im),
             })
@@ -317,8 +318,10 @@ impl<'a> PathTracer<'a> {
         if let Some(z_norm) = self.rough_norm {
             let o = -next.as_dvec3();
             let i = self.scene.sun.direction.as_dvec3();
-            let (pdf, t, cos_im) = self.scene.surface.beam_transmission(i, o, z_norm)?;
-            return Some((t * pdf / -o.z, pdf, Crossing::Facet(cos_im)));
+            let surface = &self.scene.surface;
+            let (pdf, t, cos_im) = surface.beam_transmission(i, o, z_norm)?;
+            let g1 = surface.masking(o);
+            return Some((t * g1 * pdf / -o.z, pdf, Crossing::Facet(cos_im)));
         }
         let up_a = refract(next.as_dvec3(), DVec3::NEG_Z, n, 1.0)?;
         let to_sun = -self.scene.sun.direction.as_dvec3();

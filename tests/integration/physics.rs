@@ -548,7 +548,18 @@ fn angles(v: glam::DVec3) -> (f64, f64) {
     (v.z.clamp(-1.0, 1.0).acos(), v.y.atan2(v.x))
 }
 
-/// The Cox–Munk glint, L = E_sun rho(omega) p(zx, zy) / (4 cos(theta_v)
+/// Smith's (1967) unshadowed fraction 1 / (1 + Lambda) of a direction at
+/// zenith angle `theta` over Gaussian slopes of total variance `sigma2`,
+/// from cot(theta): nu = cot(theta) / sigma, Lambda = (exp(-nu^2) /
+/// (sqrt(pi) nu) - erfc(nu)) / 2.
+fn smith_g1(theta: f64, sigma2: f64) -> f64 {
+    let nu = 1.0 / (theta.tan() * sigma2.sqrt());
+    let lambda = ((-nu * nu).exp() / (std::f64::consts::PI.sqrt() * nu) - libm::erfc(nu)) / 2.0;
+    1.0 / (1.0 + lambda)
+}
+
+/// The Cox–Munk glint with Smith's shadowing of the sun and the view,
+/// L = E_sun rho(omega) p(zx, zy) G1(theta_s) G1(theta_v) / (4 cos(theta_v)
 /// cos^4(beta)), from angles by spherical trigonometry (Cox & Munk 1954):
 /// cos 2 omega = cos theta_v cos theta_s + sin theta_v sin theta_s
 /// cos(phi_v - phi_s), cos beta = (cos theta_s + cos theta_v) / (2 cos
@@ -567,12 +578,13 @@ fn glint_by_angles(
     let cos_b = (ts.cos() + tv.cos()) / (2.0 * omega.cos());
     let tan2_b = 1.0 / (cos_b * cos_b) - 1.0;
     let p = (-tan2_b / sigma2).exp() / (std::f64::consts::PI * sigma2);
-    let l = e_sun * fresnel_by_angles(omega, n) * p / (4.0 * tv.cos() * cos_b.powi(4));
+    let g = smith_g1(ts, sigma2) * smith_g1(tv, sigma2);
+    let l = e_sun * fresnel_by_angles(omega, n) * p * g / (4.0 * tv.cos() * cos_b.powi(4));
     (l, tan2_b.max(0.0).sqrt())
 }
 
-/// `add_glint` adds the Cox–Munk glint formula, computed here
-/// independently from angles, for views at and around the specular
+/// `add_glint` adds the Cox–Munk glint formula with Smith's shadowing,
+/// computed here independently from angles, for views at and around the specular
 /// direction, across the principal plane and off it, three suns and
 /// winds; and nothing on a flat surface or for a view below the horizon.
 /// Same f32 directions on both sides, but a normalised f32 vector is unit
@@ -645,7 +657,8 @@ fn add_glint_is_the_cox_munk_formula() {
 /// The glint formula conserves the light facets reflect: its radiance
 /// integrated over the view hemisphere, int L cos(theta_v) d omega, equals
 /// the irradiance the facets mirror, E_sun int rho(omega) cos(omega) p / cos
-/// beta dzx dzy over the slopes facing the sun whose reflection goes up —
+/// beta G1(sun) G1(up) dzx dzy over the slopes facing the sun whose
+/// reflection `up` goes up and escapes unshadowed —
 /// a check of the 1 / (4 cos theta_v cos^4 beta) Jacobian that the formula
 /// comparison above cannot see. Midpoint rules on both sides; refining
 /// them changes the ratio by under 1e-5, so 1e-4 is allowed.
@@ -690,7 +703,8 @@ fn glint_integrates_to_the_reflected_irradiance() {
                     continue;
                 }
                 let p = (-(zx * zx + zy * zy) / sigma2).exp() / (PI * sigma2);
-                facets += fresnel_by_angles(cos_w.acos(), 1.34) * cos_w * p / m.z;
+                let g = smith_g1(to_sun.z.acos(), sigma2) * smith_g1(up.min(1.0).acos(), sigma2);
+                facets += fresnel_by_angles(cos_w.acos(), 1.34) * cos_w * p * g / m.z;
             }
         }
         facets *= 1.7 * h * h;
