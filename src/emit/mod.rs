@@ -241,3 +241,235 @@ pub fn emit(
     let report = emitter.report().clone();
     Ok(Emission { map, report })
 }
+
+/// The payload an emission shard carries for the merge.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ShardEmission {
+    totals: Totals,
+    report_inputs: report::ReportInputs,
+}
+
+/// Batches of source indices traced in parallel before the ordered write.
+const SHARD_BATCHES_AT_ONCE: u64 = 16;
+
+/// Trace shard `shard` of `shards` of the scene's photon indices (equal
+/// contiguous ranges, `store::shard::shard_range`) into the shard file at
+/// `path`, with the pilot, totals and report inputs the merge needs. The
+/// file is a pure function of the scene, the shard and the budget: batches
+/// are traced in parallel and written in index order.
+pub fn emit_shard(
+    scene: &Scene,
+    provenance: &Provenance,
+    path: &Path,
+    (shard, shards): (u64, u64),
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<crate::store::shard::ShardHeader> {
+    use crate::store::shard::{shard_range, ShardHeader, ShardWriter};
+    use rayon::prelude::*;
+    if shards == 0 || shard >= shards {
+        return Err(crate::Error::invalid(
+            "--shard",
+            format!("{shard}/{shards}: give I/N with 0 <= I < N"),
+        ));
+    }
+    let mut emitter = Emitter::new(scene)?;
+    emitter.provenance = provenance.clone();
+    let pilot = crate::store::build::Pilot::trace(&emitter, options)?;
+    let range = shard_range(emitter.indices(), shard, shards);
+    let mut writer = ShardWriter::create(path)?;
+    let pool = crate::parallel::pool(options.threads)?;
+    let batch = crate::store::build::BATCH_INDICES;
+    let batches = (range.end - range.start).div_ceil(batch);
+    progress.stage("trace photons", range.end - range.start);
+    let mut b = 0;
+    while b < batches {
+        let upto = (b + SHARD_BATCHES_AT_ONCE).min(batches);
+        let traced: Vec<Vec<StagedPhoton>> = pool.install(|| {
+            (b..upto)
+                .into_par_iter()
+                .map(|k| {
+                    let lo = range.start + k * batch;
+                    let hi = (lo + batch).min(range.end);
+                    let mut out = Vec::new();
+                    emitter.generate(lo..hi, &mut out);
+                    progress.advance(hi - lo);
+                    out
+                })
+                .collect()
+        });
+        for t in &traced {
+            writer.push(t)?;
+        }
+        b = upto;
+    }
+    progress.finish();
+    let bounds = emitter.bounds();
+    let payload = ShardEmission {
+        totals: emitter.totals(),
+        report_inputs: report::ReportInputs::new(scene, &emitter.photon_power),
+    };
+    let header = ShardHeader {
+        shard,
+        shards,
+        indices: [range.start, range.end],
+        total_indices: emitter.indices(),
+        provenance_digest: provenance.digest_hex(),
+        provenance_record: provenance.record.clone(),
+        bands_nm: scene.bands.centers_nm().to_vec(),
+        fwhm_nm: scene.bands.fwhm_nm().to_vec(),
+        bounds_min: bounds.min.to_array(),
+        bounds_max: bounds.max.to_array(),
+        pilot_indices: pilot.indices,
+        pilot: pilot.positions.iter().map(|p| p.to_array()).collect(),
+        photons: 0,
+        stream_bytes: 0,
+        stream_crc32: 0,
+        payload: serde_json::to_value(&payload)
+            .map_err(|e| crate::Error::invalid("shard payload", e.to_string()))?,
+    };
+    writer.finish(header)
+}
+
+/// Merge the shard files of one sharded emission into the map at `out`:
+/// byte-identical to the map a single `emit` of the scene writes with the
+/// same budget. The shards must be all of one emission (same provenance,
+/// pilot and shard count, each shard once), in any order; the merge reads
+/// them one after another, within `options`' budget.
+pub fn merge_shards(
+    paths: &[std::path::PathBuf],
+    out: &Path,
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<Emission> {
+    use crate::store::shard::{shard_range, ShardFile};
+    let mut shards = paths
+        .iter()
+        .map(|p| ShardFile::open(p))
+        .collect::<Result<Vec<_>>>()?;
+    let Some(first) = shards.first() else {
+        return Err(crate::Error::invalid("map merge", "no shard files given"));
+    };
+    let n = first.header().shards;
+    let head = first.header().clone();
+    let first_path = first.path().to_path_buf();
+    let mismatch = |s: &ShardFile, what: &str| {
+        crate::Error::data(
+            s.path(),
+            None,
+            "shard",
+            format!(
+                "{what} differs from {}'s: not a shard of the same emission",
+                first_path.display()
+            ),
+        )
+    };
+    for s in &shards {
+        let h = s.header();
+        if h.shards != n {
+            return Err(mismatch(s, "the shard count"));
+        }
+        if h.provenance_digest != head.provenance_digest || h.total_indices != head.total_indices {
+            return Err(mismatch(s, "the scene (provenance)"));
+        }
+        if h.pilot_indices != head.pilot_indices || h.pilot != head.pilot {
+            return Err(mismatch(
+                s,
+                "the pilot sample (was it emitted with another --mem-budget?)",
+            ));
+        }
+        if h.indices != {
+            let r = shard_range(h.total_indices, h.shard, n);
+            [r.start, r.end]
+        } {
+            return Err(crate::Error::data(
+                s.path(),
+                None,
+                "shard",
+                "its index range does not match its shard number",
+            ));
+        }
+    }
+    shards.sort_by_key(|s| s.header().shard);
+    if let Some(w) = shards
+        .windows(2)
+        .find(|w| w[0].header().shard == w[1].header().shard)
+    {
+        return Err(crate::Error::invalid(
+            "map merge",
+            format!(
+                "shard {} is given twice ({} and {})",
+                w[0].header().shard,
+                w[0].path().display(),
+                w[1].path().display()
+            ),
+        ));
+    }
+    for (k, s) in shards.iter().enumerate() {
+        if s.header().shard != k as u64 {
+            let missing = (0..n)
+                .filter(|i| !shards.iter().any(|s| s.header().shard == *i))
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>();
+            let what = if missing.is_empty() {
+                format!("shard {} is given twice", s.header().shard)
+            } else {
+                format!("shards missing: {} of {n}", missing.join(", "))
+            };
+            return Err(crate::Error::invalid("map merge", what));
+        }
+    }
+    if shards.len() as u64 != n {
+        return Err(crate::Error::invalid(
+            "map merge",
+            format!("{} shard files given, the emission has {n}", shards.len()),
+        ));
+    }
+    // The report from the summed fixed-point totals: the same numbers a
+    // single run's totals give.
+    let mut totals: Option<Totals> = None;
+    let mut inputs = None;
+    for s in &shards {
+        let p: ShardEmission = serde_json::from_value(s.header().payload.clone()).map_err(|e| {
+            crate::Error::data(
+                s.path(),
+                None,
+                "shard",
+                format!("not an emission shard: {e}"),
+            )
+        })?;
+        match &mut totals {
+            None => totals = Some(p.totals),
+            Some(t) => {
+                if t.bands != p.totals.bands || t.depths != p.totals.depths {
+                    return Err(mismatch(s, "the tallies' shape"));
+                }
+                t.merge(&p.totals)
+            }
+        }
+        inputs.get_or_insert(p.report_inputs);
+    }
+    let (totals, inputs) = (totals.expect("one shard"), inputs.expect("one shard"));
+    let report = report::EmissionReport::from_inputs(&inputs, &totals);
+    let metadata = serde_json::to_vec(&report).expect("the report serialises");
+    let description = head.description(&first_path)?;
+    let mut iters = Vec::with_capacity(shards.len());
+    for s in &shards {
+        iters.push(s.batches()?);
+    }
+    let mut batches = iters.into_iter().flatten().inspect(|b| {
+        if let Ok(b) = b {
+            progress.advance(b.len() as u64);
+        }
+    });
+    let map = crate::store::build::build_map_from_batches(
+        out,
+        &description,
+        head.pilot(),
+        &mut batches,
+        &metadata,
+        options,
+        progress,
+    )?;
+    Ok(Emission { map, report })
+}

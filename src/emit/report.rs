@@ -103,6 +103,38 @@ pub struct PhotonCounts {
     pub truncated: u64,
 }
 
+/// What the emission report needs of the scene besides the run's totals.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReportInputs {
+    pub scene: String,
+    pub bands_nm: Vec<f32>,
+    pub fwhm_nm: Vec<f32>,
+    pub area_m2: f64,
+    pub tally_depths_m: Vec<f64>,
+    /// E_d(0+) per band (W m^-2 nm^-1).
+    #[serde(deserialize_with = "crate::json::f64s")]
+    pub incident_irradiance: Vec<f64>,
+    /// Power per photon of each band (W nm^-1).
+    #[serde(deserialize_with = "crate::json::f64s")]
+    pub photon_power: Vec<f64>,
+}
+
+impl ReportInputs {
+    pub fn new(scene: &Scene, photon_power: &[f64]) -> Self {
+        ReportInputs {
+            scene: scene.name.clone(),
+            bands_nm: scene.bands.centers_nm().to_vec(),
+            fwhm_nm: scene.bands.fwhm_nm().to_vec(),
+            area_m2: scene.domain.area_m2(),
+            tally_depths_m: scene.tally_depths.clone(),
+            incident_irradiance: (0..scene.bands.len())
+                .map(|b| scene.incident_irradiance(b))
+                .collect(),
+            photon_power: photon_power.to_vec(),
+        }
+    }
+}
+
 /// The physics part of the emission report.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EmissionReport {
@@ -169,9 +201,16 @@ impl EmissionReport {
 
     /// Turn run totals into absolute quantities.
     pub fn new(scene: &Scene, totals: &Totals, photon_power: &[f64]) -> Self {
-        let nb = scene.bands.len();
+        Self::from_inputs(&ReportInputs::new(scene, photon_power), totals)
+    }
+
+    /// [`EmissionReport::new`] from what it needs of the scene (shards
+    /// carry these, so a merge needs no scene).
+    pub fn from_inputs(inputs: &ReportInputs, totals: &Totals) -> Self {
+        let photon_power = &inputs.photon_power[..];
+        let nb = inputs.bands_nm.len();
         let n = totals.traced as f64;
-        let area = scene.domain.area_m2();
+        let area = inputs.area_m2;
         // A tally mean per traced photon m becomes irradiance m N P_b / A.
         let scale: Vec<f64> = (0..nb).map(|b| n * photon_power[b] / area).collect();
         let series = |slot: usize| -> (Vec<f64>, Vec<f64>) {
@@ -183,7 +222,7 @@ impl EmissionReport {
                 .unzip()
         };
         let mut tally = Vec::new();
-        for (d, &depth) in scene.tally_depths.iter().enumerate() {
+        for (d, &depth) in inputs.tally_depths_m.iter().enumerate() {
             let (ed, ed_se) = series(totals.slot(d, ED));
             let (eu, eu_se) = series(totals.slot(d, EU));
             let (eod, eod_se) = series(totals.slot(d, EOD));
@@ -251,7 +290,7 @@ impl EmissionReport {
                 .collect()
         };
         let emitted: Vec<f64> = (0..nb)
-            .map(|b| scene.incident_irradiance(b) * area)
+            .map(|b| inputs.incident_irradiance[b] * area)
             .collect();
         let escaped = power(&totals.escaped);
         let absorbed_water = power(&totals.absorbed_water);
@@ -276,9 +315,9 @@ impl EmissionReport {
         }
         let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
         EmissionReport {
-            scene: scene.name.clone(),
-            bands_nm: scene.bands.centers_nm().to_vec(),
-            fwhm_nm: scene.bands.fwhm_nm().to_vec(),
+            scene: inputs.scene.clone(),
+            bands_nm: inputs.bands_nm.clone(),
+            fwhm_nm: inputs.fwhm_nm.clone(),
             tally,
             above_surface: AboveSurface {
                 Ed: ed,

@@ -106,7 +106,7 @@ impl Fate {
 }
 
 /// Run totals over photons, per band.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Totals {
     pub bands: usize,
     pub depths: usize,

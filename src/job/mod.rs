@@ -81,6 +81,41 @@ impl EmitJob<'_> {
     }
 }
 
+/// Merge the shard files of a sharded emission into one map, with the
+/// emission report of the whole (byte-identical to a single [`EmitJob`]'s
+/// map and report with the same budget).
+pub struct MergeJob<'a> {
+    pub parts: &'a [PathBuf],
+    pub map: PathBuf,
+    pub budget: MemoryBudget,
+}
+
+impl MergeJob<'_> {
+    pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
+        let start = Instant::now();
+        crate::mem::fixed_mmap_threshold();
+        let sampler = crate::mem::PeakSampler::start();
+        let em =
+            crate::emit::merge_shards(self.parts, &self.map, &self.budget.emission(0), progress)?;
+        let provenance = MapFile::open(&self.map)?.header().provenance.digest_hex();
+        let seconds = start.elapsed().as_secs_f64();
+        let peaks = sampler.finish();
+        Ok(EmitReport {
+            emission: em.report,
+            map: MapSummary::written(&em.map, provenance, Some(&self.map)),
+            timings_s: EmitTimings {
+                scene: 0.0,
+                emit_and_store: seconds,
+                total: seconds,
+            },
+            peak_memory: peaks,
+            mem_budget_bytes: self.budget.total(),
+            peak_rss_bytes: peaks.rss_bytes,
+            units: units::report_units(),
+        })
+    }
+}
+
 /// Render a scene: photon map (reused or emitted), cube, quicklook, EXR and
 /// the JSON report, all in `out_dir`.
 pub struct RenderJob<'a> {

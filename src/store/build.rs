@@ -80,31 +80,34 @@ impl BuildOptions {
     }
 }
 
-/// Build the map at `path` from `source`.
-pub fn build_map(
-    path: &Path,
-    source: &dyn PhotonSource,
-    options: &BuildOptions,
-    progress: &dyn Progress,
-) -> Result<WriteSummary> {
-    let n = source.indices();
-    // Pilot: evenly strided indices; its photons give the partition and the
-    // expected number of stored photons. A probe of the first indices sizes
-    // it so the pilot's positions take at most an eighth of the budget.
-    let mut staged = Vec::new();
-    let probe = n.min(1024);
-    source.sample(0..probe, &mut staged);
-    let per_index = (staged.len() as f64 / probe.max(1) as f64).max(1.0 / 64.0);
-    let cap = (options.mem_budget / 8 / std::mem::size_of::<Vec3>() as u64) as f64;
-    let pilot_n = n
-        .min(PILOT_INDICES)
-        .min((cap / per_index) as u64)
-        .max(probe.min(n));
-    // Trace the pilot in parallel: for an emitter it is real transport work.
-    let pilot: Vec<Vec3> = {
+/// The pilot sample of a source: the positions of the photons stored by
+/// evenly strided source indices, and how many indices it traced. It fixes
+/// the partition and the expected number of stored photons; a probe of the
+/// first indices sizes it so the pilot's positions take at most an eighth
+/// of the budget. A pure function of the source and the budget, so every
+/// shard of a sharded emission computes the same one.
+pub struct Pilot {
+    pub positions: Vec<Vec3>,
+    /// Source indices traced for it.
+    pub indices: u64,
+}
+
+impl Pilot {
+    pub fn trace(source: &dyn PhotonSource, options: &BuildOptions) -> Result<Pilot> {
+        let n = source.indices();
+        let mut staged = Vec::new();
+        let probe = n.min(1024);
+        source.sample(0..probe, &mut staged);
+        let per_index = (staged.len() as f64 / probe.max(1) as f64).max(1.0 / 64.0);
+        let cap = (options.mem_budget / 8 / std::mem::size_of::<Vec3>() as u64) as f64;
+        let pilot_n = n
+            .min(PILOT_INDICES)
+            .min((cap / per_index) as u64)
+            .max(probe.min(n));
+        // Trace the pilot in parallel: for an emitter it is real transport work.
         use rayon::prelude::*;
         let pool = crate::parallel::pool(options.threads)?;
-        pool.install(|| {
+        let positions = pool.install(|| {
             (0..pilot_n)
                 .into_par_iter()
                 .map_init(Vec::new, |buf, j| {
@@ -115,29 +118,97 @@ pub fn build_map(
                 })
                 .flatten()
                 .collect()
+        });
+        Ok(Pilot {
+            positions,
+            indices: pilot_n,
         })
-    };
-    let mut pilot = pilot;
-    drop(staged);
-    let expected = if pilot_n == 0 {
-        0
-    } else {
-        (pilot.len() as u128 * n as u128 / pilot_n as u128) as u64
-    };
+    }
+
+    /// Stored photons expected from `n` source indices.
+    fn expected(&self, n: u64) -> u64 {
+        if self.indices == 0 {
+            0
+        } else {
+            (self.positions.len() as u128 * n as u128 / self.indices as u128) as u64
+        }
+    }
+}
+
+/// What a map is made of, apart from its photons.
+pub struct MapDescription {
+    /// Source indices the photons come from.
+    pub indices: u64,
+    pub bands: BandGrid,
+    pub bounds: Aabb,
+    pub provenance: Provenance,
+}
+
+/// The writer for a map of `description`, planned and partitioned from
+/// `pilot` within `options`' budget.
+fn planned_writer(
+    path: &Path,
+    description: &MapDescription,
+    pilot: Pilot,
+    options: &BuildOptions,
+) -> Result<MapWriter> {
+    let expected = pilot.expected(description.indices);
     let mut plan = WriterPlan::new(options.mem_budget, expected)?;
     if let Some(t) = options.tile_photons {
         plan = plan.with_tile_photons(t);
     }
-    let partition = Partition::from_pilot(&mut pilot, plan.cells_for(expected));
-    drop(pilot);
-    let mut writer = MapWriter::create(
+    let mut positions = pilot.positions;
+    let partition = Partition::from_pilot(&mut positions, plan.cells_for(expected));
+    drop(positions);
+    MapWriter::create(
         path,
         plan,
         partition,
-        source.bands(),
-        source.bounds(),
-        source.provenance(),
-    )?;
+        description.bands.clone(),
+        description.bounds,
+        description.provenance.clone(),
+    )
+}
+
+/// Build the map at `path` from photons already traced: `batches` yields
+/// them in any order, `pilot` is the source's [`Pilot`] and `metadata` the
+/// bytes recorded after them. The map is byte-identical to [`build_map`]'s
+/// from the same source and budget, since the writer's result depends only
+/// on the set of photons.
+pub fn build_map_from_batches(
+    path: &Path,
+    description: &MapDescription,
+    pilot: Pilot,
+    batches: &mut dyn Iterator<Item = Result<Vec<StagedPhoton>>>,
+    metadata: &[u8],
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<WriteSummary> {
+    let mut writer = planned_writer(path, description, pilot, options)?;
+    progress.stage("merge photons", description.indices);
+    for batch in batches {
+        writer.push(&batch?)?;
+    }
+    progress.finish();
+    writer.finish(metadata, progress)
+}
+
+/// Build the map at `path` from `source`.
+pub fn build_map(
+    path: &Path,
+    source: &dyn PhotonSource,
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<WriteSummary> {
+    let n = source.indices();
+    let pilot = Pilot::trace(source, options)?;
+    let description = MapDescription {
+        indices: n,
+        bands: source.bands(),
+        bounds: source.bounds(),
+        provenance: source.provenance(),
+    };
+    let mut writer = planned_writer(path, &description, pilot, options)?;
 
     let pool = crate::parallel::pool(options.threads)?;
     let (tx, rx) = crossbeam_channel::bounded::<Vec<StagedPhoton>>(CHANNEL_BATCHES);

@@ -12,6 +12,7 @@ pub mod memory;
 pub mod partition;
 pub mod query;
 pub mod reader;
+pub mod shard;
 pub mod writer;
 
 pub use build::{build_map, BuildOptions, PhotonSource};

@@ -64,6 +64,12 @@ impl MapFile {
         if bytes.len() as u64 != len {
             return Err(Error::format(path, "file changed size while opening"));
         }
+        if bytes[..8] == super::shard::SHARD_MAGIC[..] {
+            return Err(Error::format(
+                path,
+                "this is one shard of a sharded emission, not a map: merge the shards with `littoral map merge`",
+            ));
+        }
         if bytes[..8] != HEADER_MAGIC {
             return Err(Error::format(path, "wrong magic at the start of the file"));
         }

@@ -20,6 +20,7 @@ mod products;
 mod render;
 mod roundtrip;
 mod scenes;
+mod sharding;
 mod sky;
 mod splitting;
 mod water_optics;

@@ -106,6 +106,49 @@ pub struct EmitArgs {
     /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
     #[arg(long, default_value = "256MiB")]
     pub mem_budget: String,
+    /// Trace only shard I of N (I from 0) of the photons into a shard file
+    /// at --map, to be merged by `littoral map merge`; give every shard and
+    /// the merge the same --mem-budget.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    pub shard: Option<(u64, u64)>,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// `I/N` with 0 <= I < N.
+pub fn parse_shard(s: &str) -> Result<(u64, u64), String> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("'{s}' is not I/N (e.g. 0/4)"))?;
+    let i: u64 = i
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{i}' is not a number"))?;
+    let n: u64 = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{n}' is not a number"))?;
+    if n == 0 || i >= n {
+        return Err(format!("{i}/{n}: need 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The shard files of one sharded emission (`emit --shard I/N`), all of them, any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The photon map to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write the emission report (JSON) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Memory budget (the shards' --mem-budget gives the single-run map's bytes).
+    #[arg(long, default_value = "256MiB")]
+    pub mem_budget: String,
     /// No progress on stderr.
     #[arg(long)]
     pub quiet: bool,
@@ -113,6 +156,9 @@ pub struct EmitArgs {
 
 #[derive(Subcommand)]
 pub enum MapCommand {
+    /// Merge the shard files of a sharded emission into one photon map,
+    /// byte-identical to a single `emit` with the same --mem-budget.
+    Merge(MergeArgs),
     /// Write a synthetic photon map (for tests, benchmarks and low-memory runs).
     Synth(SynthArgs),
     /// Print a JSON summary of a map.

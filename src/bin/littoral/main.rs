@@ -77,6 +77,44 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         Some(path) => Some(littoral::output::temp_beside(path)?),
         None => None,
     };
+    if let Some(shard) = a.shard {
+        let provenance = littoral::emit::emission_provenance(&scene)?;
+        let h = littoral::emit::emit_shard(
+            &scene,
+            &provenance,
+            &a.map,
+            shard,
+            &budget.emission(a.threads),
+            &Bars::new(a.quiet),
+        )?;
+        let summary = serde_json::json!({
+            "shard": h.shard,
+            "shards": h.shards,
+            "indices": h.indices,
+            "photons": h.photons,
+            "file_bytes": std::fs::metadata(&a.map).map(|m| m.len()).unwrap_or(0),
+            "path": a.map.display().to_string(),
+            "seconds": start.elapsed().as_secs_f64(),
+        });
+        if let Some(path) = &a.report {
+            littoral::output::write_atomic(
+                path,
+                (serde_json::to_string_pretty(&summary)? + "\n").as_bytes(),
+            )?;
+        }
+        if !a.quiet {
+            eprintln!(
+                "emitted shard {}/{}: photon indices {}..{}, {} photons stored in {}",
+                h.shard,
+                h.shards,
+                h.indices[0],
+                h.indices[1],
+                h.photons,
+                a.map.display()
+            );
+        }
+        return Ok(());
+    }
     let job = EmitJob {
         scene: &scene,
         map: a.map.clone(),
@@ -103,6 +141,30 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
 
 fn run_map(cmd: MapCommand) -> AnyResult<()> {
     match cmd {
+        MapCommand::Merge(a) => {
+            let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
+            let report_file = match &a.report {
+                Some(path) => Some(littoral::output::temp_beside(path)?),
+                None => None,
+            };
+            let job = littoral::job::MergeJob {
+                parts: &a.parts,
+                map: a.out.clone(),
+                budget,
+            };
+            let r = job.run(&Bars::new(a.quiet))?;
+            if let (Some(mut tmp), Some(path)) = (report_file, &a.report) {
+                use std::io::Write;
+                let text = serde_json::to_string_pretty(&r)? + "\n";
+                tmp.write_all(text.as_bytes())
+                    .map_err(|e| littoral::Error::io(path, "write", e))?;
+                littoral::output::publish(tmp, path)?;
+            }
+            if !a.quiet {
+                eprintln!("merged {} shards: {}", a.parts.len(), r.summary());
+            }
+            Ok(())
+        }
         MapCommand::Synth(a) => {
             let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
             let source = SynthSource::new(a.photons, a.bands.into(), a.seed, a.distribution)?;

@@ -1,0 +1,194 @@
+//! Sharded production: `emit --shard I/N` on several machines, `map merge`
+//! into one map, byte-identical to a single `emit`; shard files that are
+//! a pure function of scene, shard and budget; and merges refused, with
+//! the file named, for a missing, repeated, foreign, truncated or corrupt
+//! shard.
+
+use crate::common::{assert_clean_failure, littoral, p, tempdir};
+use std::path::{Path, PathBuf};
+
+/// A small floor-and-target scene with a sky, so every photon kind occurs.
+const SCENE: &str = r#"
+name = "shards"
+seed = 7
+[spectral]
+start_nm = 420.0
+end_nm = 680.0
+bands = 6
+[sun]
+zenith_deg = 35.0
+irradiance = 1.0
+[sky]
+radiance = 0.03
+[domain]
+size_m = [30.0, 30.0]
+[water]
+chl = 1.0
+[bottom]
+depth_m = 6.0
+reflectance = "sand"
+[[target]]
+kind = "panel"
+center_m = [15.0, 15.0, -3.0]
+size_m = [4.0, 4.0]
+reflectance = 0.4
+[photons]
+count = 120000
+[tally]
+depths_m = [0.0, 2.0]
+"#;
+
+fn ok(out: std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn shards(dir: &Path, scene: &Path, n: u64, extra: &[&str]) -> Vec<PathBuf> {
+    (0..n)
+        .map(|i| {
+            let part = dir.join(format!("part{i}.shard"));
+            let shard = format!("{i}/{n}");
+            let mut args = vec![
+                "emit",
+                p(scene),
+                "--shard",
+                &shard,
+                "--map",
+                p(&part),
+                "--quiet",
+            ];
+            args.extend_from_slice(extra);
+            ok(littoral(&args));
+            part
+        })
+        .collect()
+}
+
+#[test]
+fn merged_shards_are_the_single_run_map_byte_for_byte() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let single = dir.path().join("single.map");
+    ok(littoral(&[
+        "emit",
+        p(&scene),
+        "--map",
+        p(&single),
+        "--mem-budget",
+        "64MiB",
+        "--quiet",
+    ]));
+    let single_bytes = std::fs::read(&single).unwrap();
+    for n in [1u64, 3] {
+        let sub = dir.path().join(format!("n{n}"));
+        std::fs::create_dir(&sub).unwrap();
+        let parts = shards(&sub, &scene, n, &["--mem-budget", "64MiB"]);
+        // Any order.
+        let mut args = vec!["map", "merge"];
+        let rev: Vec<&str> = parts.iter().rev().map(|x| p(x)).collect();
+        args.extend(rev);
+        let merged = sub.join("merged.map");
+        let report = sub.join("merged.json");
+        args.extend([
+            "--out",
+            p(&merged),
+            "--report",
+            p(&report),
+            "--mem-budget",
+            "64MiB",
+            "--quiet",
+        ]);
+        ok(littoral(&args));
+        assert!(
+            std::fs::read(&merged).unwrap() == single_bytes,
+            "{n} shards: the merged map differs from the single run's"
+        );
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        assert_eq!(r["photons"]["traced"], 120000);
+    }
+    // A shard file is the same for any number of threads.
+    let a = dir.path().join("t1.shard");
+    let b = dir.path().join("t2.shard");
+    for (path, threads) in [(&a, "1"), (&b, "2")] {
+        ok(littoral(&[
+            "emit",
+            p(&scene),
+            "--shard",
+            "1/3",
+            "--map",
+            p(path),
+            "--threads",
+            threads,
+            "--quiet",
+        ]));
+    }
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
+}
+
+#[test]
+fn bad_shard_sets_are_refused_naming_the_file() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, SCENE.replace("count = 120000", "count = 20000")).unwrap();
+    let parts = shards(dir.path(), &scene, 3, &[]);
+    let out = dir.path().join("m.map");
+    let merge = |files: &[&Path]| {
+        let mut args = vec!["map", "merge"];
+        args.extend(files.iter().map(|f| p(f)));
+        args.extend(["--out", p(&out)]);
+        littoral(&args)
+    };
+    assert_clean_failure(&merge(&[&parts[0], &parts[2]]), "shards missing: 1 of 3");
+    assert_clean_failure(&merge(&[&parts[0], &parts[1], &parts[1]]), "given twice");
+    // Another scene's shard.
+    let other = dir.path().join("o.toml");
+    std::fs::write(
+        &other,
+        SCENE
+            .replace("count = 120000", "count = 20000")
+            .replace("seed = 7", "seed = 8"),
+    )
+    .unwrap();
+    let foreign = dir.path().join("foreign.shard");
+    ok(littoral(&[
+        "emit",
+        p(&other),
+        "--shard",
+        "1/3",
+        "--map",
+        p(&foreign),
+        "--quiet",
+    ]));
+    assert_clean_failure(&merge(&[&parts[0], &foreign, &parts[2]]), "foreign.shard");
+    // Truncated and corrupted files.
+    let bytes = std::fs::read(&parts[1]).unwrap();
+    let cut = dir.path().join("cut.shard");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    assert_clean_failure(&merge(&[&parts[0], &cut, &parts[2]]), "cut.shard");
+    let mut flipped = bytes.clone();
+    flipped[100] ^= 0x40;
+    let bad = dir.path().join("bad.shard");
+    std::fs::write(&bad, &flipped).unwrap();
+    assert_clean_failure(&merge(&[&parts[0], &bad, &parts[2]]), "bad.shard");
+    assert!(
+        !out.exists(),
+        "nothing under the final name after a failed merge"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "temporaries left: {left:?}");
+    // A shard is not a map.
+    let info = littoral(&["map", "info", p(&parts[0])]);
+    assert_clean_failure(&info, "littoral map merge");
+    // Shard numbers are checked on the command line.
+    let e = littoral(&["emit", p(&scene), "--shard", "3/3", "--map", p(&out)]);
+    assert_eq!(e.status.code(), Some(2));
+}
