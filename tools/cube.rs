@@ -165,6 +165,21 @@ enum Command {
         #[arg(long, allow_hyphen_values = true)]
         tol: Option<f64>,
     },
+    /// Assemble the part directories of a render split with `littoral
+    /// render --tiles I/N` into the files a whole render writes (cubes
+    /// byte-identical to it); the scene is built again from what the parts
+    /// recorded, so its files must be where they were.
+    Assemble {
+        /// Every part directory of the render, any order.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Worker threads (0 = one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+    },
     /// Write the cube as a spectral OpenEXR file (one channel per band,
     /// named S0.<nm>nm), tile by tile.
     Exr {
@@ -337,6 +352,15 @@ fn run(cli: Cli) -> AnyResult<()> {
             &open(&cube)?,
             (x, y, w, h),
         )?),
+        Command::Assemble {
+            parts,
+            out,
+            threads,
+        } => {
+            let r = littoral::job::parts::assemble(&parts, &out, threads)?;
+            eprintln!("assembled {} parts: {}", parts.len(), r.summary());
+            Ok(())
+        }
         Command::Stats { cube } => {
             let stats = littoral::cube::ops::stats(&open(&cube)?)?;
             print(&format!("{}\n", serde_json::to_string_pretty(&stats)?))

@@ -22,6 +22,7 @@
 
 pub mod budget;
 pub mod html;
+pub mod parts;
 pub mod report;
 pub mod units;
 
@@ -171,136 +172,21 @@ impl RenderJob<'_> {
             ),
         };
         let t_render = start.elapsed().as_secs_f64();
-
-        let json = self.out_dir.join(format!("{}.json", scene.name));
-        let html = self.out_dir.join(format!("{}.html", scene.name));
         let peaks = sampler.finish();
-        let ed_above = match &stage {
-            Some(s) => s.emission.above_surface.Ed.clone(),
-            None => (0..scene.bands.len())
-                .map(|b| scene.incident_irradiance(b))
-                .collect(),
-        };
-        let (emission, map, reused_map) = match stage {
-            Some(s) => (Some(s.emission), Some(s.summary), s.reused),
-            None => (None, None, false),
-        };
-        // Depth profiles and Kd, as CSV, from the emission's tallies.
-        let mut profiles = None;
-        if let Some(e) = &emission {
-            let p = self.out_dir.join(format!("{}.profiles.csv", scene.name));
-            let k = self.out_dir.join(format!("{}.kd.csv", scene.name));
-            crate::output::write_atomic(&p, e.profiles_csv().as_bytes())?;
-            crate::output::write_atomic(&k, e.kd_csv().as_bytes())?;
-            profiles = Some((p.display().to_string(), k.display().to_string()));
-        }
-        let sensor_cubes = self.sensor_cubes(&rendered)?;
-        let report = RunReport {
-            integrator,
-            Ed_above_surface: ed_above,
-            emission,
-            map,
-            reused_map,
-            radiometers: rendered.radiometers,
-            estimate: scene.estimate.clone(),
-            sensor: SensorSummary {
-                pixels: scene.sensor.pixels,
-                samples_per_pixel: scene.sensor.samples_per_pixel,
-                bands: scene.bands.len(),
-                georef: scene.georef,
-                geotransform: crate::cube::georef::geotransform(scene),
-                sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
-                sun_azimuth_deg: scene.sun.azimuth_rad.to_degrees(),
-            },
-            cache: rendered.cache,
-            memory: shares,
-            outputs: Outputs {
-                hdr: rendered.hdr.display().to_string(),
-                bsq: rendered.bsq.display().to_string(),
-                png: rendered.png.display().to_string(),
-                exr: rendered.exr.display().to_string(),
-                json: json.display().to_string(),
-                html: html.display().to_string(),
-                stderr_hdr: rendered
-                    .stderr
-                    .as_ref()
-                    .map(|c| c.hdr.display().to_string()),
-                stderr_bsq: rendered
-                    .stderr
-                    .as_ref()
-                    .map(|c| c.bsq.display().to_string()),
-                profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
-                kd_csv: profiles.map(|p| p.1),
-                products: crate::render::PRODUCTS
-                    .iter()
-                    .zip(&rendered.products)
-                    .map(|(p, f)| report::ProductFiles {
-                        product: p.suffix.into(),
-                        units: p.units.into(),
-                        hdr: f.hdr.display().to_string(),
-                        bsq: f.bsq.display().to_string(),
-                    })
-                    .collect(),
-                sensor_cubes,
-            },
-            timings_s: RenderTimings {
+        publish_run(
+            scene,
+            &self.out_dir,
+            rendered,
+            stage,
+            shares,
+            RenderTimings {
                 scene: self.scene_seconds,
                 emit: t_emit,
                 render: t_render - t_emit,
                 total: self.scene_seconds + t_render,
             },
-            peak_memory: peaks,
-            peak_rss_bytes: peaks.rss_bytes,
-            units: units::report_units(),
-        };
-        let text = serde_json::to_string_pretty(&report)
-            .map_err(|e| Error::invalid("report", e.to_string()))?
-            + "\n";
-        html::write(scene, &report, &html)?;
-        crate::output::write_atomic(&json, text.as_bytes())?;
-        Ok(report)
-    }
-
-    /// The photon-map integrator: the map (reused or emitted), then the
-    /// render; returns the render, the map stage and the seconds to the end
-    /// of emission.
-    /// With `[sensor] response`: the radiance and the product cubes
-    /// integrated over that sensor's bands (`cube::ops::resample`), as
-    /// `NAME[.product].SENSOR.{hdr,bsq}` beside them.
-    fn sensor_cubes(
-        &self,
-        rendered: &crate::render::Rendered,
-    ) -> Result<Vec<report::ProductFiles>> {
-        let Some(sensor) = &self.scene.sensor.response else {
-            return Ok(Vec::new());
-        };
-        let tag = Path::new(&sensor.name)
-            .file_stem()
-            .map_or_else(|| sensor.name.clone(), |s| s.to_string_lossy().into_owned());
-        let mut cubes = vec![("radiance", rendered.hdr.clone())];
-        cubes.extend(
-            crate::render::PRODUCTS
-                .iter()
-                .zip(&rendered.products)
-                .map(|(p, f)| (p.suffix, f.hdr.clone())),
-        );
-        let mut out = Vec::with_capacity(cubes.len());
-        for (product, hdr) in cubes {
-            let cube = crate::cube::EnviCube::open(&hdr)?;
-            let stem = hdr
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let (files, _) =
-                crate::cube::ops::resample(&cube, sensor, &self.out_dir, &format!("{stem}.{tag}"))?;
-            out.push(report::ProductFiles {
-                product: product.into(),
-                units: cube.data_units().unwrap_or("unknown").into(),
-                hdr: files.hdr.display().to_string(),
-                bsq: files.bsq.display().to_string(),
-            });
-        }
-        Ok(out)
+            peaks,
+        )
     }
 
     fn photon_map(
@@ -309,6 +195,23 @@ impl RenderJob<'_> {
         start: Instant,
         progress: &dyn Progress,
     ) -> Result<(crate::render::Rendered, MapStage, f64)> {
+        let (map, stage, t_emit, scratch) = self.open_map(shares, start, progress)?;
+        let rendered =
+            crate::render::render(self.scene, &map, &self.out_dir, self.threads, progress)?;
+        drop(map);
+        drop(scratch);
+        Ok((rendered, stage, t_emit))
+    }
+
+    /// The photon map of the render: reused when its provenance matches,
+    /// else emitted (into a scratch file in the output directory without
+    /// `map`), with the band-shape grid's share taken from the budget.
+    fn open_map(
+        &self,
+        shares: &mut RenderShares,
+        start: Instant,
+        progress: &dyn Progress,
+    ) -> Result<(PhotonMap, MapStage, f64, Option<tempfile::NamedTempFile>)> {
         let scene = self.scene;
         let provenance = crate::emit::emission_provenance(scene)?;
         let scratch = match &self.map {
@@ -350,16 +253,53 @@ impl RenderJob<'_> {
             volume_photons,
         ))?;
         let map = PhotonMap::new(file, shares.tile_cache_bytes)?;
-        let rendered = crate::render::render(scene, &map, &self.out_dir, self.threads, progress)?;
-        drop(map);
-        drop(scratch);
         let stage = MapStage {
             emission,
             summary,
             reused: reused_map,
         };
-        Ok((rendered, stage, t_emit))
+        Ok((map, stage, t_emit, scratch))
     }
+}
+
+/// With `[sensor] response`: the radiance and the product cubes integrated
+/// over that sensor's bands (`cube::ops::resample`), as
+/// `NAME[.product].SENSOR.{hdr,bsq}` beside them.
+fn sensor_cubes(
+    scene: &Scene,
+    out_dir: &Path,
+    rendered: &crate::render::Rendered,
+) -> Result<Vec<report::ProductFiles>> {
+    let Some(sensor) = &scene.sensor.response else {
+        return Ok(Vec::new());
+    };
+    let tag = Path::new(&sensor.name)
+        .file_stem()
+        .map_or_else(|| sensor.name.clone(), |s| s.to_string_lossy().into_owned());
+    let mut cubes = vec![("radiance", rendered.hdr.clone())];
+    cubes.extend(
+        crate::render::PRODUCTS
+            .iter()
+            .zip(&rendered.products)
+            .map(|(p, f)| (p.suffix, f.hdr.clone())),
+    );
+    let mut out = Vec::with_capacity(cubes.len());
+    for (product, hdr) in cubes {
+        let cube = crate::cube::EnviCube::open(&hdr)?;
+        let stem = hdr
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let (files, _) =
+            crate::cube::ops::resample(&cube, sensor, out_dir, &format!("{stem}.{tag}"))?;
+        out.push(report::ProductFiles {
+            product: product.into(),
+            units: cube.data_units().unwrap_or("unknown").into(),
+            hdr: files.hdr.display().to_string(),
+            bsq: files.bsq.display().to_string(),
+        });
+    }
+    Ok(out)
 }
 
 /// Create `dir` (and its parents) and check that it is a directory.
@@ -373,4 +313,100 @@ fn create_dir(dir: &Path) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The files and the report of a finished render in `out_dir`: depth
+/// profiles and Kd as CSV (photon map), the sensor-band cubes, the HTML
+/// page and the JSON report.
+fn publish_run(
+    scene: &Scene,
+    out_dir: &Path,
+    rendered: crate::render::Rendered,
+    stage: Option<MapStage>,
+    shares: RenderShares,
+    timings: RenderTimings,
+    peaks: crate::mem::MemoryPeaks,
+) -> Result<RunReport> {
+    let integrator = scene.render.integrator;
+    let json = out_dir.join(format!("{}.json", scene.name));
+    let html = out_dir.join(format!("{}.html", scene.name));
+    let ed_above = match &stage {
+        Some(s) => s.emission.above_surface.Ed.clone(),
+        None => (0..scene.bands.len())
+            .map(|b| scene.incident_irradiance(b))
+            .collect(),
+    };
+    let (emission, map, reused_map) = match stage {
+        Some(s) => (Some(s.emission), Some(s.summary), s.reused),
+        None => (None, None, false),
+    };
+    // Depth profiles and Kd, as CSV, from the emission's tallies.
+    let mut profiles = None;
+    if let Some(e) = &emission {
+        let p = out_dir.join(format!("{}.profiles.csv", scene.name));
+        let k = out_dir.join(format!("{}.kd.csv", scene.name));
+        crate::output::write_atomic(&p, e.profiles_csv().as_bytes())?;
+        crate::output::write_atomic(&k, e.kd_csv().as_bytes())?;
+        profiles = Some((p.display().to_string(), k.display().to_string()));
+    }
+    let sensor_cubes = sensor_cubes(scene, out_dir, &rendered)?;
+    let report = RunReport {
+        integrator,
+        Ed_above_surface: ed_above,
+        emission,
+        map,
+        reused_map,
+        radiometers: rendered.radiometers,
+        estimate: scene.estimate.clone(),
+        sensor: SensorSummary {
+            pixels: scene.sensor.pixels,
+            samples_per_pixel: scene.sensor.samples_per_pixel,
+            bands: scene.bands.len(),
+            georef: scene.georef,
+            geotransform: crate::cube::georef::geotransform(scene),
+            sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
+            sun_azimuth_deg: scene.sun.azimuth_rad.to_degrees(),
+        },
+        cache: rendered.cache,
+        memory: shares,
+        outputs: Outputs {
+            hdr: rendered.hdr.display().to_string(),
+            bsq: rendered.bsq.display().to_string(),
+            png: rendered.png.display().to_string(),
+            exr: rendered.exr.display().to_string(),
+            json: json.display().to_string(),
+            html: html.display().to_string(),
+            stderr_hdr: rendered
+                .stderr
+                .as_ref()
+                .map(|c| c.hdr.display().to_string()),
+            stderr_bsq: rendered
+                .stderr
+                .as_ref()
+                .map(|c| c.bsq.display().to_string()),
+            profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
+            kd_csv: profiles.map(|p| p.1),
+            products: crate::render::PRODUCTS
+                .iter()
+                .zip(&rendered.products)
+                .map(|(p, f)| report::ProductFiles {
+                    product: p.suffix.into(),
+                    units: p.units.into(),
+                    hdr: f.hdr.display().to_string(),
+                    bsq: f.bsq.display().to_string(),
+                })
+                .collect(),
+            sensor_cubes,
+        },
+        timings_s: timings,
+        peak_memory: peaks,
+        peak_rss_bytes: peaks.rss_bytes,
+        units: units::report_units(),
+    };
+    let text = serde_json::to_string_pretty(&report)
+        .map_err(|e| Error::invalid("report", e.to_string()))?
+        + "\n";
+    html::write(scene, &report, &html)?;
+    crate::output::write_atomic(&json, text.as_bytes())?;
+    Ok(report)
 }

@@ -251,6 +251,283 @@ pub fn render_path(
     render_with(scene, &PathTracer::new(scene), dir, threads, progress)
 }
 
+/// The rendered values of one image tile (16 x 16 pixels, fewer at the
+/// right and bottom edges), pixel-major with the bands innermost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TileResult {
+    /// Tile column and row.
+    pub i: usize,
+    pub j: usize,
+    /// Width and height in pixels.
+    pub w: usize,
+    pub h: usize,
+    /// L_t per pixel and band.
+    pub values: Vec<f32>,
+    /// Its standard error (empty without a standard-error cube).
+    pub errors: Vec<f32>,
+    /// The products in the order of [`PRODUCTS`].
+    pub products: Vec<Vec<f32>>,
+    /// Quicklook colour per pixel (linear RGB).
+    pub rgb: Vec<f32>,
+}
+
+/// The image tiles of `scene` as (column, row), in the Morton order they
+/// are rendered in (neighbouring tiles query neighbouring photons).
+pub fn image_tiles(scene: &Scene) -> Vec<(usize, usize)> {
+    let [w, h] = scene.sensor.pixels;
+    let (tx, ty) = (w.div_ceil(TILE_PX), h.div_ceil(TILE_PX));
+    let mut tiles: Vec<(u64, usize, usize)> = (0..ty)
+        .flat_map(|j| (0..tx).map(move |i| (morton3([i as u16, j as u16, 0]), i, j)))
+        .collect();
+    tiles.sort_unstable();
+    tiles.into_iter().map(|(_, i, j)| (i, j)).collect()
+}
+
+/// What the standard-error cube holds for `scene`'s integrator, or None
+/// when it writes none (the path integrator at one sample per pixel).
+pub fn stderr_description(scene: &Scene) -> Option<String> {
+    let spp = scene.sensor.samples_per_pixel;
+    match scene.render.integrator {
+        crate::scene::IntegratorMode::PhotonMap => Some(format!(
+            "photon noise from {GROUPS} photon groups, {spp} samples per pixel"
+        )),
+        crate::scene::IntegratorMode::Path if spp >= 2 => {
+            Some(format!("{spp} independent paths per pixel"))
+        }
+        crate::scene::IntegratorMode::Path => None,
+    }
+}
+
+/// Render tile (`i`, `j`) of `scene` with `light`.
+pub fn render_tile(
+    scene: &Scene,
+    light: &dyn Integrator,
+    (i, j): (usize, usize),
+    quicklook: &Quicklook,
+) -> Result<TileResult> {
+    let nb = scene.bands.len();
+    let [w, h] = scene.sensor.pixels;
+    let spp = scene.sensor.samples_per_pixel as u64;
+    let channels = light.channels();
+    let with_errors = stderr_description(scene).is_some();
+    // E_d(0+): the sun's horizontal irradiance plus the sky's.
+    let ed: Vec<f64> = (0..nb).map(|b| scene.incident_irradiance(b)).collect();
+    let (x0, y0) = (i * TILE_PX, j * TILE_PX);
+    let (tw, th) = (TILE_PX.min(w - x0), TILE_PX.min(h - y0));
+    let mut values = vec![0f32; tw * th * nb];
+    let mut errors = vec![0f32; if with_errors { tw * th * nb } else { 0 }];
+    let mut rgb = vec![0f32; tw * th * 3];
+    let mut products = vec![vec![0f32; tw * th * nb]; PRODUCTS.len()];
+    let mut acc = Moments::new(nb, channels);
+    let mut sample = vec![0f64; nb * channels];
+    let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
+    let mut se = vec![0f64; nb];
+    for py in 0..th {
+        for px in 0..tw {
+            let (gx, gy) = (x0 + px, y0 + py);
+            let pixel = (gy * w + gx) as u64;
+            acc.clear();
+            water_sum.iter_mut().for_each(|v| *v = 0.0);
+            for s in 0..spp {
+                let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
+                let (u, v) = if spp == 1 {
+                    (0.5, 0.5)
+                } else {
+                    (rng.uniform_f32(), rng.uniform_f32())
+                };
+                let ray = camera::ray(&scene.sensor, gx, gy, u, v);
+                light.camera(ray, &mut rng, &mut sample, &mut water)?;
+                acc.add(&sample);
+                water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
+            }
+            let base = (py * tw + px) * nb;
+            for (b, m) in acc.mean().enumerate() {
+                let lw = water_sum[b] / spp as f64;
+                values[base + b] = m as f32;
+                products[0][base + b] = lw as f32;
+                products[1][base + b] = (m - lw) as f32;
+                products[2][base + b] = if ed[b] > 0.0 {
+                    (lw / ed[b]) as f32
+                } else {
+                    0.0
+                };
+            }
+            if !errors.is_empty() {
+                acc.standard_error(&mut se);
+                for (e, s) in errors[base..base + nb].iter_mut().zip(&se) {
+                    *e = *s as f32;
+                }
+            }
+            let c = quicklook.rgb(&values[base..base + nb]);
+            rgb[(py * tw + px) * 3..(py * tw + px) * 3 + 3].copy_from_slice(&c);
+        }
+    }
+    Ok(TileResult {
+        i,
+        j,
+        w: tw,
+        h: th,
+        values,
+        errors,
+        products,
+        rgb,
+    })
+}
+
+/// The cubes of a render being written tile by tile, and the quicklook's
+/// pixels gathered for the end.
+pub struct RenderOutputs {
+    dir: PathBuf,
+    writer: EnviWriter,
+    products: Vec<EnviWriter>,
+    stderr: Option<EnviWriter>,
+    image: std::sync::Mutex<Vec<f32>>,
+}
+
+impl RenderOutputs {
+    /// Create the cubes of `scene` in `dir` (under temporary names).
+    pub fn create(scene: &Scene, dir: &Path) -> Result<RenderOutputs> {
+        let [w, h] = scene.sensor.pixels;
+        let spec_in = |description: String, units: &str| CubeSpec {
+            samples: w,
+            lines: h,
+            bands: scene.bands.clone(),
+            description,
+            data_units: units.into(),
+        };
+        let spec = |description: String| spec_in(description, RADIANCE_UNITS);
+        let extra = crate::cube::georef::envi_header_lines(scene);
+        let writer = EnviWriter::create_with(
+            dir,
+            &scene.name,
+            spec(format!(
+                "littoral total radiance at the sensor (L_t) of scene '{}'",
+                scene.name
+            )),
+            &extra,
+        )?;
+        // The products: water-leaving radiance, surface-reflected radiance,
+        // remote-sensing reflectance.
+        let products = PRODUCTS
+            .iter()
+            .map(|p| {
+                EnviWriter::create_with(
+                    dir,
+                    &format!("{}.{}", scene.name, p.suffix),
+                    spec_in(
+                        format!("littoral {} of scene '{}'", p.description, scene.name),
+                        p.units,
+                    ),
+                    &extra,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let stderr = match stderr_description(scene) {
+            Some(what) => Some(EnviWriter::create_with(
+                dir,
+                &format!("{}.stderr", scene.name),
+                spec(format!(
+                    "littoral standard error of the radiance cube of scene '{}' ({what})",
+                    scene.name
+                )),
+                &extra,
+            )?),
+            None => None,
+        };
+        Ok(RenderOutputs {
+            dir: dir.to_path_buf(),
+            writer,
+            products,
+            stderr,
+            image: std::sync::Mutex::new(vec![0f32; w * h * 3]),
+        })
+    }
+
+    /// Write one tile into every cube and the quicklook.
+    pub fn write(&self, t: &TileResult) -> Result<()> {
+        let (x0, y0) = (t.i * TILE_PX, t.j * TILE_PX);
+        self.writer.write_tile(x0, y0, t.w, t.h, &t.values)?;
+        for (pw, v) in self.products.iter().zip(&t.products) {
+            pw.write_tile(x0, y0, t.w, t.h, v)?;
+        }
+        if let Some(se) = &self.stderr {
+            se.write_tile(x0, y0, t.w, t.h, &t.errors)?;
+        }
+        let w = self.writer.spec().samples;
+        let mut image = self.image.lock().unwrap_or_else(|e| e.into_inner());
+        for (row, chunk) in t.rgb.chunks(t.w * 3).enumerate() {
+            let start = ((y0 + row) * w + x0) * 3;
+            image[start..start + chunk.len()].copy_from_slice(chunk);
+        }
+        Ok(())
+    }
+
+    /// Finish the cubes, write the quicklook and the spectral EXR.
+    pub fn finish(self, scene: &Scene, radiometers: Vec<RadiometerReading>) -> Result<Rendered> {
+        let RenderOutputs {
+            dir,
+            writer,
+            products,
+            stderr,
+            image,
+        } = self;
+        let [w, h] = scene.sensor.pixels;
+        let image = image.into_inner().unwrap_or_else(|e| e.into_inner());
+        let png = dir.join(format!("{}.png", scene.name));
+        write_png(&png, w, h, &image, None)?;
+        let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
+        let stderr = stderr.map(|s| s.finish()).transpose()?;
+        let products = products
+            .into_iter()
+            .map(|p| p.finish())
+            .collect::<Result<Vec<_>>>()?;
+        // The spectral OpenEXR copy, tile by tile from the finished cubes:
+        // the radiance, its standard error, then the products.
+        let exr = dir.join(format!("{}.exr", scene.name));
+        let mut layers = vec![("radiance", crate::cube::EnviCube::open(&hdr)?)];
+        if let Some(se) = &stderr {
+            layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
+        }
+        for (p, files) in PRODUCTS.iter().zip(&products) {
+            layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
+        }
+        let named: Vec<(&str, &crate::cube::EnviCube)> =
+            layers.iter().map(|(n, c)| (*n, c)).collect();
+        crate::cube::exr::write_spectral_exr_layers_with(
+            &named,
+            &exr,
+            scene.render.exr_compression,
+        )?;
+        Ok(Rendered {
+            hdr,
+            bsq,
+            exr,
+            png,
+            stderr,
+            products,
+            radiometers,
+            cache: Default::default(),
+        })
+    }
+}
+
+/// Every radiometer's reading with `light`, in parallel on `threads`.
+pub fn read_radiometers(
+    scene: &Scene,
+    light: &dyn Integrator,
+    threads: usize,
+) -> Result<Vec<RadiometerReading>> {
+    let pool = crate::parallel::pool(threads)?;
+    pool.install(|| {
+        scene
+            .radiometers
+            .par_iter()
+            .enumerate()
+            .map(|(i, r)| read_radiometer(scene, light, i as u64, r))
+            .collect::<Result<Vec<_>>>()
+    })
+}
+
 /// Render `scene` with `light`: the image tiles, the quicklook, the EXR,
 /// the standard-error cube where the samples allow one, the radiometers.
 pub fn render_with(
@@ -261,185 +538,21 @@ pub fn render_with(
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let pool = crate::parallel::pool(threads)?;
-    let nb = scene.bands.len();
-    let [w, h] = scene.sensor.pixels;
-    let spp = scene.sensor.samples_per_pixel as u64;
-    let spec_in = |description: String, units: &str| CubeSpec {
-        samples: w,
-        lines: h,
-        bands: scene.bands.clone(),
-        description,
-        data_units: units.into(),
-    };
-    let spec = |description: String| spec_in(description, RADIANCE_UNITS);
-    let extra = crate::cube::georef::envi_header_lines(scene);
-    let writer = EnviWriter::create_with(
-        dir,
-        &scene.name,
-        spec(format!(
-            "littoral total radiance at the sensor (L_t) of scene '{}'",
-            scene.name
-        )),
-        &extra,
-    )?;
-    // The products: water-leaving radiance, surface-reflected radiance,
-    // remote-sensing reflectance.
-    let product_writers = PRODUCTS
-        .iter()
-        .map(|p| {
-            EnviWriter::create_with(
-                dir,
-                &format!("{}.{}", scene.name, p.suffix),
-                spec_in(
-                    format!("littoral {} of scene '{}'", p.description, scene.name),
-                    p.units,
-                ),
-                &extra,
-            )
-        })
-        .collect::<Result<Vec<_>>>()?;
-    // E_d(0+): the sun's horizontal irradiance plus the sky's.
-    let ed: Vec<f64> = (0..nb).map(|b| scene.incident_irradiance(b)).collect();
-    let channels = light.channels();
-    let se_writer = if (light.independent_samples() && spp >= 2) || channels > 1 {
-        let what = if channels > 1 {
-            format!("photon noise from {GROUPS} photon groups, {spp} samples per pixel")
-        } else {
-            format!("{spp} independent paths per pixel")
-        };
-        Some(EnviWriter::create_with(
-            dir,
-            &format!("{}.stderr", scene.name),
-            spec(format!(
-                "littoral standard error of the radiance cube of scene '{}' ({what})",
-                scene.name
-            )),
-            &extra,
-        )?)
-    } else {
-        None
-    };
+    let outputs = RenderOutputs::create(scene, dir)?;
     let quicklook = Quicklook::new(&scene.bands);
-    let (tx, ty) = (w.div_ceil(TILE_PX), h.div_ceil(TILE_PX));
-    let mut tiles: Vec<(u64, usize, usize)> = (0..ty)
-        .flat_map(|j| (0..tx).map(move |i| (morton3([i as u16, j as u16, 0]), i, j)))
-        .collect();
-    tiles.sort_unstable();
+    let tiles = image_tiles(scene);
     progress.stage("render tiles", tiles.len() as u64);
-    let rgb_tiles: Vec<(usize, usize, Vec<f32>)> = pool.install(|| {
-        tiles
-            .par_iter()
-            .map(|&(_, i, j)| -> Result<(usize, usize, Vec<f32>)> {
-                let (x0, y0) = (i * TILE_PX, j * TILE_PX);
-                let (tw, th) = (TILE_PX.min(w - x0), TILE_PX.min(h - y0));
-                let mut values = vec![0f32; tw * th * nb];
-                let mut errors = vec![0f32; if se_writer.is_some() { tw * th * nb } else { 0 }];
-                let mut rgb = vec![0f32; tw * th * 3];
-                let mut products = vec![vec![0f32; tw * th * nb]; PRODUCTS.len()];
-                let mut acc = Moments::new(nb, channels);
-                let mut sample = vec![0f64; nb * channels];
-                let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
-                let mut se = vec![0f64; nb];
-                for py in 0..th {
-                    for px in 0..tw {
-                        let (gx, gy) = (x0 + px, y0 + py);
-                        let pixel = (gy * w + gx) as u64;
-                        acc.clear();
-                        water_sum.iter_mut().for_each(|v| *v = 0.0);
-                        for s in 0..spp {
-                            let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
-                            let (u, v) = if spp == 1 {
-                                (0.5, 0.5)
-                            } else {
-                                (rng.uniform_f32(), rng.uniform_f32())
-                            };
-                            let ray = camera::ray(&scene.sensor, gx, gy, u, v);
-                            light.camera(ray, &mut rng, &mut sample, &mut water)?;
-                            acc.add(&sample);
-                            water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
-                        }
-                        let base = (py * tw + px) * nb;
-                        for (b, m) in acc.mean().enumerate() {
-                            let lw = water_sum[b] / spp as f64;
-                            values[base + b] = m as f32;
-                            products[0][base + b] = lw as f32;
-                            products[1][base + b] = (m - lw) as f32;
-                            products[2][base + b] = if ed[b] > 0.0 {
-                                (lw / ed[b]) as f32
-                            } else {
-                                0.0
-                            };
-                        }
-                        if !errors.is_empty() {
-                            acc.standard_error(&mut se);
-                            for (e, s) in errors[base..base + nb].iter_mut().zip(&se) {
-                                *e = *s as f32;
-                            }
-                        }
-                        let c = quicklook.rgb(&values[base..base + nb]);
-                        rgb[(py * tw + px) * 3..(py * tw + px) * 3 + 3].copy_from_slice(&c);
-                    }
-                }
-                writer.write_tile(x0, y0, tw, th, &values)?;
-                for (pw, v) in product_writers.iter().zip(&products) {
-                    pw.write_tile(x0, y0, tw, th, v)?;
-                }
-                if let Some(se) = &se_writer {
-                    se.write_tile(x0, y0, tw, th, &errors)?;
-                }
-                progress.advance(1);
-                Ok((i, j, rgb))
-            })
-            .collect::<Result<Vec<_>>>()
+    pool.install(|| {
+        tiles.par_iter().try_for_each(|&tile| -> Result<()> {
+            let t = render_tile(scene, light, tile, &quicklook)?;
+            outputs.write(&t)?;
+            progress.advance(1);
+            Ok(())
+        })
     })?;
     progress.finish();
-    let mut image = vec![0f32; w * h * 3];
-    for (i, j, rgb) in rgb_tiles {
-        let (x0, y0) = (i * TILE_PX, j * TILE_PX);
-        let tw = TILE_PX.min(w - x0);
-        for (row, chunk) in rgb.chunks(tw * 3).enumerate() {
-            let start = ((y0 + row) * w + x0) * 3;
-            image[start..start + chunk.len()].copy_from_slice(chunk);
-        }
-    }
-    let png = dir.join(format!("{}.png", scene.name));
-    write_png(&png, w, h, &image, None)?;
-    let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
-    let stderr = se_writer.map(|s| s.finish()).transpose()?;
-    let products = product_writers
-        .into_iter()
-        .map(|p| p.finish())
-        .collect::<Result<Vec<_>>>()?;
-    // The spectral OpenEXR copy, tile by tile from the finished cubes:
-    // the radiance, its standard error, then the products.
-    let exr = dir.join(format!("{}.exr", scene.name));
-    let mut layers = vec![("radiance", crate::cube::EnviCube::open(&hdr)?)];
-    if let Some(se) = &stderr {
-        layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
-    }
-    for (p, files) in PRODUCTS.iter().zip(&products) {
-        layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
-    }
-    let named: Vec<(&str, &crate::cube::EnviCube)> = layers.iter().map(|(n, c)| (*n, c)).collect();
-    crate::cube::exr::write_spectral_exr_layers_with(&named, &exr, scene.render.exr_compression)?;
-    let radiometers = pool.install(|| {
-        scene
-            .radiometers
-            .par_iter()
-            .enumerate()
-            .map(|(i, r)| read_radiometer(scene, light, i as u64, r))
-            .collect::<Result<Vec<_>>>()
-    })?;
-    Ok(Rendered {
-        hdr,
-        bsq,
-        exr,
-        png,
-        stderr,
-        products,
-        radiometers,
-        cache: Default::default(),
-    })
+    let radiometers = read_radiometers(scene, light, threads)?;
+    outputs.finish(scene, radiometers)
 }
 
 /// Radiometer readings only (no image), with the photon-map integrator.

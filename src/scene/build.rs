@@ -265,5 +265,10 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         render,
         georef,
         inputs,
+        origin: SceneOrigin {
+            text: text.to_string(),
+            path: path.to_path_buf(),
+            overrides: *ov,
+        },
     })
 }

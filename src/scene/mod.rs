@@ -233,6 +233,24 @@ pub struct Scene {
     /// Every file the scene names (spectra, meshes, height fields, grids,
     /// phase tables), sorted: inputs of the emission's provenance.
     pub inputs: Vec<PathBuf>,
+    /// The text, path and overrides it was built from, to build it again
+    /// elsewhere (the parts of a render split over machines).
+    pub origin: SceneOrigin,
+}
+
+/// What a scene was built from: [`Scene::parse`]'s arguments.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SceneOrigin {
+    pub text: String,
+    pub path: PathBuf,
+    pub overrides: Overrides,
+}
+
+impl SceneOrigin {
+    /// Build the scene again (relative file names resolve as they did).
+    pub fn build(&self) -> Result<Scene> {
+        Scene::parse(&self.text, &self.path, &self.overrides)
+    }
 }
 
 /// Where the scene's frame (x east, y north, m) sits on a map: the map
@@ -257,7 +275,7 @@ impl Georef {
 }
 
 /// Values the command line may override before validation.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Overrides {
     pub photons: Option<u64>,
     pub bands: Option<usize>,

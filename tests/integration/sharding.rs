@@ -192,3 +192,203 @@ fn bad_shard_sets_are_refused_naming_the_file() {
     let e = littoral(&["emit", p(&scene), "--shard", "3/3", "--map", p(&out)]);
     assert_eq!(e.status.code(), Some(2));
 }
+
+/// The sharding scene with a small image (3 x 2 tiles of 16 px) and a
+/// radiometer.
+fn render_scene() -> String {
+    SCENE.replace("count = 120000", "count = 60000")
+        + "[sensor]\npixels = [40, 24]\ngsd_m = 0.6\n[[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [15.0, 15.0]\n"
+}
+
+/// Every file a render writes that must be byte-identical between a whole
+/// render and an assembled one (the JSON and HTML carry timings and paths).
+fn same_outputs(a: &Path, b: &Path) {
+    let mut names: Vec<String> = std::fs::read_dir(a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.ends_with(".json") && !n.ends_with(".html") && !n.starts_with('.'))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 15, "{names:?}");
+    for n in &names {
+        assert!(
+            std::fs::read(a.join(n)).unwrap() == std::fs::read(b.join(n)).unwrap(),
+            "{n} differs"
+        );
+    }
+    let ra: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("shards.json")).unwrap()).unwrap();
+    let rb: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(b.join("shards.json")).unwrap()).unwrap();
+    assert_eq!(ra["radiometers"], rb["radiometers"]);
+    assert_eq!(ra["emission"], rb["emission"]);
+    assert!(b.join("shards.html").exists());
+}
+
+/// `render --tiles I/N` parts assembled by `littoral-cube assemble` write
+/// the whole render's cubes, EXR, quicklook and CSVs byte for byte, with
+/// the photon map and with the path integrator; a part started again
+/// keeps the tiles it finished; bad part sets are refused.
+#[test]
+fn assembled_parts_are_the_whole_render_byte_for_byte() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, render_scene()).unwrap();
+    let map = dir.path().join("s.map");
+    ok(littoral(&["emit", p(&scene), "--map", p(&map), "--quiet"]));
+    for extra in [&[][..], &["--integrator", "path", "--spp", "2"][..]] {
+        let tag = if extra.is_empty() { "pm" } else { "path" };
+        let whole = dir.path().join(format!("{tag}-whole"));
+        let mut args = vec![
+            "render",
+            p(&scene),
+            "--map",
+            p(&map),
+            "--out",
+            p(&whole),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        ok(littoral(&args));
+        let parts: Vec<PathBuf> = (0..3)
+            .map(|i| {
+                let part = dir.path().join(format!("{tag}-part{i}"));
+                let tiles = format!("{i}/3");
+                let mut args = vec![
+                    "render",
+                    p(&scene),
+                    "--map",
+                    p(&map),
+                    "--tiles",
+                    &tiles,
+                    "--out",
+                    p(&part),
+                    "--quiet",
+                ];
+                args.extend_from_slice(extra);
+                ok(littoral(&args));
+                part
+            })
+            .collect();
+        let out = dir.path().join(format!("{tag}-assembled"));
+        let cube = std::process::Command::new(env!("CARGO_BIN_EXE_littoral-cube"))
+            .args([
+                "assemble",
+                p(&parts[2]),
+                p(&parts[0]),
+                p(&parts[1]),
+                "--out",
+                p(&out),
+            ])
+            .output()
+            .unwrap();
+        ok(cube);
+        same_outputs(&whole, &out);
+    }
+
+    // A part started again keeps its finished tiles (same inode) and
+    // renders the ones that are gone.
+    let part = dir.path().join("pm-part1");
+    let tiles: Vec<PathBuf> = std::fs::read_dir(part.join("tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(tiles.len(), 2, "part 1 of 3 of 6 tiles");
+    use std::os::unix::fs::MetadataExt;
+    let kept_inode = std::fs::metadata(&tiles[0]).unwrap().ino();
+    let redo = std::fs::read(&tiles[1]).unwrap();
+    std::fs::remove_file(&tiles[1]).unwrap();
+    ok(littoral(&[
+        "render",
+        p(&scene),
+        "--map",
+        p(&map),
+        "--tiles",
+        "1/3",
+        "--out",
+        p(&part),
+        "--quiet",
+    ]));
+    assert_eq!(std::fs::metadata(&tiles[0]).unwrap().ino(), kept_inode);
+    assert!(
+        std::fs::read(&tiles[1]).unwrap() == redo,
+        "the tile rendered again is the same"
+    );
+
+    // Bad sets: a missing part, a corrupt tile, a part without a map.
+    let run_cube = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_littoral-cube"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = dir.path().join("bad");
+    let p0 = dir.path().join("pm-part0");
+    let p2 = dir.path().join("pm-part2");
+    assert_clean_failure(
+        &run_cube(&["assemble", p(&p0), p(&p2), "--out", p(&out)]),
+        "parts missing: 1 of 3",
+    );
+    let mut bytes = std::fs::read(&tiles[0]).unwrap();
+    let k = bytes.len() / 2;
+    bytes[k] ^= 1;
+    std::fs::write(&tiles[0], &bytes).unwrap();
+    assert_clean_failure(
+        &run_cube(&["assemble", p(&p0), p(&part), p(&p2), "--out", p(&out)]),
+        "CRC",
+    );
+    assert_clean_failure(
+        &littoral(&["render", p(&scene), "--tiles", "0/2", "--out", p(&out)]),
+        "--map",
+    );
+}
+
+/// `render --resume` after an interruption: the tiles a killed run left
+/// in OUT/.NAME.parts are kept, the rest rendered, and the outputs are the
+/// uninterrupted render's; the parts directory is gone afterwards.
+#[test]
+fn a_resumed_render_is_the_uninterrupted_one() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, render_scene()).unwrap();
+    let whole = dir.path().join("whole");
+    ok(littoral(&[
+        "render",
+        p(&scene),
+        "--out",
+        p(&whole),
+        "--quiet",
+    ]));
+    // What a killed --resume run leaves: some tiles, no part.json.
+    let out = dir.path().join("resumed");
+    let parts = out.join(".shards.parts");
+    ok(littoral(&[
+        "render",
+        p(&scene),
+        "--tiles",
+        "0/1",
+        "--map",
+        p(&parts.join("map.map")),
+        "--out",
+        p(&parts),
+        "--quiet",
+    ]));
+    std::fs::remove_file(parts.join("part.json")).unwrap();
+    let tiles: Vec<PathBuf> = std::fs::read_dir(parts.join("tiles"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    for t in tiles.iter().step_by(2) {
+        std::fs::remove_file(t).unwrap();
+    }
+    ok(littoral(&[
+        "render",
+        p(&scene),
+        "--out",
+        p(&out),
+        "--resume",
+        "--quiet",
+    ]));
+    same_outputs(&whole, &out);
+    assert!(!parts.exists(), "the parts directory is removed");
+}

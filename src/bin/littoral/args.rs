@@ -71,6 +71,15 @@ pub struct RenderArgs {
     /// scene's `[sensor] samples_per_pixel`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
     pub spp: Option<u32>,
+    /// Render only part I of N of the image tiles into --out (a part
+    /// directory), from the photon map at --map; `littoral-cube assemble`
+    /// joins the parts. Started again, a part keeps its finished tiles.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "resume")]
+    pub tiles: Option<(u64, u64)>,
+    /// Keep finished tiles in OUT/.NAME.parts so that a killed render,
+    /// started again with --resume, renders only the rest.
+    #[arg(long)]
+    pub resume: bool,
     /// No progress on stderr.
     #[arg(long)]
     pub quiet: bool,

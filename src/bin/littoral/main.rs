@@ -47,6 +47,29 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         Some(path) => Scene::load(path, &overrides)?,
         None => Scene::coastal(&overrides)?,
     };
+    if let Some(tiles) = a.tiles {
+        let job = littoral::job::parts::RenderPartJob {
+            scene: &scene,
+            part_dir: a.out.clone(),
+            map: a.map.clone(),
+            emit_map: tiles.1 == 1,
+            tiles,
+            threads: a.threads,
+            budget,
+        };
+        let m = job.run(&Bars::new(a.quiet))?;
+        if !a.quiet {
+            eprintln!(
+                "rendered part {}/{} ({} tiles) into {} in {:.1} s",
+                m.part,
+                m.parts,
+                m.tiles.len(),
+                a.out.display(),
+                m.timings_s.total
+            );
+        }
+        return Ok(());
+    }
     let job = RenderJob {
         scene: &scene,
         out_dir: a.out.clone(),
@@ -55,7 +78,11 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
         budget,
         scene_seconds: start.elapsed().as_secs_f64(),
     };
-    let r = job.run(&Bars::new(a.quiet))?;
+    let r = if a.resume {
+        littoral::job::parts::render_resumable(&job, &Bars::new(a.quiet))?
+    } else {
+        job.run(&Bars::new(a.quiet))?
+    };
     if !a.quiet {
         eprintln!("{}", r.summary());
     }
