@@ -23,6 +23,7 @@
 pub mod budget;
 pub mod html;
 pub mod parts;
+pub mod plan;
 pub mod report;
 pub mod units;
 

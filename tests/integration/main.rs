@@ -22,5 +22,6 @@ mod roundtrip;
 mod scenes;
 mod sharding;
 mod sky;
+mod slurm;
 mod splitting;
 mod water_optics;

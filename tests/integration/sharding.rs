@@ -392,3 +392,75 @@ fn a_resumed_render_is_the_uninterrupted_one() {
     same_outputs(&whole, &out);
     assert!(!parts.exists(), "the parts directory is removed");
 }
+
+/// `littoral plan` writes the four batch scripts and submit.sh (two for
+/// the path integrator: no map to emit), each valid shell, with the array
+/// size, memory and the task id in the commands, chained by afterok.
+#[test]
+fn plan_writes_chained_batch_scripts() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, render_scene()).unwrap();
+    let plan = dir.path().join("plan");
+    ok(littoral(&[
+        "plan",
+        p(&scene),
+        "--shards",
+        "4",
+        "--out",
+        p(&plan),
+        "--mem-budget",
+        "128MiB",
+        "--cpus-per-task",
+        "3",
+        "--time",
+        "1:00:00",
+    ]));
+    let read = |n: &str| std::fs::read_to_string(plan.join(n)).unwrap();
+    for n in [
+        "emit.sbatch",
+        "merge.sbatch",
+        "render.sbatch",
+        "assemble.sbatch",
+        "submit.sh",
+    ] {
+        let st = std::process::Command::new("bash")
+            .args(["-n", p(&plan.join(n))])
+            .status()
+            .unwrap();
+        assert!(st.success(), "{n} is not valid bash");
+    }
+    let emit = read("emit.sbatch");
+    assert!(
+        emit.contains("#SBATCH --array=0-3") && emit.contains("--shard \"$SLURM_ARRAY_TASK_ID\"/4")
+    );
+    // 128 MiB + a quarter + 256 MiB.
+    assert!(emit.contains("#SBATCH --mem=416M") && emit.contains("#SBATCH --cpus-per-task=3"));
+    assert!(emit.contains("#SBATCH --time=1:00:00"));
+    let merge = read("merge.sbatch");
+    assert!((0..4).all(|i| merge.contains(&format!("part-{i}.shard"))));
+    let render = read("render.sbatch");
+    assert!(render.contains("--tiles \"$SLURM_ARRAY_TASK_ID\"/4") && render.contains("--map"));
+    let submit = read("submit.sh");
+    let order: Vec<usize> = ["emit=", "merge=", "render=", "assemble="]
+        .iter()
+        .map(|k| submit.find(k).unwrap())
+        .collect();
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{submit}");
+    assert_eq!(submit.matches("--dependency=afterok:").count(), 3);
+
+    let path_plan = dir.path().join("path-plan");
+    ok(littoral(&[
+        "plan",
+        p(&scene),
+        "--shards",
+        "2",
+        "--out",
+        p(&path_plan),
+        "--integrator",
+        "path",
+    ]));
+    assert!(!path_plan.join("emit.sbatch").exists() && !path_plan.join("merge.sbatch").exists());
+    let render = std::fs::read_to_string(path_plan.join("render.sbatch")).unwrap();
+    assert!(render.contains("--integrator path") && !render.contains("--map"));
+}

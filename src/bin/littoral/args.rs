@@ -29,6 +29,9 @@ pub enum Command {
     /// Photon map files: build synthetic maps, inspect, verify, query, dump.
     #[command(subcommand)]
     Map(MapCommand),
+    /// Write Slurm batch scripts for a sharded run: an emit job array, the
+    /// merge, a render job array and the assembly, chained by submit.sh.
+    Plan(PlanArgs),
 }
 
 #[derive(Args)]
@@ -246,4 +249,50 @@ pub enum Layer {
     VolumeUp,
     /// Photons stored on the floor and targets.
     Surface,
+}
+
+#[derive(Args)]
+pub struct PlanArgs {
+    /// Scene file (TOML); the built-in coastal scene when absent (written
+    /// into the plan directory).
+    pub scene: Option<PathBuf>,
+    /// Shards of the emission and parts of the render (array tasks).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    pub shards: u64,
+    /// The plan directory: scripts, shards, parts, logs, the map. On a
+    /// cluster it must be on a filesystem every node sees.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Where the assembled outputs go (default: OUT/results).
+    #[arg(long)]
+    pub results: Option<PathBuf>,
+    /// Memory budget of every task; each asks Slurm for it plus a quarter
+    /// plus 256 MiB.
+    #[arg(long, default_value = "512MiB")]
+    pub mem_budget: String,
+    /// CPUs per task (each task runs that many threads).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub cpus_per_task: u32,
+    /// Slurm partition.
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Time limit per task (Slurm's format, e.g. 2:00:00).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Photons to trace (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
+    pub photons: Option<u64>,
+    /// Random seed (overrides the scene).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Integrator (overrides the scene).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorMode>,
+    /// Samples per pixel (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
+    pub spp: Option<u32>,
+    /// Directory of the littoral and littoral-cube binaries the jobs run
+    /// (default: this binary's).
+    #[arg(long)]
+    pub bin_dir: Option<PathBuf>,
 }

@@ -27,6 +27,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             cli::print(&format!("{}: {}\n", file.display(), scene.summary()))
         }
         Command::Emit(a) => run_emit(a),
+        Command::Plan(a) => run_plan(a),
         Command::Render(a) => run_render(a),
     }
 }
@@ -253,4 +254,84 @@ fn run_map(cmd: MapCommand) -> AnyResult<()> {
             cli::print_with(|out| map.dump_csv(out))
         }
     }
+}
+
+fn run_plan(a: PlanArgs) -> AnyResult<()> {
+    let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
+    let overrides = Overrides {
+        photons: a.photons,
+        seed: a.seed,
+        integrator: a.integrator,
+        samples_per_pixel: a.spp,
+        ..Overrides::default()
+    };
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| littoral::Error::io(&a.out, "create directory", e))?;
+    let scene_path = match &a.scene {
+        Some(p) => std::path::absolute(p).map_err(|e| littoral::Error::io(p, "resolve", e))?,
+        None => {
+            let p = std::path::absolute(a.out.join("scene.toml"))
+                .map_err(|e| littoral::Error::io(&a.out, "resolve", e))?;
+            littoral::output::write_atomic(&p, littoral::scene::COASTAL_TOML.as_bytes())?;
+            p
+        }
+    };
+    let scene = Scene::load(&scene_path, &overrides)?;
+    let mut scene_args = vec![scene_path.display().to_string()];
+    for (flag, v) in [
+        ("--photons", a.photons.map(|v| v.to_string())),
+        ("--seed", a.seed.map(|v| v.to_string())),
+    ] {
+        if let Some(v) = v {
+            scene_args.extend([flag.to_string(), v]);
+        }
+    }
+    // Flags emit does not take go to render only: the render scripts get
+    // them through the scene arguments of the render (see below).
+    let mut render_only = Vec::new();
+    if let Some(i) = a.integrator {
+        use clap::ValueEnum;
+        let name = i
+            .to_possible_value()
+            .map(|v| v.get_name().to_string())
+            .unwrap_or_default();
+        render_only.extend(["--integrator".to_string(), name]);
+    }
+    if let Some(spp) = a.spp {
+        render_only.extend(["--spp".to_string(), spp.to_string()]);
+    }
+    let bin_dir = match &a.bin_dir {
+        Some(d) => d.clone(),
+        None => std::env::current_exe()?
+            .parent()
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default(),
+    };
+    let plan = littoral::job::plan::Plan {
+        scene: &scene,
+        scene_args,
+        render_args: render_only,
+        shards: a.shards,
+        dir: a.out.clone(),
+        results: a.results.clone().unwrap_or_else(|| a.out.join("results")),
+        mem_budget: budget.total(),
+        cpus: a.cpus_per_task,
+        partition: a.partition.clone(),
+        time: a.time.clone(),
+        bin_dir,
+    };
+    let scripts = plan.write()?;
+    for s in &scripts {
+        println!("{}", s.display());
+    }
+    eprintln!(
+        "wrote {} scripts into {}: run {} to submit ({} array tasks per stage, {} MiB and {} CPUs each)",
+        scripts.len(),
+        a.out.display(),
+        scripts.last().map(|p| p.display().to_string()).unwrap_or_default(),
+        a.shards,
+        plan.task_mem_mib(),
+        a.cpus_per_task
+    );
+    Ok(())
 }
