@@ -7,28 +7,35 @@
 //! - [`optics`]: embedded spectral tables averaged over the band grid
 //!   ([`optics::tables::Table`]), IOPs, phase functions with exact samplers
 //!   ([`optics::phase::PhaseFunction`]), the sky's radiance distribution
-//!   ([`optics::sky::SkyModel`]), the sea surface.
+//!   ([`optics::sky::SkyModel`]), the sea surface with Smith shadowing, and
+//!   the water's refractive index per band ([`optics::water_index`]).
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy, the
-//!   emission report ([`emit::Emitter`]).
+//!   emission report ([`emit::Emitter`]); sharded emission and its merge
+//!   ([`emit::emit_shard`], [`emit::merge_shards`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader —
 //!   and its read side: the tile cache ([`store::cache::TileCache`]) and exact
 //!   kNN and radius queries behind one interface ([`store::PhotonQuery`]),
 //!   implemented by the tiled map ([`store::PhotonMap`]) and an in-memory map
-//!   ([`store::InMemoryMap`]).
+//!   ([`store::InMemoryMap`]); shard files of a sharded emission
+//!   ([`store::shard`]).
 //! - [`estimate`]: radiance from photons, with boundary- and spectral-bias
 //!   compensation and the forward peak as a delta ([`estimate::Estimator`]).
 //! - [`render`]: sensor rays, the two integrators behind one trait
 //!   ([`render::Integrator`]): the photon map's ray marcher
 //!   ([`render::march::RayMarcher`]) and the unbiased reference path tracer
-//!   ([`render::path::PathTracer`]); the image loop and radiometers
+//!   ([`render::path::PathTracer`]); the image loop, tile by tile
+//!   ([`render::render_tile`], [`render::RenderOutputs`]), and radiometers
 //!   ([`render::render_with`]).
 //! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR), its
 //!   quicklook (PNG), derived cubes ([`cube::ops`]) and real sensors' bands
 //!   ([`cube::sensor::Sensor`]).
 //! - [`job`]: the whole pipeline as one call — scene, map (reused by
 //!   provenance or emitted), render, outputs — with the typed report and the
-//!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]).
+//!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]);
+//!   the HTML report ([`job::html`]); renders split into parts and
+//!   assembled, or resumed ([`job::parts`]); Slurm batch scripts
+//!   ([`job::plan`]).
 //!
 //! Data types every stage shares: [`spectral`] (the band grid every photon
 //! indexes, [`BandGrid`]), [`photon`] (the stored photon and its quantised
