@@ -1,4 +1,5 @@
-//! Memory: `littoral map synth` of 20 M photons, `emit` and `render` under
+//! Memory: `littoral map synth` of 20 M photons, `emit`, `render` and the
+//! stages of a sharded run (shard emission, merge, render parts) under
 //! `--mem-budget 64MiB` stay under the budget plus a fixed overhead, judged
 //! by VmHWM and, for emit and render, by the sampled anonymous peak their
 //! reports give apart from the mapped file pages.
@@ -201,4 +202,76 @@ fn render_with_a_churning_cache_within_its_budget() {
         "{:?}",
         r.peak_memory
     );
+}
+
+/// The stages of a sharded run under `--mem-budget 64MiB`, built-in scene
+/// at 1 M photons (64 x 64 pixels): each shard's emission, the merge and
+/// each render part, judged by the anonymous peak each records.
+#[test]
+fn sharded_stages_within_64mib() {
+    let dir = tempdir();
+    let scene = coarse_builtin_scene(dir.path(), 64, 3.0);
+    let map = dir.path().join("m.map");
+    let mut parts = Vec::new();
+    for i in 0..2 {
+        let part = dir.path().join(format!("p{i}.shard"));
+        let report = dir.path().join(format!("p{i}.json"));
+        let shard = format!("{i}/2");
+        let run = littoral(&[
+            "emit",
+            p(&scene),
+            "--shard",
+            &shard,
+            "--map",
+            p(&part),
+            "--report",
+            p(&report),
+            "--photons",
+            "1000000",
+            "--mem-budget",
+            "64MiB",
+            "--quiet",
+        ]);
+        let r: serde_json::Value = report_of(&run, &report);
+        let peaks: MemoryPeaks = serde_json::from_value(r["peak_memory"].clone()).unwrap();
+        assert_peak_within_64mib(&format!("emit shard {i}"), peaks);
+        parts.push(part);
+    }
+    let report = dir.path().join("merge.json");
+    let run = littoral(&[
+        "map",
+        "merge",
+        p(&parts[0]),
+        p(&parts[1]),
+        "--out",
+        p(&map),
+        "--report",
+        p(&report),
+        "--mem-budget",
+        "64MiB",
+        "--quiet",
+    ]);
+    let r: EmitReport = report_of(&run, &report);
+    assert_peak_within_64mib("merge", r.peak_memory);
+    for i in 0..2 {
+        let out = dir.path().join(format!("part{i}"));
+        let tiles = format!("{i}/2");
+        let run = littoral(&[
+            "render",
+            p(&scene),
+            "--photons",
+            "1000000",
+            "--map",
+            p(&map),
+            "--tiles",
+            &tiles,
+            "--out",
+            p(&out),
+            "--mem-budget",
+            "64MiB",
+            "--quiet",
+        ]);
+        let m: littoral::job::parts::PartManifest = report_of(&run, &out.join("part.json"));
+        assert_peak_within_64mib(&format!("render part {i}"), m.peak_memory);
+    }
 }

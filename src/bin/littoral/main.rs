@@ -106,6 +106,8 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         None => None,
     };
     if let Some(shard) = a.shard {
+        littoral::mem::fixed_mmap_threshold();
+        let sampler = littoral::mem::PeakSampler::start();
         let provenance = littoral::emit::emission_provenance(&scene)?;
         let h = littoral::emit::emit_shard(
             &scene,
@@ -123,6 +125,8 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
             "file_bytes": std::fs::metadata(&a.map).map(|m| m.len()).unwrap_or(0),
             "path": a.map.display().to_string(),
             "seconds": start.elapsed().as_secs_f64(),
+            "mem_budget_bytes": budget.total(),
+            "peak_memory": sampler.finish(),
         });
         if let Some(path) = &a.report {
             littoral::output::write_atomic(
