@@ -249,31 +249,15 @@ impl RenderPartJob<'_> {
                     scene,
                     crate::estimate::Estimator::new(scene, &map)?,
                 );
-                self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
-                let radiometers = if part == 0 {
-                    Some(crate::render::read_radiometers(
-                        scene,
-                        &light,
-                        self.threads,
-                    )?)
-                } else {
-                    None
-                };
+                let radiometers =
+                    self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
                 use crate::store::PhotonQuery;
                 (Some(stage), t_emit, map.cache_stats(), radiometers)
             }
             IntegratorMode::Path => {
                 let light = crate::render::path::PathTracer::new(scene);
-                self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
-                let radiometers = if part == 0 {
-                    Some(crate::render::read_radiometers(
-                        scene,
-                        &light,
-                        self.threads,
-                    )?)
-                } else {
-                    None
-                };
+                let radiometers =
+                    self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
                 (None, 0.0, CacheStats::default(), radiometers)
             }
         };
@@ -308,6 +292,8 @@ impl RenderPartJob<'_> {
         Ok(manifest)
     }
 
+    /// Render the tiles `todo` into tile files; part 0 also reads the
+    /// radiometers.
     fn render_tiles(
         &self,
         light: &dyn crate::render::Integrator,
@@ -315,7 +301,7 @@ impl RenderPartJob<'_> {
         digest: &str,
         quicklook: &crate::cube::quicklook::Quicklook,
         progress: &dyn Progress,
-    ) -> Result<()> {
+    ) -> Result<Option<Vec<RadiometerReading>>> {
         let pool = crate::parallel::pool(self.threads)?;
         let bands = self.scene.bands.len();
         progress.stage("render tiles", todo.len() as u64);
@@ -331,7 +317,15 @@ impl RenderPartJob<'_> {
             })
         })?;
         progress.finish();
-        Ok(())
+        if self.tiles.0 == 0 {
+            Ok(Some(crate::render::read_radiometers(
+                self.scene,
+                light,
+                self.threads,
+            )?))
+        } else {
+            Ok(None)
+        }
     }
 }
 

@@ -154,15 +154,7 @@ pub(super) fn water(
         return Ok((WaterModel::Bands(iops), particle_phase));
     }
     if let Some(iop) = &w.iop {
-        let constituents = [w.chl, w.cdom_440, w.nap_440, w.bp_550]
-            .iter()
-            .any(Option::is_some)
-            || w.gradient.is_some()
-            || !w.layer.is_empty()
-            || w.grid.is_some();
-        if constituents {
-            reject_constituents(ctx, w, "iop")?;
-        }
+        reject_constituents(ctx, w, "iop")?;
         if !finite_in(iop.a, 0.0, 1e4) || iop.a <= 0.0 && iop.b <= 0.0 {
             return Err(ctx.err(
                 &[K("water"), K("iop"), K("a")],
