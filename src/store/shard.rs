@@ -25,6 +25,7 @@ use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::provenance::Provenance;
 use crate::spectral::BandGrid;
+use bytemuck::Zeroable;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::fs::File;
@@ -382,5 +383,3 @@ impl Iterator for ShardBatches {
         Some(Ok(buf))
     }
 }
-
-use bytemuck::Zeroable;
