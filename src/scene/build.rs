@@ -185,9 +185,9 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         periodic,
     };
 
-    let (water, particle_phase) = water::water(&ctx, &f.water, &domain)?;
     let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
         .expect("the pure-water q is valid");
+    let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);

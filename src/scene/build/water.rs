@@ -140,6 +140,7 @@ pub(super) fn water(
     ctx: &Ctx,
     w: &WaterFile,
     domain: &Domain,
+    water_phase: &PhaseFunction,
 ) -> Result<(WaterModel, PhaseFunction)> {
     let wk = |k| [K("water"), K(k)];
     let particle_phase = phase(ctx, w.phase.as_ref())?;
@@ -147,9 +148,7 @@ pub(super) fn water(
         if w.iop.is_some() {
             return Err(ctx.err(&wk("iop_file"), "give iop or iop_file, not both"));
         }
-        let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
-            .map_err(|e| ctx.err(&wk("iop_file"), e.to_string()))?;
-        let iops = iop_table(ctx, file, &water_phase, &particle_phase)?;
+        let iops = iop_table(ctx, file, water_phase, &particle_phase)?;
         reject_constituents(ctx, w, "iop_file")?;
         return Ok((WaterModel::Bands(iops), particle_phase));
     }
