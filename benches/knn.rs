@@ -1,13 +1,17 @@
 //! kNN (k = 50) on a 10 M photon water map: one in-memory kiddo tree over
-//! every photon, the store with the whole map cached, and the store with a
-//! cache of 5 % of the decoded map in coherent and in random query order.
+//! every photon (item numbers only, and as the in-memory photon map that
+//! returns the photons), the store with the whole map cached, and the store with a
+//! cache of 5 % of the decoded map in the renderer's image-tile order, in
+//! a global Morton order and in random order.
 
 mod common;
 
 use common::*;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use littoral::store::cache::tile_bytes;
+use littoral::store::cache::DecodedTile;
 use littoral::store::codec::TileDecoder;
+use littoral::store::memory::InMemoryMap;
+use littoral::store::tiletree::TileTree;
 use littoral::store::MapFile;
 use littoral::store::{PhotonMap, PhotonQuery, Search};
 use std::num::NonZeroUsize;
@@ -25,6 +29,7 @@ fn knn(c: &mut Criterion) {
     let path = water_map(PHOTONS, BANDS);
     let random = query_points(QUERIES, BANDS);
     let ordered = coherent(&random);
+    let image_tiles = image_tile_order(&random, 6.25);
     let search = Search::Nearest {
         k: 50,
         max_radius: None,
@@ -34,7 +39,8 @@ fn knn(c: &mut Criterion) {
     g.throughput(Throughput::Elements(QUERIES as u64));
 
     {
-        // (a) one kiddo ImmutableKdTree over all photons, in memory.
+        // (a0) one kiddo ImmutableKdTree over all photons, in memory,
+        // returning item numbers only (no photon is read).
         let file = MapFile::open(&path).unwrap();
         let mut dec = TileDecoder::default();
         let mut tile = Vec::new();
@@ -47,8 +53,8 @@ fn knn(c: &mut Criterion) {
             kiddo::ImmutableKdTree::new_from_slice(&points).unwrap();
         let k = NonZeroUsize::new(50).unwrap();
         for (name, pts) in [
-            ("a_kiddo_in_memory_random", &random),
-            ("a_kiddo_in_memory_coherent", &ordered),
+            ("a0_kiddo_items_only_random", &random),
+            ("a0_kiddo_items_only_coherent", &ordered),
         ] {
             g.bench_function(name, |b| {
                 b.iter(|| {
@@ -65,6 +71,25 @@ fn knn(c: &mut Criterion) {
         }
     }
 
+    {
+        // (a) the in-memory photon map: one kiddo tree per layer over every
+        // photon, answering the same queries with the same photons.
+        let memory = InMemoryMap::from_file(&MapFile::open(&path).unwrap()).unwrap();
+        for (name, pts) in [
+            ("a_in_memory_random", &random),
+            ("a_in_memory_coherent", &ordered),
+            ("a_in_memory_image_tiles", &image_tiles),
+        ] {
+            g.bench_function(name, |b| {
+                b.iter(|| {
+                    pts.iter()
+                        .map(|p| memory.query(*p, search).unwrap().len())
+                        .sum::<usize>()
+                })
+            });
+        }
+    }
+
     let full = PhotonMap::new(MapFile::open(&path).unwrap(), 64 << 30).unwrap();
     for p in &random {
         full.query(*p, search).unwrap();
@@ -72,6 +97,7 @@ fn knn(c: &mut Criterion) {
     for (name, pts) in [
         ("b_store_all_cached_random", &random),
         ("b_store_all_cached_coherent", &ordered),
+        ("b_store_all_cached_image_tiles", &image_tiles),
     ] {
         g.bench_function(name, |b| {
             b.iter(|| {
@@ -84,7 +110,17 @@ fn knn(c: &mut Criterion) {
     drop(full);
 
     let file = MapFile::open(&path).unwrap();
-    let decoded: u64 = file.tiles().iter().map(|t| tile_bytes(t.count)).sum();
+    // What the tiles hold decoded, with their trees (not the bound the
+    // cache reserves while one decodes).
+    let mut dec = TileDecoder::default();
+    let mut decoded = 0u64;
+    for t in 0..file.tiles().len() as u32 {
+        let mut photons = Vec::new();
+        file.decode_tile(t, &mut dec, &mut photons).unwrap();
+        photons.shrink_to_fit();
+        let tree = TileTree::from_morton(dec.codes(), &file.tiles()[t as usize].quant);
+        decoded += DecodedTile { photons, tree }.bytes();
+    }
     let budget = decoded / 20;
     eprintln!(
         "decoded map {:.1} MiB; 5 % budget {:.1} MiB",
@@ -94,6 +130,7 @@ fn knn(c: &mut Criterion) {
     let small = PhotonMap::new(file, budget).unwrap();
     let few = &random[..RANDOM_SMALL_CACHE_QUERIES];
     for (name, pts) in [
+        ("c_store_5pct_image_tiles", &image_tiles[..]),
         ("c_store_5pct_coherent", &ordered[..]),
         ("d_store_5pct_random", few),
     ] {

@@ -1,10 +1,13 @@
 //! `cache::tile_bytes` must bound what a decoded tile really holds: the
-//! photons plus the kiddo tree, measured here with a counting allocator
-//! (this test binary holds one test so nothing else allocates meanwhile).
+//! photons plus its search tree, measured here with a counting allocator
+//! (this test binary holds one test so nothing else allocates meanwhile),
+//! and `DecodedTile::bytes` must be what it holds.
 
 use glam::Vec3;
-use littoral::photon::PackedPhoton;
-use littoral::store::cache::tile_bytes;
+use littoral::photon::Photon;
+use littoral::store::cache::{tile_bytes, DecodedTile};
+use littoral::store::codec::{StagedPhoton, TileDecoder, TileEncoder};
+use littoral::store::tiletree::TileTree;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
@@ -33,33 +36,50 @@ static A: Counting = Counting;
 #[test]
 fn tile_bytes_bounds_photons_and_tree() {
     let mut rng = littoral::rng::Pcg32::new(4, 4);
+    let mut encoder = TileEncoder::default();
+    let mut decoder = TileDecoder::default();
     for n in [1usize, 17, 33, 1000, 4097, 65_536, 131_000] {
-        let before = LIVE.load(Ordering::SeqCst);
-        let photons: Vec<PackedPhoton> = (0..n)
-            .map(|_| {
+        let staged: Vec<StagedPhoton> = (0..n)
+            .map(|i| {
                 // Many share one z, as on a flat floor.
                 let z = if rng.uniform_f32() < 0.3 {
                     -10.0
                 } else {
                     rng.uniform_f32()
                 };
-                PackedPhoton {
-                    position: Vec3::new(rng.uniform_f32(), rng.uniform_f32(), z).to_array(),
-                    ..Default::default()
-                }
+                let p = Photon {
+                    position: Vec3::new(rng.uniform_f32(), rng.uniform_f32(), z),
+                    direction: Vec3::Z,
+                    band: 0,
+                    power: 1.0,
+                    group: 0,
+                };
+                StagedPhoton::new(&p, 0, i as u64)
             })
             .collect();
-        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position).collect();
-        let tree: kiddo::ImmutableKdTree<f32, 3> =
-            kiddo::ImmutableKdTree::new_from_slice(&points).unwrap();
-        drop(points);
+        let tile = encoder.encode(&staged).unwrap();
+        let entry = tile.entry(0);
+        drop(staged);
+        // Grow the decoder's scratch first: it is the thread's, not the tile's.
+        let mut photons = Vec::new();
+        decoder.decode(&tile.blob, &entry, &mut photons).unwrap();
+        photons = Vec::new();
+        let before = LIVE.load(Ordering::SeqCst);
+        decoder.decode(&tile.blob, &entry, &mut photons).unwrap();
+        photons.shrink_to_fit();
+        let tree = TileTree::from_morton(decoder.codes(), &entry.quant);
+        let decoded = DecodedTile { photons, tree };
         let held = (LIVE.load(Ordering::SeqCst) - before) as u64;
+        assert_eq!(
+            held,
+            decoded.bytes(),
+            "n {n}: bytes() is what the tile holds"
+        );
         assert!(
             held <= tile_bytes(n as u32),
             "n {n}: tile holds {held} B, bound {}",
             tile_bytes(n as u32)
         );
-        drop(tree);
-        drop(photons);
+        drop(decoded);
     }
 }

@@ -53,3 +53,28 @@ pub fn coherent(points: &[Vec3]) -> Vec<Vec3> {
     keyed.sort_by_key(|k| k.0);
     keyed.into_iter().map(|k| k.1).collect()
 }
+
+/// Order points as the renderer asks for them: image tiles of `side` m
+/// (16 x 16 pixels) in Morton order over the synthetic domain, within a
+/// tile pixel by pixel in rows, and within a pixel down the water column.
+pub fn image_tile_order(points: &[Vec3], side: f32) -> Vec<Vec3> {
+    let pixel = side / 16.0;
+    let mut keyed: Vec<(u64, u32, i64, Vec3)> = points
+        .iter()
+        .map(|p| {
+            let (tx, ty) = ((p.x / side).floor() as u16, (p.y / side).floor() as u16);
+            let (px, py) = (
+                ((p.x - tx as f32 * side) / pixel).floor() as u32,
+                ((p.y - ty as f32 * side) / pixel).floor() as u32,
+            );
+            (
+                littoral::morton::morton3([tx, ty, 0]),
+                py * 16 + px,
+                -(p.z * 1e3) as i64,
+                *p,
+            )
+        })
+        .collect();
+    keyed.sort_by_key(|k| (k.0, k.1, k.2));
+    keyed.into_iter().map(|k| k.3).collect()
+}

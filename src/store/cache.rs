@@ -1,9 +1,10 @@
-//! The tile cache: decoded tiles with their k-d trees, shared across
+//! The tile cache: decoded tiles with their search trees, shared across
 //! threads under a byte budget.
 //!
-//! A tile's resident size (decoded photons plus an upper bound of its kiddo
-//! tree) is known from its index entry before it is decoded, so the cache
-//! reserves the bytes first and decodes outside the lock. A tile requested
+//! An upper bound of a tile's resident size (decoded photons and tree) is
+//! known from its index entry before it is decoded, so the cache reserves
+//! that first, decodes outside the lock, and keeps what the tile really
+//! holds once it is built. A hit takes only the tile's own lock. A tile requested
 //! by several threads at once is decoded once: the others wait for it.
 //! Eviction is least-recently-used among tiles no reader holds; a reader's
 //! [`TileRef`] pins its tile, and a thread needing room waits until a pin is
@@ -16,29 +17,35 @@
 use crate::error::{Error, Result};
 use crate::photon::PackedPhoton;
 use crate::store::codec::TileDecoder;
+use crate::store::tiletree::TileTree;
 use crate::store::MapFile;
-use kiddo::ImmutableKdTree;
-use std::collections::HashMap;
 use std::ops::Deref;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{fence, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 
-/// A decoded tile: photons in stored (Morton) order and a k-d tree whose
-/// items index them.
+/// A decoded tile: photons in stored (Morton) order and the tree whose
+/// leaves index them.
 pub struct DecodedTile {
     pub photons: Vec<PackedPhoton>,
-    pub tree: ImmutableKdTree<f32, 3>,
+    pub tree: TileTree,
+}
+
+impl DecodedTile {
+    /// Bytes this tile holds.
+    pub fn bytes(&self) -> u64 {
+        (self.photons.capacity() * std::mem::size_of::<PackedPhoton>() + self.tree.heap_bytes())
+            as u64
+    }
 }
 
 /// Upper bound of the bytes a tile of `count` photons occupies in the cache:
-/// 24 B per decoded photon, and for the kiddo tree 16 B per point (12 B of
-/// coordinates, 4 B item) plus leaf and stem tables and per-leaf padding.
-/// Checked against a counting allocator in the tests.
+/// 24 B per decoded photon, 6 B of cell coordinates and at most two 12 B
+/// tree nodes per photon (every leaf holds one photon or more). The cache
+/// reserves this while a tile decodes and keeps [`DecodedTile::bytes`] once
+/// it is built (about 32 B per photon: a node per five photons or so).
 pub fn tile_bytes(count: u32) -> u64 {
     let n = count as u64;
-    let photons = n * std::mem::size_of::<PackedPhoton>() as u64;
-    let tree = 16 * n + 8 * n / 2 + 16 * 1024;
-    photons + tree
+    n * (std::mem::size_of::<PackedPhoton>() as u64 + 6) + 24 * n.max(1)
 }
 
 /// Cache counters, summed over all threads.
@@ -57,26 +64,35 @@ pub struct CacheStats {
     pub peak_resident_bytes: u64,
 }
 
-enum Slot {
-    Loading,
-    Ready {
-        tile: Arc<DecodedTile>,
-        last_used: u64,
-    },
+/// One tile's place in the cache. Its own lock guards its state, so a hit
+/// touches no lock but this one.
+struct Slot {
+    state: Mutex<State>,
+    last_used: AtomicU64,
 }
 
+enum State {
+    Absent,
+    Loading,
+    Ready(Arc<DecodedTile>),
+}
+
+/// What the global lock guards: the byte account and the resident tiles.
 struct Inner {
-    slots: HashMap<u32, Slot>,
+    resident_tiles: Vec<u32>,
     resident: u64,
     peak: u64,
-    clock: u64,
 }
 
 /// A shared, budgeted cache of decoded tiles of one map.
 pub struct TileCache {
     budget: u64,
+    slots: Vec<Slot>,
     inner: Mutex<Inner>,
     changed: Condvar,
+    /// Threads waiting on `changed` for a pin to be released.
+    waiters: AtomicUsize,
+    clock: AtomicU64,
     hits: AtomicU64,
     misses: AtomicU64,
     evictions: AtomicU64,
@@ -99,15 +115,25 @@ impl Deref for TileRef<'_> {
 
 impl Drop for TileRef<'_> {
     fn drop(&mut self) {
-        // Unpin under the lock so a waiter cannot miss the wake-up.
-        let _guard = self.cache.inner.lock().unwrap_or_else(|e| e.into_inner());
         self.tile = None;
-        self.cache.changed.notify_all();
+        // Pairs with the fence in `make_room`: either a waiter sees this
+        // release when it looks for a tile to evict, or this sees the waiter
+        // and wakes it (under the lock, so the wake-up cannot fall between
+        // its look and its wait).
+        fence(Ordering::SeqCst);
+        if self.cache.waiters.load(Ordering::SeqCst) > 0 {
+            let _guard = self.cache.inner.lock().unwrap_or_else(|e| e.into_inner());
+            self.cache.changed.notify_all();
+        }
     }
 }
 
 thread_local! {
     static DECODER: std::cell::RefCell<TileDecoder> = std::cell::RefCell::new(TileDecoder::default());
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl TileCache {
@@ -130,19 +156,31 @@ impl TileCache {
         }
         Ok(TileCache {
             budget,
+            slots: (0..map.tiles().len())
+                .map(|_| Slot {
+                    state: Mutex::new(State::Absent),
+                    last_used: AtomicU64::new(0),
+                })
+                .collect(),
             inner: Mutex::new(Inner {
-                slots: HashMap::new(),
+                resident_tiles: Vec::new(),
                 resident: 0,
                 peak: 0,
-                clock: 0,
             }),
             changed: Condvar::new(),
+            waiters: AtomicUsize::new(0),
+            clock: AtomicU64::new(0),
             hits: AtomicU64::new(0),
             misses: AtomicU64::new(0),
             evictions: AtomicU64::new(0),
             decodes: AtomicU64::new(0),
             decoded_bytes: AtomicU64::new(0),
         })
+    }
+
+    /// Bytes of the cache's own bookkeeping (one slot per tile of the map).
+    pub fn overhead_bytes(tiles: usize) -> u64 {
+        (tiles * std::mem::size_of::<Slot>()) as u64
     }
 
     /// The byte budget.
@@ -152,7 +190,7 @@ impl TileCache {
 
     /// Counters so far.
     pub fn stats(&self) -> CacheStats {
-        let inner = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        let inner = lock(&self.inner);
         CacheStats {
             hits: self.hits.load(Ordering::Relaxed),
             misses: self.misses.load(Ordering::Relaxed),
@@ -164,63 +202,91 @@ impl TileCache {
         }
     }
 
+    /// The tile of slot `t` if it is resident, pinned.
+    fn hit(&self, t: u32) -> Option<TileRef<'_>> {
+        let slot = &self.slots[t as usize];
+        let state = lock(&slot.state);
+        let State::Ready(tile) = &*state else {
+            return None;
+        };
+        let tile = Arc::clone(tile);
+        drop(state);
+        slot.last_used.store(
+            self.clock.fetch_add(1, Ordering::Relaxed),
+            Ordering::Relaxed,
+        );
+        self.hits.fetch_add(1, Ordering::Relaxed);
+        Some(TileRef {
+            tile: Some(tile),
+            cache: self,
+        })
+    }
+
     /// Pin tile `t` of `map`, decoding it if it is not resident.
+    ///
+    /// A hit takes only the tile's own lock. A miss takes the global lock to
+    /// reserve the tile's bytes (evicting the least recently used unpinned
+    /// tiles), decodes outside it, and takes it again to publish the tile.
+    /// Locks are always taken global first, then a slot.
     pub fn get<'a>(&'a self, map: &MapFile, t: u32) -> Result<TileRef<'a>> {
+        if let Some(r) = self.hit(t) {
+            return Ok(r);
+        }
         let need = tile_bytes(map.tiles()[t as usize].count);
-        let mut inner = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        let mut inner = lock(&self.inner);
         loop {
-            inner.clock += 1;
-            let now = inner.clock;
-            match inner.slots.get_mut(&t) {
-                Some(Slot::Ready { tile, last_used }) => {
-                    *last_used = now;
-                    let tile = Arc::clone(tile);
-                    self.hits.fetch_add(1, Ordering::Relaxed);
-                    return Ok(TileRef {
-                        tile: Some(tile),
-                        cache: self,
-                    });
+            {
+                let mut state = lock(&self.slots[t as usize].state);
+                match &*state {
+                    State::Ready(_) => {
+                        drop(state);
+                        drop(inner);
+                        if let Some(r) = self.hit(t) {
+                            return Ok(r);
+                        }
+                        // Evicted between the two looks: start again.
+                        inner = lock(&self.inner);
+                        continue;
+                    }
+                    State::Loading => {
+                        drop(state);
+                        inner = self.changed.wait(inner).unwrap_or_else(|e| e.into_inner());
+                        continue;
+                    }
+                    State::Absent => {
+                        if inner.resident + need <= self.budget {
+                            *state = State::Loading;
+                            break;
+                        }
+                    }
                 }
-                Some(Slot::Loading) => {
-                    inner = self.changed.wait(inner).unwrap_or_else(|e| e.into_inner());
-                    continue;
-                }
-                None => {}
             }
-            if inner.resident + need <= self.budget {
-                break;
-            }
-            if !Self::evict_one(&mut inner, &self.evictions) {
-                // Everything resident is pinned or loading: wait for a release.
-                inner = self.changed.wait(inner).unwrap_or_else(|e| e.into_inner());
-            }
+            inner = self.make_room(inner);
         }
         inner.resident += need;
         inner.peak = inner.peak.max(inner.resident);
-        inner.slots.insert(t, Slot::Loading);
+        inner.resident_tiles.push(t);
         self.misses.fetch_add(1, Ordering::Relaxed);
         drop(inner);
 
         let decoded = Self::decode(map, t);
 
-        let mut inner = self.inner.lock().unwrap_or_else(|e| e.into_inner());
-        self.changed.notify_all();
-        match decoded {
+        let mut inner = lock(&self.inner);
+        let mut state = lock(&self.slots[t as usize].state);
+        let result = match decoded {
             Ok(tile) => {
                 self.decodes.fetch_add(1, Ordering::Relaxed);
                 self.decoded_bytes.fetch_add(
                     (tile.photons.len() * std::mem::size_of::<PackedPhoton>()) as u64,
                     Ordering::Relaxed,
                 );
+                // Keep what the tile holds, not the bound reserved for it.
+                inner.resident -= need - tile.bytes().min(need);
                 let tile = Arc::new(tile);
-                inner.clock += 1;
-                let last_used = inner.clock;
-                inner.slots.insert(
-                    t,
-                    Slot::Ready {
-                        tile: Arc::clone(&tile),
-                        last_used,
-                    },
+                *state = State::Ready(Arc::clone(&tile));
+                self.slots[t as usize].last_used.store(
+                    self.clock.fetch_add(1, Ordering::Relaxed),
+                    Ordering::Relaxed,
                 );
                 Ok(TileRef {
                     tile: Some(tile),
@@ -228,42 +294,69 @@ impl TileCache {
                 })
             }
             Err(e) => {
-                inner.slots.remove(&t);
+                *state = State::Absent;
                 inner.resident -= need;
+                inner.resident_tiles.retain(|&r| r != t);
                 Err(e)
             }
+        };
+        drop(state);
+        self.changed.notify_all();
+        result
+    }
+
+    /// Evict the least recently used unpinned tile, or wait for a pin to be
+    /// released when every resident tile is pinned or loading.
+    fn make_room<'g>(
+        &'g self,
+        mut inner: std::sync::MutexGuard<'g, Inner>,
+    ) -> std::sync::MutexGuard<'g, Inner> {
+        self.waiters.fetch_add(1, Ordering::SeqCst);
+        fence(Ordering::SeqCst);
+        if !self.evict_one(&mut inner) {
+            inner = self.changed.wait(inner).unwrap_or_else(|e| e.into_inner());
         }
+        self.waiters.fetch_sub(1, Ordering::SeqCst);
+        inner
+    }
+
+    /// Evict the least recently used unpinned tile; false if none.
+    fn evict_one(&self, inner: &mut Inner) -> bool {
+        let mut order: Vec<(u64, usize)> = inner
+            .resident_tiles
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (self.slots[t as usize].last_used.load(Ordering::Relaxed), i))
+            .collect();
+        order.sort_unstable();
+        for (_, i) in order {
+            let t = inner.resident_tiles[i];
+            let mut state = lock(&self.slots[t as usize].state);
+            // Pins are taken under the slot's lock, so none can appear
+            // between this check and the eviction.
+            let State::Ready(tile) = &*state else {
+                continue;
+            };
+            if Arc::strong_count(tile) != 1 {
+                continue;
+            }
+            inner.resident -= tile.bytes();
+            *state = State::Absent;
+            inner.resident_tiles.swap_remove(i);
+            self.evictions.fetch_add(1, Ordering::Relaxed);
+            return true;
+        }
+        false
     }
 
     fn decode(map: &MapFile, t: u32) -> Result<DecodedTile> {
         let mut photons = Vec::new();
-        DECODER.with(|d| map.decode_tile(t, &mut d.borrow_mut(), &mut photons))?;
-        photons.shrink_to_fit();
-        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position).collect();
-        let tree = ImmutableKdTree::new_from_slice(&points)
-            .map_err(|e| Error::tile(map.path(), t, format!("k-d tree: {e:?}")))?;
-        Ok(DecodedTile { photons, tree })
-    }
-
-    /// Evict the least recently used unpinned tile; false if none.
-    fn evict_one(inner: &mut Inner, evictions: &AtomicU64) -> bool {
-        let victim = inner
-            .slots
-            .iter()
-            .filter_map(|(&t, s)| match s {
-                Slot::Ready { tile, last_used } if Arc::strong_count(tile) == 1 => {
-                    Some((*last_used, t))
-                }
-                _ => None,
-            })
-            .min();
-        let Some((_, t)) = victim else {
-            return false;
-        };
-        if let Some(Slot::Ready { tile, .. }) = inner.slots.remove(&t) {
-            inner.resident -= tile_bytes(tile.photons.len() as u32);
-            evictions.fetch_add(1, Ordering::Relaxed);
-        }
-        true
+        DECODER.with(|d| {
+            let mut d = d.borrow_mut();
+            map.decode_tile(t, &mut d, &mut photons)?;
+            photons.shrink_to_fit();
+            let tree = TileTree::from_morton(d.codes(), &map.tiles()[t as usize].quant);
+            Ok(DecodedTile { photons, tree })
+        })
     }
 }

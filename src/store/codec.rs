@@ -69,6 +69,13 @@ const MORTON_MASK: u64 = (1 << 48) - 1;
 pub struct BoxQuantizer([AxisQuantizer; 3]);
 
 impl BoxQuantizer {
+    /// Decoded value of code `q` on `axis` (what [`BoxQuantizer::decode`]
+    /// gives for that axis).
+    #[inline(always)]
+    pub fn decode_axis(&self, axis: usize, q: u16) -> f32 {
+        self.0[axis].decode(q)
+    }
+
     pub fn new(b: &Aabb) -> Self {
         BoxQuantizer([
             AxisQuantizer::new(b.min.x, b.max.x),
@@ -205,6 +212,7 @@ pub enum DecodeError {
 #[derive(Default)]
 pub struct TileDecoder {
     raw: Vec<u8>,
+    codes: Vec<u64>,
     zstd: Option<zstd::bulk::Decompressor<'static>>,
 }
 
@@ -260,6 +268,9 @@ impl TileDecoder {
         let raw = &self.raw[..];
         out.clear();
         out.reserve_exact(n);
+        let codes = &mut self.codes;
+        codes.clear();
+        codes.reserve(n);
         // Deltas are below 2^48, so while the running code stays below 2^48
         // no sum can overflow; `high` remembers any excursion above it.
         let mut m = 0u64;
@@ -281,6 +292,7 @@ impl TileDecoder {
                 let delta = u64::from_le_bytes([r[0], r[1], r[2], r[3], r[4], r[5], 0, 0]);
                 m += delta;
                 high |= m;
+                codes.push(m);
                 PackedPhoton {
                     position: q.decode(demorton3(m & MORTON_MASK)).to_array(),
                     oct: [
@@ -296,9 +308,16 @@ impl TileDecoder {
         }
         if high > MORTON_MASK {
             out.clear();
+            self.codes.clear();
             return Err(DecodeError::Order);
         }
         Ok(())
+    }
+
+    /// The Morton codes of the photons last decoded, in the same (sorted)
+    /// order: what [`super::tiletree::BoxTree::from_morton`] builds on.
+    pub fn codes(&self) -> &[u64] {
+        &self.codes
     }
 }
 

@@ -13,6 +13,7 @@ pub mod partition;
 pub mod query;
 pub mod reader;
 pub mod shard;
+pub mod tiletree;
 pub mod writer;
 
 pub use build::{build_map, BuildOptions, PhotonSource};

@@ -1,8 +1,10 @@
 //! Exact photon queries over a tiled map: k-nearest and fixed-radius.
 //!
-//! A query visits the tiles whose photon bounds meet its search sphere,
-//! nearest box first, and searches each tile's k-d tree; a kNN query stops
-//! when the next box is farther than its current k-th neighbour. The
+//! A query walks a tree over the tiles' photon bounds (one per layer) and
+//! visits the tiles whose boxes meet its search sphere, nearest box first,
+//! searching each tile's own tree (`store::tiletree`); a kNN query keeps
+//! one heap of the k nearest across tiles and stops when the next box is
+//! farther than its current k-th neighbour. The
 //! results are those of one k-d tree over every photon of the map (up to
 //! the order of photons at exactly equal distance). Each query pins one
 //! tile at a time, which is what lets the cache stay inside its budget.
@@ -20,6 +22,7 @@ use crate::morton::morton3;
 use crate::photon::{PackedPhoton, Photon};
 use crate::spectral::BandGrid;
 use crate::store::cache::{CacheStats, TileCache};
+use crate::store::tiletree::{BoxTree, Nearest};
 use crate::store::MapFile;
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -174,17 +177,30 @@ impl Search {
     }
 }
 
-/// Per-thread query scratch: candidate tiles, and results with directions
-/// still packed.
-type QueryScratch = (Vec<(f32, u32)>, Vec<(f32, PackedPhoton)>);
+/// Per-thread query scratch: the tile-box heap, radius results with
+/// directions still packed, and the k nearest so far.
+#[derive(Default)]
+struct QueryScratch {
+    boxes: Vec<(f32, u32)>,
+    within: Vec<(f32, PackedPhoton)>,
+    nearest: Nearest,
+}
 
 thread_local! {
-    static CANDIDATES: std::cell::RefCell<QueryScratch> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+    static SCRATCH: std::cell::RefCell<QueryScratch> = std::cell::RefCell::new(QueryScratch::default());
+}
+
+/// The tiles of one layer and a tree over their boxes.
+struct LayerIndex {
+    layer: u16,
+    tiles: Vec<u32>,
+    tree: BoxTree,
 }
 
 /// A map file with its tile cache: the query interface of the store.
 pub struct PhotonMap {
     file: MapFile,
+    index: Vec<LayerIndex>,
     cache: TileCache,
 }
 
@@ -193,10 +209,38 @@ pub struct PhotonMap {
 const PRUNE_SLACK: f32 = 1.0 + 1e-5;
 
 impl PhotonMap {
-    /// Queries over `file` with a tile cache of `cache_budget` bytes.
+    /// Queries over `file` with `cache_budget` bytes for the tile cache,
+    /// of which the tile-box index and the cache's slots take their share
+    /// first.
     pub fn new(file: MapFile, cache_budget: u64) -> Result<PhotonMap> {
-        let cache = TileCache::new(&file, cache_budget)?;
-        Ok(PhotonMap { file, cache })
+        let mut index = Vec::new();
+        for layer in 0..crate::photon::LAYERS as u16 {
+            let tiles: Vec<u32> = (0..file.tiles().len() as u32)
+                .filter(|&t| file.tiles()[t as usize].layer == layer as u32)
+                .collect();
+            if tiles.is_empty() {
+                continue;
+            }
+            let boxes: Vec<Aabb> = tiles
+                .iter()
+                .map(|&t| file.tiles()[t as usize].bounds)
+                .collect();
+            index.push(LayerIndex {
+                layer,
+                tree: BoxTree::over_boxes(&boxes),
+                tiles,
+            });
+        }
+        let overhead = Self::index_bytes(file.tiles().len());
+        let cache = TileCache::new(&file, cache_budget.saturating_sub(overhead))?;
+        Ok(PhotonMap { file, index, cache })
+    }
+
+    /// Bytes the tile-box index and the cache's bookkeeping take for a map
+    /// of `tiles` tiles (a tree node and a tile number per tile, and one
+    /// cache slot): taken from the cache's budget.
+    pub fn index_bytes(tiles: usize) -> u64 {
+        (tiles * (64 + 4)) as u64 + TileCache::overhead_bytes(tiles)
     }
 
     /// The underlying map file.
@@ -221,82 +265,73 @@ impl PhotonMap {
         let Some((k, limit_sq)) = search.limits() else {
             return Ok(());
         };
-        CANDIDATES.with(|c| {
-            let (candidates, packed) = &mut *c.borrow_mut();
-            packed.clear();
-            self.search_tiles(at, layer, k, limit_sq, sorted, candidates, packed)?;
+        SCRATCH.with(|c| {
+            let s = &mut *c.borrow_mut();
+            self.search_tiles(at, layer, k, limit_sq, s)?;
             // Directions are decoded only for the photons that made the cut.
-            out.extend(packed.iter().map(|(d, p)| Neighbour {
+            let neighbour = |(d, p): (f32, &PackedPhoton)| Neighbour {
                 photon: p.unpack(),
-                distance_sq: *d,
-            }));
+                distance_sq: d,
+            };
+            if k == usize::MAX {
+                if sorted {
+                    s.within.sort_by(|a, b| a.0.total_cmp(&b.0));
+                }
+                out.extend(s.within.iter().map(|(d, p)| neighbour((*d, p))));
+            } else {
+                out.extend(s.nearest.results(sorted).map(neighbour));
+            }
             Ok(())
         })
     }
 
-    /// Visit the tiles in `candidates` nearest box first, as long as a box
-    /// can still hold a result. Picking the nearest box by a linear scan is
-    /// cheaper than sorting: a query visits only a few of the map's tiles.
-    /// Unsorted, the k nearest so far are kept by selection and the k-th
-    /// distance is their maximum.
-    #[allow(clippy::too_many_arguments)]
+    /// Visit the tiles whose boxes can still hold a result, nearest box
+    /// first (through the tile-box index), and search each one's tree; the
+    /// k nearest are kept in one heap across tiles, whose k-th distance
+    /// bounds the tiles still to visit. The results are left in
+    /// `s.within` (a radius search, `k == usize::MAX`) or `s.nearest`.
     fn search_tiles(
         &self,
         at: Vec3,
         layer: Option<u16>,
         k: usize,
         limit_sq: f32,
-        sorted: bool,
-        candidates: &mut Vec<(f32, u32)>,
-        out: &mut Vec<(f32, PackedPhoton)>,
+        s: &mut QueryScratch,
     ) -> Result<()> {
-        candidates.clear();
-        candidates.extend(
-            self.file
-                .tiles()
-                .iter()
-                .enumerate()
-                .filter(|(_, e)| layer.is_none_or(|l| e.layer == l as u32))
-                .map(|(t, e)| (e.bounds.distance_sq(at), t as u32))
-                .filter(|&(d, _)| d <= limit_sq * PRUNE_SLACK),
-        );
         let q = at.to_array();
-        // The k-th distance so far, once k photons are known.
-        let mut kth_sq = f32::INFINITY;
-        while !candidates.is_empty() {
-            let (i, &(box_sq, t)) = candidates
-                .iter()
-                .enumerate()
-                .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(a.1 .1.cmp(&b.1 .1)))
-                .expect("not empty");
-            candidates.swap_remove(i);
-            let bound_sq = if out.len() >= k { kth_sq } else { limit_sq };
-            if box_sq > bound_sq * PRUNE_SLACK {
-                break;
+        let QueryScratch {
+            boxes,
+            within,
+            nearest,
+        } = s;
+        within.clear();
+        if k != usize::MAX {
+            nearest.reset(k, limit_sq);
+        }
+        for index in &self.index {
+            if layer.is_some_and(|l| l != index.layer) {
+                continue;
             }
-            let tile = self.cache.get(&self.file, t)?;
-            let before = out.len();
-            let found = search_tree(&tile.tree, &q, k, bound_sq, sorted);
-            out.extend(
-                found
-                    .into_iter()
-                    .map(|r| (r.distance, tile.photons[r.item as usize])),
-            );
-            drop(tile);
-            if out.len() > before {
-                if sorted {
-                    out.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    out.truncate(k);
-                    if out.len() >= k {
-                        kth_sq = out[k - 1].0;
-                    }
-                } else if out.len() >= k && k != usize::MAX {
-                    if out.len() > k {
-                        out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
-                        out.truncate(k);
-                    }
-                    kth_sq = out.iter().fold(0.0f32, |m, p| m.max(p.0));
-                }
+            if k == usize::MAX {
+                index
+                    .tree
+                    .nearest_leaves(&q, limit_sq * PRUNE_SLACK, boxes, |_, item| {
+                        let tile = self.cache.get(&self.file, index.tiles[item as usize])?;
+                        tile.tree.within(&tile.photons, &q, limit_sq, within);
+                        Ok::<_, crate::error::Error>(limit_sq * PRUNE_SLACK)
+                    })?;
+            } else {
+                index.tree.nearest_leaves(
+                    &q,
+                    nearest.bound_sq() * PRUNE_SLACK,
+                    boxes,
+                    |_, item| {
+                        let tile = self.cache.get(&self.file, index.tiles[item as usize])?;
+                        tile.tree.nearest(&q, nearest);
+                        nearest.take_records(&tile.photons);
+                        Ok::<_, crate::error::Error>(nearest.bound_sq() * PRUNE_SLACK)
+                    },
+                )?;
             }
         }
         Ok(())

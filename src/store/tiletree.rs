@@ -1,0 +1,770 @@
+//! Search structures that build at decode speed: a k-d tree over a tile's
+//! photons, and a bounding-volume hierarchy over the map's tile boxes.
+//!
+//! A tile stores its photons sorted by the Morton code of their 16-bit
+//! positions in the tile's box (`store::codec`). That order is already a
+//! k-d tree: the photons sharing a code prefix are contiguous and fill one
+//! octree cell. [`TileTree::from_morton`] cuts the sorted run at the
+//! highest bit in which its first and last codes differ (a binary radix
+//! tree, as in Karras 2012), down to leaves of at most [`LEAF`] photons.
+//! Each cut is a plane on the axis that bit encodes, at the first cell of
+//! the upper half, so a node is 12 bytes (plane, axis, second child) and
+//! the build needs no sort, no median search and no pass over the
+//! positions: one binary search per node. A cache miss costs the decode
+//! and little more. Nothing beyond the codes is stored, so the map format
+//! is unchanged and maps written before read as they are.
+//!
+//! The tree keeps the photons' 16-bit cells (6 bytes a photon) and scans
+//! those rather than the 24-byte records; a query walks it depth first,
+//! nearer side first, keeping the distance to each side's cell per axis,
+//! and prunes a side whose cell lies beyond the current bound. The cell
+//! distance and the photon distance are computed with the same f32
+//! operations from quantities ordered the same way, so a cell is never
+//! farther than a photon in it and pruning is exact.
+//!
+//! [`BoxTree::over_boxes`] builds a hierarchy over a list of boxes (the
+//! map's tiles, split at the median along the longest axis of their
+//! centres), with both children's boxes in each 64-byte node, for the
+//! tile-box index a query walks nearest first.
+//!
+//! Not for: paging tiles (`store::cache`) or assembling a query's results
+//! (`store::query`).
+
+use crate::bounds::Aabb;
+use crate::morton::demorton3;
+use crate::photon::PackedPhoton;
+use crate::store::codec::BoxQuantizer;
+use glam::Vec3;
+
+/// Most photons in a leaf of a tile's tree.
+pub const LEAF: usize = 16;
+
+/// Deepest tree: 48 radix levels (one per Morton bit) and 32 count
+/// splits of runs of equal codes; the traversal stack holds one entry per
+/// level.
+const MAX_DEPTH: usize = 96;
+
+#[inline(always)]
+fn point_distance_sq(p: &[f32; 3], q: &[f32; 3]) -> f32 {
+    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    dx * dx + dy * dy + dz * dz
+}
+
+#[inline(always)]
+fn norm_sq(o: &[f32; 3]) -> f32 {
+    o[0] * o[0] + o[1] * o[1] + o[2] * o[2]
+}
+
+// ---------------------------------------------------------------- tiles
+
+/// A node of a tile's tree, in pre-order. A leaf (`count > 0`) holds
+/// items `link..link + count`. An internal node's first child follows it
+/// and holds the photons below `split` on `axis`; its second child, at
+/// `link`, those at or above it.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+struct KdNode {
+    split: f32,
+    link: u32,
+    axis: u8,
+    count: u8,
+}
+
+const _: () = assert!(std::mem::size_of::<KdNode>() == 12);
+
+/// A tile's search tree (items are the tile's photons in stored order).
+#[derive(Clone, Debug)]
+pub struct TileTree {
+    nodes: Vec<KdNode>,
+    /// The photons' 16-bit cells in the tile's box.
+    cells: Vec<[u16; 3]>,
+    quant: BoxQuantizer,
+}
+
+/// A pending item of [`Nearest`]: an index into the tile being searched,
+/// not yet copied out of it.
+const PENDING: u32 = 1 << 31;
+
+/// The `k` nearest photons found so far, none farther than a limit: a
+/// max-heap of (squared distance, item). One heap serves a query across
+/// all the tiles it visits; the records of the photons taken from a tile
+/// are copied out of it once the tile is searched
+/// ([`Nearest::take_records`]), so photons that enter the heap and leave
+/// it again are never read.
+#[derive(Default)]
+pub struct Nearest {
+    k: usize,
+    limit_sq: f32,
+    heap: Vec<(f32, u32)>,
+    records: Vec<PackedPhoton>,
+}
+
+impl Nearest {
+    /// Empty, for the `k` nearest (k > 0) within `limit_sq`.
+    pub fn reset(&mut self, k: usize, limit_sq: f32) {
+        assert!(k > 0, "k nearest with k = 0");
+        self.k = k;
+        self.limit_sq = limit_sq;
+        self.heap.clear();
+        self.records.clear();
+    }
+
+    /// Squared distance beyond which nothing more can be taken.
+    #[inline(always)]
+    pub fn bound_sq(&self) -> f32 {
+        if self.heap.len() < self.k {
+            self.limit_sq
+        } else {
+            self.heap[0].0
+        }
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, d: f32, item: u32) {
+        if self.heap.len() < self.k {
+            if d <= self.limit_sq {
+                self.heap.push((d, item | PENDING));
+                self.sift_up(self.heap.len() - 1);
+            }
+        } else if d < self.heap[0].0 {
+            self.heap[0] = (d, item | PENDING);
+            self.sift_down(0);
+        }
+    }
+
+    fn sift_up(&mut self, mut i: usize) {
+        let h = &mut self.heap;
+        while i > 0 {
+            let parent = (i - 1) / 2;
+            if h[parent].0 >= h[i].0 {
+                break;
+            }
+            h.swap(parent, i);
+            i = parent;
+        }
+    }
+
+    fn sift_down(&mut self, mut i: usize) {
+        let h = &mut self.heap;
+        let n = h.len();
+        loop {
+            let l = 2 * i + 1;
+            if l >= n {
+                break;
+            }
+            let r = l + 1;
+            let c = if r < n && h[r].0 > h[l].0 { r } else { l };
+            if h[c].0 <= h[i].0 {
+                break;
+            }
+            h.swap(c, i);
+            i = c;
+        }
+    }
+
+    /// Copy the records of the photons taken from the tile just searched
+    /// (whose photons are `photons`).
+    pub fn take_records(&mut self, photons: &[PackedPhoton]) {
+        for e in &mut self.heap {
+            if e.1 & PENDING != 0 {
+                self.records.push(photons[(e.1 & !PENDING) as usize]);
+                e.1 = (self.records.len() - 1) as u32;
+            }
+        }
+    }
+
+    /// The photons found (after [`Nearest::take_records`]), nearest first
+    /// when `sorted`, else in heap order.
+    pub fn results(&mut self, sorted: bool) -> impl Iterator<Item = (f32, &PackedPhoton)> {
+        if sorted {
+            self.heap.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        let records = &self.records;
+        self.heap.iter().map(move |&(d, r)| {
+            debug_assert!(r & PENDING == 0, "records not taken");
+            (d, &records[r as usize])
+        })
+    }
+}
+
+/// The traversal state of one side not yet visited.
+#[derive(Clone, Copy)]
+struct Pending {
+    /// Distance from the query to the side's cell, per axis.
+    offset: [f32; 3],
+    distance_sq: f32,
+    node: u32,
+}
+
+impl TileTree {
+    /// The tree over a tile's photons given their Morton `codes` (sorted,
+    /// the order a tile is stored and decoded in) of 16-bit cells in the
+    /// box `quant`.
+    pub fn from_morton(codes: &[u64], quant: &Aabb) -> TileTree {
+        debug_assert!(codes.windows(2).all(|w| w[0] <= w[1]));
+        let mut tree = TileTree {
+            nodes: Vec::with_capacity(4 * codes.len().div_ceil(LEAF) + 1),
+            cells: codes.iter().map(|&c| demorton3(c)).collect(),
+            quant: BoxQuantizer::new(quant),
+        };
+        if !codes.is_empty() {
+            tree.radix(codes, 0, codes.len());
+        }
+        tree.nodes.shrink_to_fit();
+        tree
+    }
+
+    fn radix(&mut self, codes: &[u64], lo: usize, hi: usize) {
+        if hi - lo <= LEAF {
+            self.nodes.push(KdNode {
+                split: 0.0,
+                link: lo as u32,
+                axis: 0,
+                count: (hi - lo) as u8,
+            });
+            return;
+        }
+        let differ = codes[lo] ^ codes[hi - 1];
+        let (mid, axis, split) = if differ == 0 {
+            // A run of equal codes: split it by count, at their position.
+            let mid = lo + (hi - lo) / 2;
+            (mid, 0, self.quant.decode_axis(0, self.cells[mid][0]))
+        } else {
+            let bit = 63 - differ.leading_zeros();
+            let mid = lo + codes[lo..hi].partition_point(|&c| c & (1 << bit) == 0);
+            // Bit `bit` is bit `bit / 3` of axis `bit % 3`: the upper half's
+            // cells on that axis start at the first one's with lower bits
+            // cleared.
+            let (axis, j) = ((bit % 3) as usize, bit / 3);
+            let first = (self.cells[mid][axis] >> j) << j;
+            (mid, axis, self.quant.decode_axis(axis, first))
+        };
+        let at = self.nodes.len();
+        self.nodes.push(KdNode {
+            split,
+            link: 0,
+            axis: axis as u8,
+            count: 0,
+        });
+        self.radix(codes, lo, mid);
+        self.nodes[at].link = self.nodes.len() as u32;
+        self.radix(codes, mid, hi);
+    }
+
+    /// Bytes this tree holds.
+    pub fn heap_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<KdNode>()
+            + self.cells.capacity() * std::mem::size_of::<[u16; 3]>()
+    }
+
+    /// Nodes in the tree.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True for a tree over nothing.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Position of item `i`: its cell decoded, as the tile's decoder gives it.
+    #[inline(always)]
+    fn position(&self, i: usize) -> [f32; 3] {
+        let c = self.cells[i];
+        [
+            self.quant.decode_axis(0, c[0]),
+            self.quant.decode_axis(1, c[1]),
+            self.quant.decode_axis(2, c[2]),
+        ]
+    }
+
+    /// Offer every photon that could be among the nearest to `q` to
+    /// `nearest` (as an index into this tile; then call
+    /// [`Nearest::take_records`] with the tile's photons).
+    pub fn nearest(&self, q: &[f32; 3], nearest: &mut Nearest) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [Pending {
+            offset: [0.0; 3],
+            distance_sq: 0.0,
+            node: 0,
+        }; MAX_DEPTH];
+        let mut top = 0;
+        let mut node = 0usize;
+        let mut offset = [0.0f32; 3];
+        loop {
+            let n = self.nodes[node];
+            if n.count == 0 {
+                let a = n.axis as usize;
+                let diff = q[a] - n.split;
+                let (near, far) = if diff < 0.0 {
+                    (node + 1, n.link as usize)
+                } else {
+                    (n.link as usize, node + 1)
+                };
+                let mut far_offset = offset;
+                far_offset[a] = diff.abs();
+                let far_sq = norm_sq(&far_offset);
+                if far_sq <= nearest.bound_sq() {
+                    stack[top] = Pending {
+                        offset: far_offset,
+                        distance_sq: far_sq,
+                        node: far as u32,
+                    };
+                    top += 1;
+                }
+                node = near;
+                continue;
+            }
+            let lo = n.link as usize;
+            for i in lo..lo + n.count as usize {
+                let d = point_distance_sq(&self.position(i), q);
+                if d <= nearest.bound_sq() {
+                    nearest.offer(d, i as u32);
+                }
+            }
+            // The next side still within reach.
+            loop {
+                if top == 0 {
+                    return;
+                }
+                top -= 1;
+                let p = &stack[top];
+                if p.distance_sq <= nearest.bound_sq() {
+                    (node, offset) = (p.node as usize, p.offset);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Append every photon of `photons` (the tile's, in stored order)
+    /// within `radius_sq` of `q` to `out`.
+    pub fn within(
+        &self,
+        photons: &[PackedPhoton],
+        q: &[f32; 3],
+        radius_sq: f32,
+        out: &mut Vec<(f32, PackedPhoton)>,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [([0.0f32; 3], 0u32); MAX_DEPTH];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (offset, mut node) = (stack[top].0, stack[top].1 as usize);
+            loop {
+                let n = self.nodes[node];
+                if n.count == 0 {
+                    let a = n.axis as usize;
+                    let diff = q[a] - n.split;
+                    let (near, far) = if diff < 0.0 {
+                        (node + 1, n.link)
+                    } else {
+                        (n.link as usize, (node + 1) as u32)
+                    };
+                    let mut far_offset = offset;
+                    far_offset[a] = diff.abs();
+                    if norm_sq(&far_offset) <= radius_sq {
+                        stack[top] = (far_offset, far);
+                        top += 1;
+                    }
+                    node = near;
+                    continue;
+                }
+                let lo = n.link as usize;
+                for (i, p) in photons[lo..lo + n.count as usize].iter().enumerate() {
+                    let d = point_distance_sq(&self.position(lo + i), q);
+                    if d <= radius_sq {
+                        out.push((d, *p));
+                    }
+                }
+                break;
+            }
+        }
+    }
+}
+
+// ----------------------------------------------------------- tile boxes
+/// A child of a node: another node, or a leaf's run of items.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Child {
+    Node(u32),
+    Leaf { start: u32, count: u32 },
+}
+
+/// An internal node: both children's boxes, so one cache line decides
+/// which to visit. A child with `count[i] > 0` is a leaf of `count[i]`
+/// items from `child[i]`; `child[i] == NONE` is no child (an empty box,
+/// min +inf and max -inf, infinitely far from every point); otherwise
+/// `child[i]` is a node.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node {
+    min: [[f32; 3]; 2],
+    max: [[f32; 3]; 2],
+    child: [u32; 2],
+    count: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == 64);
+
+/// [`Node::child`] of a missing child.
+const NONE: u32 = u32::MAX;
+
+impl Node {
+    #[inline(always)]
+    fn distance_sq(&self, i: usize, q: &[f32; 3]) -> f32 {
+        let mut s = 0.0f32;
+        for (a, &qa) in q.iter().enumerate() {
+            let d = (self.min[i][a] - qa).max(qa - self.max[i][a]).max(0.0);
+            s += d * d;
+        }
+        s
+    }
+
+    #[inline(always)]
+    fn child(&self, i: usize) -> Child {
+        if self.count[i] > 0 {
+            Child::Leaf {
+                start: self.child[i],
+                count: self.count[i],
+            }
+        } else if self.child[i] == NONE {
+            Child::Leaf { start: 0, count: 0 }
+        } else {
+            Child::Node(self.child[i])
+        }
+    }
+
+    fn set(&mut self, i: usize, b: &Aabb, c: Child) {
+        self.min[i] = b.min.to_array();
+        self.max[i] = b.max.to_array();
+        (self.child[i], self.count[i]) = match c {
+            Child::Node(n) => (n, 0),
+            Child::Leaf { start, count } => (start, count),
+        };
+    }
+
+    const EMPTY: Node = Node {
+        min: [[f32::INFINITY; 3]; 2],
+        max: [[f32::NEG_INFINITY; 3]; 2],
+        child: [NONE; 2],
+        count: [0; 2],
+    };
+}
+
+/// A bounding-volume hierarchy over boxes, in pre-order.
+#[derive(Clone, Debug, Default)]
+pub struct BoxTree {
+    nodes: Vec<Node>,
+}
+
+impl BoxTree {
+    /// A tree over `boxes` with one box per leaf (items index `boxes`).
+    pub fn over_boxes(boxes: &[Aabb]) -> BoxTree {
+        let mut items: Vec<(Vec3, u32)> = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| ((b.min + b.max) * 0.5, i as u32))
+            .collect();
+        let mut tree = BoxTree {
+            nodes: Vec::with_capacity(boxes.len()),
+        };
+        if !items.is_empty() {
+            tree.nodes.push(Node::EMPTY);
+            let (b, c) = tree.median(boxes, &mut items);
+            tree.nodes[0].set(0, &b, c);
+        }
+        tree
+    }
+
+    fn median(&mut self, boxes: &[Aabb], items: &mut [(Vec3, u32)]) -> (Aabb, Child) {
+        if items.len() == 1 {
+            let i = items[0].1;
+            return (boxes[i as usize], Child::Leaf { start: i, count: 1 });
+        }
+        let mut centres = Aabb::EMPTY;
+        for (c, _) in items.iter() {
+            centres.grow(*c);
+        }
+        let axis = (centres.max - centres.min).max_position();
+        let mid = items.len() / 2;
+        items.select_nth_unstable_by(mid, |x, y| {
+            x.0[axis].total_cmp(&y.0[axis]).then(x.1.cmp(&y.1))
+        });
+        let (l, r) = items.split_at_mut(mid);
+        let at = self.nodes.len();
+        self.nodes.push(Node::EMPTY);
+        let (bl, cl) = self.median(boxes, l);
+        let (br, cr) = self.median(boxes, r);
+        self.nodes[at].set(0, &bl, cl);
+        self.nodes[at].set(1, &br, cr);
+        (bl.union(&br), Child::Node(at as u32))
+    }
+
+    /// Bytes this tree holds.
+    pub fn heap_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node>()
+    }
+
+    /// Items whose leaf box lies within `bound_sq(…)` of `q`, nearest box
+    /// first: `visit(box distance², item)` is called in that order and
+    /// returns the bound for the rest (it may shrink as results come in).
+    /// Stops at the first box beyond the bound. `heap` is scratch.
+    pub fn nearest_leaves<E>(
+        &self,
+        q: &[f32; 3],
+        mut bound_sq: f32,
+        heap: &mut Vec<(f32, u32)>,
+        mut visit: impl FnMut(f32, u32) -> Result<f32, E>,
+    ) -> Result<(), E> {
+        heap.clear();
+        if self.nodes.is_empty() {
+            return Ok(());
+        }
+        // Heap entries: a node as its index, a leaf item with the top bit.
+        const ITEM: u32 = 1 << 31;
+        push_min(heap, (0.0, 0));
+        while let Some((d, e)) = pop_min(heap) {
+            if d > bound_sq {
+                break;
+            }
+            if e & ITEM != 0 {
+                bound_sq = visit(d, e & !ITEM)?;
+                continue;
+            }
+            let n = &self.nodes[e as usize];
+            for i in 0..2 {
+                let dc = n.distance_sq(i, q);
+                if dc > bound_sq {
+                    continue;
+                }
+                match n.child(i) {
+                    Child::Node(c) => push_min(heap, (dc, c)),
+                    Child::Leaf { start, count } => {
+                        for item in start..start + count {
+                            push_min(heap, (dc, item | ITEM));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Order of the tile-box heap: distance, then node (deterministic ties).
+#[inline(always)]
+fn before(a: (f32, u32), b: (f32, u32)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+}
+
+fn push_min(h: &mut Vec<(f32, u32)>, v: (f32, u32)) {
+    h.push(v);
+    let mut i = h.len() - 1;
+    while i > 0 {
+        let parent = (i - 1) / 2;
+        if !before(h[i], h[parent]) {
+            break;
+        }
+        h.swap(i, parent);
+        i = parent;
+    }
+}
+
+fn pop_min(h: &mut Vec<(f32, u32)>) -> Option<(f32, u32)> {
+    if h.is_empty() {
+        return None;
+    }
+    let last = h.len() - 1;
+    h.swap(0, last);
+    let v = h.pop();
+    let n = h.len();
+    let mut i = 0;
+    loop {
+        let l = 2 * i + 1;
+        if l >= n {
+            break;
+        }
+        let r = l + 1;
+        let c = if r < n && before(h[r], h[l]) { r } else { l };
+        if !before(h[c], h[i]) {
+            break;
+        }
+        h.swap(c, i);
+        i = c;
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::morton::morton3;
+    use crate::rng::Pcg32;
+    use crate::store::codec::BoxQuantizer;
+
+    /// Photons on a 16-bit grid in the unit cube, a third of them on one
+    /// plane and some exact duplicates, sorted by Morton code as a tile is.
+    const UNIT: Aabb = Aabb {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+    };
+
+    /// Photons and their codes, as a tile decodes them.
+    fn tile(n: usize, seed: u64) -> (Vec<u64>, Vec<PackedPhoton>) {
+        let mut rng = Pcg32::new(seed, 1);
+        let q = BoxQuantizer::new(&UNIT);
+        let mut v: Vec<(u64, PackedPhoton)> = Vec::with_capacity(n);
+        for i in 0..n {
+            let p = if i % 17 == 5 && i > 0 {
+                v[i / 2].1.position
+            } else {
+                let z = if rng.uniform_f32() < 0.3 {
+                    0.25
+                } else {
+                    rng.uniform_f32()
+                };
+                [rng.uniform_f32(), rng.uniform_f32(), z]
+            };
+            let code = morton3(q.encode(p));
+            let position = q.decode(crate::morton::demorton3(code)).to_array();
+            v.push((
+                code,
+                PackedPhoton {
+                    position,
+                    power: i as f32,
+                    ..Default::default()
+                },
+            ));
+        }
+        v.sort_by_key(|x| x.0);
+        v.into_iter().unzip()
+    }
+
+    fn brute(photons: &[PackedPhoton], q: &[f32; 3]) -> Vec<f32> {
+        let mut d: Vec<f32> = photons
+            .iter()
+            .map(|p| point_distance_sq(&p.position, q))
+            .collect();
+        d.sort_by(f32::total_cmp);
+        d
+    }
+
+    #[test]
+    fn nearest_equals_brute_force() {
+        for (n, seed) in [(1, 1), (LEAF, 2), (LEAF + 1, 3), (1000, 4), (20_000, 5)] {
+            let (codes, photons) = tile(n, seed);
+            let tree = TileTree::from_morton(&codes, &UNIT);
+            let mut rng = Pcg32::new(seed, 9);
+            let mut nearest = Nearest::default();
+            for _ in 0..200 {
+                let q = [
+                    rng.uniform_f32() * 1.4 - 0.2,
+                    rng.uniform_f32() * 1.4 - 0.2,
+                    rng.uniform_f32() * 1.4 - 0.2,
+                ];
+                let all = brute(&photons, &q);
+                for (k, limit) in [(1, f32::INFINITY), (50, f32::INFINITY), (200, 0.01)] {
+                    nearest.reset(k, limit);
+                    tree.nearest(&q, &mut nearest);
+                    nearest.take_records(&photons);
+                    let got: Vec<f32> = nearest.results(true).map(|x| x.0).collect();
+                    let want: Vec<f32> = all
+                        .iter()
+                        .copied()
+                        .filter(|&d| d <= limit)
+                        .take(k)
+                        .collect();
+                    assert_eq!(got, want, "n {n} k {k} limit {limit} at {q:?}");
+                    // Each photon is taken once.
+                    let mut ids: Vec<u32> =
+                        nearest.results(false).map(|x| x.1.power as u32).collect();
+                    ids.sort_unstable();
+                    ids.dedup();
+                    assert_eq!(ids.len(), got.len());
+                }
+                let r_sq = 0.02;
+                let mut out = Vec::new();
+                tree.within(&photons, &q, r_sq, &mut out);
+                let mut got: Vec<f32> = out.iter().map(|x| x.0).collect();
+                got.sort_by(f32::total_cmp);
+                let want: Vec<f32> = all.iter().copied().filter(|&d| d <= r_sq).collect();
+                assert_eq!(got, want, "radius, n {n} at {q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn leaves_cover_each_photon_once_and_planes_separate_the_sides() {
+        let (codes, photons) = tile(5000, 7);
+        let tree = TileTree::from_morton(&codes, &UNIT);
+        let mut seen = vec![0u8; photons.len()];
+        /// The items under node `i`, checking each plane against them.
+        fn walk(
+            t: &TileTree,
+            i: usize,
+            photons: &[PackedPhoton],
+            seen: &mut [u8],
+        ) -> (usize, Vec<usize>) {
+            let n = t.nodes[i];
+            if n.count > 0 {
+                assert!(n.count as usize <= LEAF);
+                let items: Vec<usize> =
+                    (n.link as usize..(n.link + n.count as u32) as usize).collect();
+                for &j in &items {
+                    seen[j] += 1;
+                    assert_eq!(t.position(j), photons[j].position);
+                }
+                return (1, items);
+            }
+            let (cl, left) = walk(t, i + 1, photons, seen);
+            let (cr, right) = walk(t, n.link as usize, photons, seen);
+            let a = n.axis as usize;
+            assert!(left.iter().all(|&j| photons[j].position[a] <= n.split));
+            assert!(right.iter().all(|&j| photons[j].position[a] >= n.split));
+            (1 + cl + cr, left.into_iter().chain(right).collect())
+        }
+        let (count, _) = walk(&tree, 0, &photons, &mut seen);
+        assert_eq!(count, tree.len(), "every node is reachable once");
+        assert!(seen.iter().all(|&s| s == 1));
+    }
+
+    #[test]
+    fn box_index_visits_boxes_nearest_first_and_finds_every_box_in_range() {
+        let mut rng = Pcg32::new(3, 3);
+        let boxes: Vec<Aabb> = (0..500)
+            .map(|_| {
+                let c = Vec3::new(rng.uniform_f32(), rng.uniform_f32(), rng.uniform_f32()) * 10.0;
+                let h = Vec3::new(rng.uniform_f32(), rng.uniform_f32(), rng.uniform_f32());
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let tree = BoxTree::over_boxes(&boxes);
+        let mut heap = Vec::new();
+        for _ in 0..100 {
+            let q = Vec3::new(rng.uniform_f32(), rng.uniform_f32(), rng.uniform_f32()) * 12.0;
+            let r_sq = 4.0;
+            let mut got = Vec::new();
+            tree.nearest_leaves::<()>(&q.to_array(), r_sq, &mut heap, |d, i| {
+                got.push((d, i));
+                Ok(r_sq)
+            })
+            .unwrap();
+            assert!(got.windows(2).all(|w| w[0].0 <= w[1].0), "nearest first");
+            let mut ids: Vec<u32> = got.iter().map(|x| x.1).collect();
+            ids.sort_unstable();
+            let want: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| boxes[i as usize].distance_sq(q) <= r_sq)
+                .collect();
+            assert_eq!(ids, want);
+        }
+    }
+}
