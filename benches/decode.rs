@@ -1,11 +1,13 @@
 //! Tile decode speed (one core): zstd + unshuffle + dequantise, then the
-//! full tile load (decode and k-d tree build), on a 64-band water map.
+//! full tile load (decode and the tile's search tree; and, for comparison,
+//! decode and a kiddo tree), on a 64-band water map.
 
 mod common;
 
 use common::*;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use littoral::store::codec::{TileDecoder, RECORD_BYTES};
+use littoral::store::tiletree::TileTree;
 use littoral::store::MapFile;
 
 fn decode(c: &mut Criterion) {
@@ -27,7 +29,15 @@ fn decode(c: &mut Criterion) {
     g.bench_function("decode_no_checksum", |b| {
         b.iter(|| dec.decode_unchecked(file.blob(t), &e, &mut out).unwrap())
     });
+    // A cache miss: the decode and the tile's tree, cut from its codes.
     g.bench_function("decode_and_build_tree", |b| {
+        b.iter(|| {
+            file.decode_tile(t, &mut dec, &mut out).unwrap();
+            TileTree::from_morton(dec.codes(), &e.quant)
+        })
+    });
+    // What a miss cost before: a kiddo tree built over the decoded positions.
+    g.bench_function("decode_and_build_kiddo_tree", |b| {
         b.iter(|| {
             file.decode_tile(t, &mut dec, &mut out).unwrap();
             let pts: Vec<[f32; 3]> = out.iter().map(|p| p.position).collect();

@@ -13,7 +13,7 @@ use littoral::store::codec::TileDecoder;
 use littoral::store::memory::InMemoryMap;
 use littoral::store::tiletree::TileTree;
 use littoral::store::MapFile;
-use littoral::store::{PhotonMap, PhotonQuery, Search};
+use littoral::store::{Neighbour, PhotonMap, PhotonQuery, Search};
 use std::num::NonZeroUsize;
 
 const PHOTONS: u64 = 10_000_000;
@@ -45,9 +45,11 @@ fn knn(c: &mut Criterion) {
         let mut dec = TileDecoder::default();
         let mut tile = Vec::new();
         let mut points: Vec<[f32; 3]> = Vec::with_capacity(PHOTONS as usize);
+        let mut photons = Vec::with_capacity(PHOTONS as usize);
         for t in 0..file.tiles().len() as u32 {
             file.decode_tile(t, &mut dec, &mut tile).unwrap();
             points.extend(tile.iter().map(|p| p.position));
+            photons.extend_from_slice(&tile);
         }
         let tree: kiddo::ImmutableKdTree<f32, 3> =
             kiddo::ImmutableKdTree::new_from_slice(&points).unwrap();
@@ -64,6 +66,33 @@ fn knn(c: &mut Criterion) {
                                 .nearest_n::<kiddo::SquaredEuclidean<f32>>(k)
                                 .execute()
                                 .len()
+                        })
+                        .sum::<usize>()
+                })
+            });
+        }
+        // (a1) the same tree returning the photons, as the store does:
+        // records gathered and unpacked, nearest first.
+        for (name, pts) in [
+            ("a1_kiddo_photons_random", &random),
+            ("a1_kiddo_photons_coherent", &ordered),
+            ("a1_kiddo_photons_image_tiles", &image_tiles),
+        ] {
+            g.bench_function(name, |b| {
+                b.iter(|| {
+                    pts.iter()
+                        .map(|p| {
+                            let found: Vec<Neighbour> = tree
+                                .query(&p.to_array())
+                                .nearest_n::<kiddo::SquaredEuclidean<f32>>(k)
+                                .execute()
+                                .into_iter()
+                                .map(|r| Neighbour {
+                                    photon: photons[r.item as usize].unpack(),
+                                    distance_sq: r.distance,
+                                })
+                                .collect();
+                            found.len()
                         })
                         .sum::<usize>()
                 })
