@@ -318,15 +318,17 @@ impl WaterModel {
         bp_550: Option<f64>,
         band: usize,
     ) -> Iop {
+        // Both chlorophyll power laws through one logarithm, as `iops` does.
+        let ln_chl = if c.chl > 0.0 { c.chl.ln() } else { 0.0 };
         let a_phi = if c.chl > 0.0 {
-            s.a_phi_a[band] * c.chl.powf(s.a_phi_e[band])
+            s.a_phi_a[band] * (s.a_phi_e[band] * ln_chl).exp()
         } else {
             0.0
         };
         let a =
             s.a_w[band] + a_phi + c.cdom_440 * s.cdom_shape[band] + c.nap_440 * s.nap_shape[band];
         let bp550 = bp_550.unwrap_or(if c.chl > 0.0 {
-            0.30 * c.chl.powf(0.62)
+            0.30 * (0.62 * ln_chl).exp()
         } else {
             0.0
         });

@@ -320,5 +320,41 @@ fn solve_increasing(
     x
 }
 
+/// As [`solve_increasing`], for an `f` whose Newton steps converge
+/// quadratically from the start: a Newton step of at most `last_step`
+/// (whose square is below the wanted precision) is the last one.
+fn solve_increasing_quadratic(
+    mut lo: f64,
+    mut hi: f64,
+    x0: f64,
+    last_step: f64,
+    tol: f64,
+    f: impl Fn(f64) -> (f64, f64),
+) -> f64 {
+    let mut x = x0.clamp(lo, hi);
+    for _ in 0..200 {
+        let (fx, dfx) = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if fx < 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let newton = x - fx / dfx;
+        let (next, converging) = if dfx > 0.0 && newton > lo && newton < hi {
+            (newton, (newton - x).abs() <= last_step)
+        } else {
+            (0.5 * (lo + hi), false)
+        };
+        if converging || (next - x).abs() <= tol || hi - lo <= tol {
+            return next;
+        }
+        x = next;
+    }
+    x
+}
+
 #[cfg(test)]
 mod tests;

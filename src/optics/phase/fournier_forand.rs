@@ -10,7 +10,7 @@
 use std::ops::RangeInclusive;
 use std::sync::Arc;
 
-use super::{solve_increasing, FOUR_PI, S2_MIN, TWO_PI};
+use super::{solve_increasing_quadratic, FOUR_PI, S2_MIN, TWO_PI};
 use crate::error::{Error, Result};
 
 /// Backscatter fractions [`super::PhaseFunction::fournier_forand`] accepts: the range
@@ -22,7 +22,7 @@ const FF_SERIES_RADIUS: f64 = 0.05;
 /// Series terms: 0.05^16 is far below f64 round-off.
 const FF_SERIES_TERMS: usize = 18;
 /// Nodes of the sampler's starting table, even in ln sin^2(psi/2).
-const FF_GUIDE_NODES: usize = 129;
+const FF_GUIDE_NODES: usize = 4097;
 /// Simpson intervals for the mean cosine.
 const FF_MEAN_INTERVALS: usize = 4096;
 
@@ -162,7 +162,11 @@ impl FournierForand {
         if v >= 1.0 {
             return -1.0;
         }
-        let ln_v = v.ln();
+        1.0 - 2.0 * self.sample_ln_s2(v.ln()).exp()
+    }
+
+    /// ln s2 at which ln P(<psi) = `ln_v`, for ln cdf_min < ln_v < 0.
+    fn sample_ln_s2(&self, ln_v: f64) -> f64 {
         let guide = &self.guide_ln_cdf;
         let last = guide.len() - 1;
         // guide[0] = ln cdf_min < ln_v < 0 = guide[last], so i is in 1..=last.
@@ -176,13 +180,14 @@ impl FournierForand {
             0.5 * (t_lo + t_hi)
         };
         // ln P is nearly linear in ln s2 (P ~ s2^-nu near the peak), so Newton
-        // on it converges in a few steps; dP/d ln s2 = 4 pi s2 p.
-        let tau = solve_increasing(t_lo, t_hi, t0, 1e-13, |t| {
+        // on it converges in a few steps; dP/d ln s2 = 4 pi s2 p. A Newton
+        // step below 1e-7 leaves an error of order its square (1e-14 in
+        // ln s2, round-off for the s2 it gives), so it is taken as the last.
+        solve_increasing_quadratic(t_lo, t_hi, t0, 1e-7, 1e-13, |t| {
             let s2 = t.exp();
             let cdf = self.shape.cdf(s2);
             (cdf.ln() - ln_v, FOUR_PI * s2 * self.shape.density(s2) / cdf)
-        });
-        1.0 - 2.0 * tau.exp()
+        })
     }
 }
 
