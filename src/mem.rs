@@ -39,7 +39,7 @@ pub const MMAP_THRESHOLD: usize = 256 << 10;
 
 /// Fix glibc's mmap threshold at [`MMAP_THRESHOLD`]. By default glibc
 /// raises the threshold (up to 32 MiB) each time a mapped block is freed,
-/// after which tile-sized buffers (decoded photons and k-d trees, 1-2 MiB
+/// after which tile-sized buffers (decoded photons and their search trees, 1-2 MiB
 /// each) come from the heap arenas, where a cache that keeps evicting and
 /// decoding tiles fragments them: rendering a 47 M-photon map under a
 /// 256 MiB budget peaked at 333 MiB of anonymous memory with 245 MiB of

@@ -17,7 +17,8 @@ use crate::error::{Error, Result};
 use crate::photon::{PackedPhoton, Photon, LAYERS};
 use crate::spectral::BandGrid;
 use glam::Vec3;
-use kiddo::ImmutableKdTree;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use std::num::NonZeroUsize;
 
 /// One layer's photons and their k-d tree (items index `photons`).
 struct Layer {
@@ -43,7 +44,7 @@ impl Layer {
     /// (squared distance, photon).
     fn search(&self, at: Vec3, k: usize, limit_sq: f32, out: &mut Vec<(f32, PackedPhoton)>) {
         let Some(tree) = &self.tree else { return };
-        let found = super::query::search_tree(tree, &at.to_array(), k, limit_sq, true);
+        let found = search_tree(tree, &at.to_array(), k, limit_sq, true);
         out.extend(
             found
                 .into_iter()
@@ -183,5 +184,31 @@ impl PhotonQuery for InMemoryMap {
         self.layers
             .get(layer as usize)
             .map_or(0, |l| l.photons.len() as u64)
+    }
+}
+
+/// One k-d tree's photons within `bound_sq` of `q` (all of them for
+/// `k == usize::MAX`, else the `k` nearest), nearest first when `sorted`;
+/// items index the tree's points.
+fn search_tree(
+    tree: &ImmutableKdTree<f32, 3>,
+    q: &[f32; 3],
+    k: usize,
+    bound_sq: f32,
+    sorted: bool,
+) -> Vec<kiddo::QueryResultItem<(), u32, f32>> {
+    if k == usize::MAX {
+        return tree
+            .query(q)
+            .within::<SquaredEuclidean<f32>>(bound_sq)
+            .unsorted()
+            .execute();
+    }
+    let want = NonZeroUsize::new(k).expect("k > 0");
+    let nearest = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(want);
+    match (bound_sq.is_finite(), sorted) {
+        (true, false) => nearest.within(bound_sq).unsorted().execute(),
+        (true, true) => nearest.within(bound_sq).execute(),
+        (false, _) => nearest.execute(),
     }
 }

@@ -4,9 +4,9 @@
 //! visits the tiles whose boxes meet its search sphere, nearest box first,
 //! searching each tile's own tree (`store::tiletree`); a kNN query keeps
 //! one heap of the k nearest across tiles and stops when the next box is
-//! farther than its current k-th neighbour. The
-//! results are those of one k-d tree over every photon of the map (up to
-//! the order of photons at exactly equal distance). Each query pins one
+//! farther than its current k-th neighbour. The results are those of one
+//! exact search over every photon of the map (up to the order of photons
+//! at exactly equal distance). Each query pins one
 //! tile at a time, which is what lets the cache stay inside its budget.
 //!
 //! [`PhotonQuery`] is the interface the estimator sees; [`PhotonMap`] (a
@@ -25,9 +25,7 @@ use crate::store::cache::{CacheStats, TileCache};
 use crate::store::tiletree::{BoxTree, Nearest};
 use crate::store::MapFile;
 use glam::Vec3;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use std::num::NonZeroUsize;
 
 /// One neighbour of a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,32 +133,6 @@ pub trait PhotonQuery: Sync {
         let mut out = Vec::new();
         self.query_into(at, Some(layer), search, &mut out)?;
         Ok(out)
-    }
-}
-
-/// One k-d tree's photons within `bound_sq` of `q` (all of them for
-/// `k == usize::MAX`, else the `k` nearest), nearest first when `sorted`;
-/// items index the tree's points.
-pub(super) fn search_tree(
-    tree: &ImmutableKdTree<f32, 3>,
-    q: &[f32; 3],
-    k: usize,
-    bound_sq: f32,
-    sorted: bool,
-) -> Vec<kiddo::QueryResultItem<(), u32, f32>> {
-    if k == usize::MAX {
-        return tree
-            .query(q)
-            .within::<SquaredEuclidean<f32>>(bound_sq)
-            .unsorted()
-            .execute();
-    }
-    let want = NonZeroUsize::new(k).expect("k > 0");
-    let nearest = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(want);
-    match (bound_sq.is_finite(), sorted) {
-        (true, false) => nearest.within(bound_sq).unsorted().execute(),
-        (true, true) => nearest.within(bound_sq).execute(),
-        (false, _) => nearest.execute(),
     }
 }
 

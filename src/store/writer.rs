@@ -47,7 +47,7 @@ pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
 
 /// Photons per tile the writer aims for when the budget allows: large
 /// enough that per-tile overhead is small, small enough that the cache can
-/// page tiles at a fine grain (about 3 MiB decoded with its k-d tree).
+/// page tiles at a fine grain (about 2 MiB decoded with its search tree).
 pub const DEFAULT_TILE_PHOTONS: u32 = 65_536;
 
 /// How a memory budget is divided while writing a map.
