@@ -189,7 +189,35 @@ struct Scratch {
     decompressor: zstd::bulk::Decompressor<'static>,
     frame: Vec<u8>,
     payload: Vec<u8>,
+    /// A chunk's records byte-shuffled (at most one chunk, 128 KiB).
+    planes: Vec<u8>,
     frames_written: u64,
+}
+
+/// Byte `k` of every 32-byte record of `records` into plane `k` of `planes`:
+/// the slowly varying bytes of positions, ids, bands and powers of photons
+/// that arrived together form runs that zstd removes. The full-precision
+/// positions' low bytes stay incompressible, so this gains only about 7 %
+/// (the built-in scene at 32 M photons spills 962 MB instead of 1034 MB).
+fn shuffle(records: &[u8], planes: &mut Vec<u8>) {
+    let n = records.len() / STAGED;
+    planes.clear();
+    planes.resize(records.len(), 0);
+    for (i, rec) in records.chunks_exact(STAGED).enumerate() {
+        for (k, &b) in rec.iter().enumerate() {
+            planes[k * n + i] = b;
+        }
+    }
+}
+
+/// Inverse of [`shuffle`].
+fn unshuffle(planes: &[u8], records: &mut [u8]) {
+    let n = planes.len() / STAGED;
+    for (i, rec) in records.chunks_exact_mut(STAGED).enumerate() {
+        for (k, b) in rec.iter_mut().enumerate() {
+            *b = planes[k * n + i];
+        }
+    }
 }
 
 impl Scratch {
@@ -218,8 +246,9 @@ impl Scratch {
             let bound = zstd::zstd_safe::compress_bound(chunk.len() * STAGED);
             self.payload.clear();
             self.payload.reserve(bound);
+            shuffle(bytemuck::cast_slice(&chunk), &mut self.planes);
             self.compressor
-                .compress_to_buffer(bytemuck::cast_slice(&chunk), &mut self.payload)
+                .compress_to_buffer(&self.planes, &mut self.payload)
                 .map_err(|e| self.err("compress spill", e))?;
             self.frame.extend_from_slice(&self.payload);
             crate::output::write_all_at(&self.file, &self.frame, self.len)
@@ -253,18 +282,20 @@ impl Scratch {
             len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
             count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
         };
-        out.clear();
-        out.resize(f.count as usize, StagedPhoton::zeroed());
+        let expected = f.count as usize * STAGED;
+        self.planes.clear();
+        // One spare byte tells a frame of exactly `expected` bytes from a longer one.
+        self.planes.reserve_exact(expected + 1);
         let got = self
             .decompressor
-            .decompress_to_buffer(
-                &self.frame[FRAME_LINK..],
-                bytemuck::cast_slice_mut::<_, u8>(out),
-            )
+            .decompress_to_buffer(&self.frame[FRAME_LINK..], &mut self.planes)
             .map_err(|e| self.err("decompress spill", e))?;
-        if got != f.count as usize * STAGED {
+        if got != expected {
             return Err(self.err("read", bad("spill frame length")));
         }
+        out.clear();
+        out.resize(f.count as usize, StagedPhoton::zeroed());
+        unshuffle(&self.planes, bytemuck::cast_slice_mut::<_, u8>(out));
         Ok((prev.count > 0).then_some(prev))
     }
 
@@ -353,6 +384,7 @@ impl MapWriter {
                 decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
                 frame: Vec::new(),
                 payload: Vec::new(),
+                planes: Vec::new(),
                 frames_written: 0,
             },
             summary: WriteSummary::default(),
