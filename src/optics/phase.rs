@@ -288,36 +288,8 @@ fn rayleigh_sample_cos(q: f64, u: f64) -> f64 {
 /// Newton steps, replaced by bisection whenever a step would leave the
 /// shrinking bracket; stops when a step or the bracket is below `tol`.
 /// `f` returns (value, derivative).
-fn solve_increasing(
-    mut lo: f64,
-    mut hi: f64,
-    x0: f64,
-    tol: f64,
-    f: impl Fn(f64) -> (f64, f64),
-) -> f64 {
-    let mut x = x0.clamp(lo, hi);
-    for _ in 0..200 {
-        let (fx, dfx) = f(x);
-        if fx == 0.0 {
-            return x;
-        }
-        if fx < 0.0 {
-            lo = x;
-        } else {
-            hi = x;
-        }
-        let newton = x - fx / dfx;
-        let next = if dfx > 0.0 && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
-        if (next - x).abs() <= tol || hi - lo <= tol {
-            return next;
-        }
-        x = next;
-    }
-    x
+fn solve_increasing(lo: f64, hi: f64, x0: f64, tol: f64, f: impl Fn(f64) -> (f64, f64)) -> f64 {
+    solve_increasing_quadratic(lo, hi, x0, 0.0, tol, f)
 }
 
 /// As [`solve_increasing`], for an `f` whose Newton steps converge

@@ -72,6 +72,25 @@ struct KdNode {
 
 const _: () = assert!(std::mem::size_of::<KdNode>() == 12);
 
+impl KdNode {
+    /// For this internal node at index `node`: the side holding `q`, the
+    /// other side, and the per-axis distance from `q` to the other side's
+    /// cell, given `offset`, the distance to this node's cell.
+    #[inline(always)]
+    fn sides(&self, node: usize, q: &[f32; 3], offset: &[f32; 3]) -> (usize, usize, [f32; 3]) {
+        let a = self.axis as usize;
+        let diff = q[a] - self.split;
+        let (near, far) = if diff < 0.0 {
+            (node + 1, self.link as usize)
+        } else {
+            (self.link as usize, node + 1)
+        };
+        let mut far_offset = *offset;
+        far_offset[a] = diff.abs();
+        (near, far, far_offset)
+    }
+}
+
 /// A tile's search tree (items are the tile's photons in stored order).
 #[derive(Clone, Debug)]
 pub struct TileTree {
@@ -296,15 +315,7 @@ impl TileTree {
         loop {
             let n = self.nodes[node];
             if n.count == 0 {
-                let a = n.axis as usize;
-                let diff = q[a] - n.split;
-                let (near, far) = if diff < 0.0 {
-                    (node + 1, n.link as usize)
-                } else {
-                    (n.link as usize, node + 1)
-                };
-                let mut far_offset = offset;
-                far_offset[a] = diff.abs();
+                let (near, far, far_offset) = n.sides(node, q, &offset);
                 let far_sq = norm_sq(&far_offset);
                 if far_sq <= nearest.bound_sq() {
                     stack[top] = Pending {
@@ -359,17 +370,9 @@ impl TileTree {
             loop {
                 let n = self.nodes[node];
                 if n.count == 0 {
-                    let a = n.axis as usize;
-                    let diff = q[a] - n.split;
-                    let (near, far) = if diff < 0.0 {
-                        (node + 1, n.link)
-                    } else {
-                        (n.link as usize, (node + 1) as u32)
-                    };
-                    let mut far_offset = offset;
-                    far_offset[a] = diff.abs();
+                    let (near, far, far_offset) = n.sides(node, q, &offset);
                     if norm_sq(&far_offset) <= radius_sq {
-                        stack[top] = (far_offset, far);
+                        stack[top] = (far_offset, far as u32);
                         top += 1;
                     }
                     node = near;
