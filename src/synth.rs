@@ -144,7 +144,7 @@ impl PhotonSource for SynthSource {
     fn generate(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
         out.extend(range.map(|i| {
             let (photon, layer) = self.photon_and_layer(i);
-            StagedPhoton::new(&photon, layer, i)
+            StagedPhoton::new(&photon, layer)
         }));
     }
 

@@ -40,7 +40,7 @@ fn tile_bytes_bounds_photons_and_tree() {
     let mut decoder = TileDecoder::default();
     for n in [1usize, 17, 33, 1000, 4097, 65_536, 131_000] {
         let staged: Vec<StagedPhoton> = (0..n)
-            .map(|i| {
+            .map(|_| {
                 // Many share one z, as on a flat floor.
                 let z = if rng.uniform_f32() < 0.3 {
                     -10.0
@@ -54,7 +54,7 @@ fn tile_bytes_bounds_photons_and_tree() {
                     power: 1.0,
                     group: 0,
                 };
-                StagedPhoton::new(&p, 0, i as u64)
+                StagedPhoton::new(&p, 0)
             })
             .collect();
         let tile = encoder.encode(&staged).unwrap();

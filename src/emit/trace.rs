@@ -79,7 +79,6 @@ struct Branch {
 /// What a path shares between its branches.
 struct Path<'a> {
     scene: &'a Scene,
-    index: u64,
     band: usize,
     power: f32,
     group: u8,
@@ -108,7 +107,6 @@ pub fn trace(
     let (sx, sy) = (d.size_m[0], d.size_m[1]);
     let mut path = Path {
         scene,
-        index,
         band,
         power,
         group: crate::photon::group_of_path(index),
@@ -174,7 +172,6 @@ impl Path<'_> {
                 group: self.group,
             },
             layer,
-            (self.index << 20) | (self.events as u64),
         ));
     }
 

@@ -1,9 +1,9 @@
 //! Tile blob codec: sorted, quantised, byte-shuffled, zstd-compressed records.
 //!
 //! A tile's photons are quantised to 16 bits per axis inside the tile's box,
-//! sorted by the Morton code of the quantised position (ties by photon id, so
-//! the order — and the blob — is a pure function of the photon set), and laid
-//! out as 16-byte records:
+//! sorted by the Morton code of the quantised position (ties by the rest of
+//! the staged record, so the order — and the blob — is a pure function of
+//! the multiset of photons), and laid out as 16-byte records:
 //!
 //! | bytes | field |
 //! |---|---|
@@ -31,24 +31,24 @@ pub const RECORD_BYTES: usize = 16;
 /// MB-sized tiles of shuffled records and cost compression speed.
 pub const ZSTD_LEVEL: i32 = 1;
 
-/// A photon on its way from the emitter to the map: full-precision position,
-/// encoded direction, and the id that breaks ties in the tile sort.
+/// A photon on its way from the emitter to the map: f32 position (snapped
+/// by the map writer to the map's spill grid, see `spill::SnapGrid`),
+/// encoded direction, band and group, layer and power. Nothing else: the
+/// map is a function of the multiset of these records, whatever order or
+/// thread they came from.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct StagedPhoton {
     pub photon: PackedPhoton,
-    /// Unique within a map; photons are sorted by it where positions tie.
-    pub id: u64,
 }
 
-const _: () = assert!(std::mem::size_of::<StagedPhoton>() == 32);
+const _: () = assert!(std::mem::size_of::<StagedPhoton>() == 24);
 
 impl StagedPhoton {
-    /// Stage a photon of `layer` with its unique id.
-    pub fn new(p: &Photon, layer: u16, id: u64) -> Self {
+    /// Stage a photon of `layer`.
+    pub fn new(p: &Photon, layer: u16) -> Self {
         StagedPhoton {
             photon: PackedPhoton::pack(p, layer),
-            id,
         }
     }
 
@@ -56,11 +56,34 @@ impl StagedPhoton {
     pub fn pos(&self) -> Vec3 {
         self.photon.pos()
     }
+
+    /// The record as three words: a total order on records (position bits
+    /// first) that tells apart any two that differ.
+    #[inline]
+    pub fn key(&self) -> [u64; 3] {
+        bytemuck::cast(self.photon)
+    }
+
+    /// The record's fields other than position, as one sort key.
+    #[inline]
+    fn payload_key(&self) -> u64 {
+        let p = &self.photon;
+        (p.oct[0] as u64) << 48 | (p.oct[1] as u64) << 32 | p.power.to_bits() as u64
+    }
 }
 
+/// A tile sort key: Morton code, direction and power, band and group, and
+/// the photon's place in the input.
+type EncodeKey = (u64, u64, u16, u32);
+
 /// Bytes of working memory the encoder needs per photon (staged record, sort
-/// key, raw record, compressed output bound), used for budgeting merges.
-pub const ENCODE_BYTES_PER_PHOTON: usize = 32 + 24 + RECORD_BYTES + RECORD_BYTES + 8;
+/// key, raw record, compressed output bound and slack), used for budgeting
+/// merges.
+pub const ENCODE_BYTES_PER_PHOTON: usize = std::mem::size_of::<StagedPhoton>()
+    + std::mem::size_of::<EncodeKey>()
+    + RECORD_BYTES
+    + RECORD_BYTES
+    + 16;
 
 const MORTON_MASK: u64 = (1 << 48) - 1;
 
@@ -130,7 +153,7 @@ impl EncodedTile {
 /// Reusable scratch for [`encode_tile`] (keeps allocations out of the loop).
 #[derive(Default)]
 pub struct TileEncoder {
-    keys: Vec<(u64, u64, u32)>,
+    keys: Vec<EncodeKey>,
     raw: Vec<u8>,
     zstd: Option<zstd::bulk::Compressor<'static>>,
 }
@@ -148,19 +171,21 @@ impl TileEncoder {
         }
         let q = BoxQuantizer::new(&quant);
         self.keys.clear();
-        self.keys.extend(
-            photons
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (morton3(q.encode(p.photon.position)), p.id, i as u32)),
-        );
+        self.keys.extend(photons.iter().enumerate().map(|(i, p)| {
+            (
+                morton3(q.encode(p.photon.position)),
+                p.payload_key(),
+                p.photon.band_group,
+                i as u32,
+            )
+        }));
         self.keys.sort_unstable();
 
         self.raw.clear();
         self.raw.resize(n * RECORD_BYTES, 0);
         let mut bounds = Aabb::EMPTY;
         let mut prev = 0u64;
-        for (i, &(m, _, idx)) in self.keys.iter().enumerate() {
+        for (i, &(m, _, _, idx)) in self.keys.iter().enumerate() {
             let p = &photons[idx as usize].photon;
             bounds.grow(q.decode(demorton3(m)));
             let mut rec = [0u8; RECORD_BYTES];

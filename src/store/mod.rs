@@ -13,6 +13,7 @@ pub mod partition;
 pub mod query;
 pub mod reader;
 pub mod shard;
+pub mod spill;
 pub mod tiletree;
 pub mod writer;
 

@@ -3,15 +3,16 @@
 //!
 //! A sharded emission splits the source indices 0..N into equal contiguous
 //! ranges; shard I traces range I and writes its staged photons (position
-//! in f32, direction, band, power, id: exactly what the map writer takes)
+//! in f32, direction, band, power: exactly what the map writer takes)
 //! with everything the merge needs: the pilot sample (the same in every
 //! shard, a pure function of the source and the budget), the map's bands,
 //! bounds and provenance, and a producer payload (for an emission: its
 //! fixed-point totals and the report's inputs). Merging feeds the photons
-//! of all shards to the map writer, whose result depends only on the set
-//! of photons, so the merged map is byte-identical to a single run's.
+//! of all shards to the map writer, whose result depends only on the
+//! multiset of photons, so the merged map is byte-identical to a single
+//! run's.
 //!
-//! Layout: `SHARD_MAGIC`, the staged photons as one zstd stream of 32-byte
+//! Layout: `SHARD_MAGIC`, the staged photons as one zstd stream of 24-byte
 //! records (index order within the shard), the header as JSON, its length
 //! (u64 LE) and CRC-32 (u32 LE), `SHARD_END`. The stream's CRC-32 and length
 //! are in the header and checked while it is read. Written under a
@@ -33,7 +34,9 @@ use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// First bytes of a shard file.
-pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD1";
+/// (`LTSHARD1` files held 32-byte records with an id; they are refused as
+/// not being shard files of this version.)
+pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD2";
 /// Last bytes of a complete shard file.
 const SHARD_END: &[u8; 8] = b"LTSHEND1";
 const TRAILER: u64 = 8 + 4 + 8;
@@ -236,7 +239,13 @@ impl ShardFile {
         let mut f = File::open(path).map_err(|e| Error::io(path, "open", e))?;
         let len = f.metadata().map_err(|e| Error::io(path, "stat", e))?.len();
         let mut magic = [0u8; 8];
-        if len < 8 + TRAILER || f.read_exact(&mut magic).is_err() || &magic != SHARD_MAGIC {
+        let read_magic = len >= 8 + TRAILER && f.read_exact(&mut magic).is_ok();
+        if read_magic && &magic == b"LTSHARD1" {
+            return Err(bad(
+                "a shard of an older littoral (32-byte records with ids): emit it again",
+            ));
+        }
+        if !read_magic || &magic != SHARD_MAGIC {
             return Err(bad("not a littoral shard file (or truncated)"));
         }
         let mut trailer = [0u8; TRAILER as usize];

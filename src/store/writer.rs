@@ -4,24 +4,30 @@
 //! Photons are routed by layer (volume, surface) and by the cells of a pilot
 //! [`Partition`] (shared by the layers) and appended to
 //! per-cell buffers made of fixed-size chunks (so growth never copies). When
-//! buffered bytes pass the budget's share, the largest buffers are spilled as
-//! zstd frames to an anonymous scratch file next to the output. Each frame
-//! starts with a reference to the previous frame of its cell, so memory
-//! holds one reference per cell however much was spilled. At the end
-//! each cell is read back (frames, then what is still buffered), encoded by
-//! the tile codec and appended to the map; a cell holding more than the split
-//! threshold is first split in two at the median of an order-independent
-//! sample, streaming, so no tile ever needs more memory than its share.
+//! buffered bytes pass the budget's share, the largest buffers are spilled
+//! to an anonymous scratch file next to the output, as sorted, delta-coded
+//! frames (`spill`). Each frame starts with a reference to the previous
+//! frame of its cell, so memory holds one reference per cell however much
+//! was spilled. At the end each cell is read back (frames, then what is
+//! still buffered), encoded by the tile codec and appended to the map; a
+//! cell holding more than the split threshold is first split in two at the
+//! median of an order-independent sample, streaming, so no tile ever needs
+//! more memory than its share.
 //!
-//! Nothing here depends on the order photons arrive in: the split planes come
-//! from samples chosen by photon id, and the codec sorts each tile by (Morton
-//! code, id). Hence a map is byte-identical for any number of producer threads.
+//! Every photon is snapped to the map's grid as it arrives (`SnapGrid`: the
+//! f32 spacing at the edge of the map's bounds), so the scratch file stores
+//! exactly what memory holds. Nothing depends on the order photons arrive
+//! in: split planes come from samples chosen by a hash of the record, and
+//! the codec sorts each tile by Morton code and then by the record itself.
+//! Hence a map is a function of the multiset of photons, byte-identical for
+//! any number of producer threads.
 //!
 //! Not for: reading maps (see `reader`), or choosing which photons to store.
 
-use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON, ZSTD_LEVEL};
+use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON};
 use super::format::{ByteWriter, Footer, Header, Section, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
+use super::spill::{Frame, Scratch, SnapGrid};
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::photon::LAYERS;
@@ -29,8 +35,6 @@ use crate::progress::Progress;
 use crate::provenance::Provenance;
 use crate::rng::mix64;
 use crate::spectral::BandGrid;
-use bytemuck::Zeroable;
-use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
@@ -39,8 +43,9 @@ const STAGED: usize = std::mem::size_of::<StagedPhoton>();
 
 /// Memory the writer keeps outside its budgeted shares: zstd contexts
 /// (level-1 compressor and a decompressor, about 1.5 MiB together), the
-/// output and scratch I/O buffers, the producer channel and spill metadata.
-pub const WRITER_FIXED_BYTES: u64 = 6 * MIB;
+/// output I/O buffer, the spill frame's sort keys and planes (about 1 MiB),
+/// the producer channel and spill metadata.
+pub const WRITER_FIXED_BYTES: u64 = 7 * MIB;
 
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
@@ -129,18 +134,6 @@ pub struct WriteSummary {
     pub peak_buffered_bytes: u64,
 }
 
-/// Where a spilled frame lies in the scratch file. On disk a frame is the
-/// previous frame's reference (16 bytes, or zeros with count 0 for none)
-/// followed by the zstd-compressed records.
-#[derive(Clone, Copy, Debug)]
-struct Frame {
-    offset: u64,
-    len: u32,
-    count: u32,
-}
-
-const FRAME_LINK: usize = 16;
-
 #[derive(Debug)]
 struct CellBuf {
     chunks: Vec<Vec<StagedPhoton>>,
@@ -179,139 +172,17 @@ impl CellBuf {
     }
 }
 
-/// The scratch file of spilled frames, with reusable zstd contexts.
-struct Scratch {
-    file: File,
-    /// How errors name the (anonymous) scratch file.
-    name: PathBuf,
-    len: u64,
-    compressor: zstd::bulk::Compressor<'static>,
-    decompressor: zstd::bulk::Decompressor<'static>,
-    frame: Vec<u8>,
-    payload: Vec<u8>,
-    /// A chunk's records byte-shuffled (at most one chunk, 128 KiB).
-    planes: Vec<u8>,
-    frames_written: u64,
-}
-
-/// Byte `k` of every 32-byte record of `records` into plane `k` of `planes`:
-/// the slowly varying bytes of positions, ids, bands and powers of photons
-/// that arrived together form runs that zstd removes. The full-precision
-/// positions' low bytes stay incompressible, so this gains only about 7 %
-/// (the built-in scene at 32 M photons spills 962 MB instead of 1034 MB).
-fn shuffle(records: &[u8], planes: &mut Vec<u8>) {
-    let n = records.len() / STAGED;
-    planes.clear();
-    planes.resize(records.len(), 0);
-    for (i, rec) in records.chunks_exact(STAGED).enumerate() {
-        for (k, &b) in rec.iter().enumerate() {
-            planes[k * n + i] = b;
-        }
-    }
-}
-
-/// Inverse of [`shuffle`].
-fn unshuffle(planes: &[u8], records: &mut [u8]) {
-    let n = planes.len() / STAGED;
-    for (i, rec) in records.chunks_exact_mut(STAGED).enumerate() {
-        for (k, b) in rec.iter_mut().enumerate() {
-            *b = planes[k * n + i];
-        }
-    }
-}
-
-impl Scratch {
-    fn err(&self, action: &'static str, e: std::io::Error) -> Error {
-        Error::io(&self.name, action, e)
-    }
-
-    /// Spill every chunk of `cell` as frames and free them; returns the
-    /// buffer bytes freed.
-    fn spill(&mut self, cell: &mut CellBuf) -> Result<u64> {
-        let mut freed = 0;
-        for chunk in cell.chunks.drain(..) {
-            freed += (chunk.capacity() * STAGED) as u64;
-            if chunk.is_empty() {
-                continue;
-            }
-            let prev = cell.last_frame.unwrap_or(Frame {
-                offset: 0,
-                len: 0,
-                count: 0,
-            });
-            self.frame.clear();
-            self.frame.extend_from_slice(&prev.offset.to_le_bytes());
-            self.frame.extend_from_slice(&prev.len.to_le_bytes());
-            self.frame.extend_from_slice(&prev.count.to_le_bytes());
-            let bound = zstd::zstd_safe::compress_bound(chunk.len() * STAGED);
-            self.payload.clear();
-            self.payload.reserve(bound);
-            shuffle(bytemuck::cast_slice(&chunk), &mut self.planes);
-            self.compressor
-                .compress_to_buffer(&self.planes, &mut self.payload)
-                .map_err(|e| self.err("compress spill", e))?;
-            self.frame.extend_from_slice(&self.payload);
-            crate::output::write_all_at(&self.file, &self.frame, self.len)
-                .map_err(|e| self.err("write", e))?;
-            cell.last_frame = Some(Frame {
-                offset: self.len,
-                len: self.frame.len() as u32,
-                count: chunk.len() as u32,
-            });
-            self.len += self.frame.len() as u64;
-            self.frames_written += 1;
-        }
+impl CellBuf {
+    /// Spill every buffered photon of this cell to `scratch` and free the
+    /// chunks; returns the buffer bytes freed.
+    fn spill(&mut self, scratch: &mut Scratch) -> Result<u64> {
+        self.last_frame = scratch.spill(self.chunks.iter().flatten(), self.last_frame)?;
+        let freed = self
+            .chunks
+            .drain(..)
+            .map(|c| (c.capacity() * STAGED) as u64)
+            .sum();
         Ok(freed)
-    }
-
-    /// Read frame `f` back into `out` (cleared first); returns the frame
-    /// before it in the same cell.
-    fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
-        let bad =
-            |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string());
-        self.frame.clear();
-        self.frame.resize(f.len as usize, 0);
-        crate::output::read_exact_at(&self.file, &mut self.frame, f.offset)
-            .map_err(|e| self.err("read", e))?;
-        if self.frame.len() < FRAME_LINK {
-            return Err(self.err("read", bad("spill frame too short")));
-        }
-        let link = &self.frame[..FRAME_LINK];
-        let prev = Frame {
-            offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
-            len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
-            count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
-        };
-        let expected = f.count as usize * STAGED;
-        self.planes.clear();
-        // One spare byte tells a frame of exactly `expected` bytes from a longer one.
-        self.planes.reserve_exact(expected + 1);
-        let got = self
-            .decompressor
-            .decompress_to_buffer(&self.frame[FRAME_LINK..], &mut self.planes)
-            .map_err(|e| self.err("decompress spill", e))?;
-        if got != expected {
-            return Err(self.err("read", bad("spill frame length")));
-        }
-        out.clear();
-        out.resize(f.count as usize, StagedPhoton::zeroed());
-        unshuffle(&self.planes, bytemuck::cast_slice_mut::<_, u8>(out));
-        Ok((prev.count > 0).then_some(prev))
-    }
-
-    /// Call `visit` with the records of every spilled frame of a cell,
-    /// newest first, through the reusable buffer `buf`.
-    fn for_each_frame(
-        &mut self,
-        mut next: Option<Frame>,
-        buf: &mut Vec<StagedPhoton>,
-        mut visit: impl FnMut(&[StagedPhoton]),
-    ) -> Result<()> {
-        while let Some(f) = next {
-            next = self.read(f, buf)?;
-            visit(buf);
-        }
-        Ok(())
     }
 }
 
@@ -365,7 +236,6 @@ impl MapWriter {
         let cells = (0..partition.cells() as usize * LAYERS)
             .map(|_| CellBuf::new())
             .collect();
-        let io = |e| Error::io(&scratch_name, "create", e);
         Ok(MapWriter {
             path: path.to_path_buf(),
             plan,
@@ -376,34 +246,40 @@ impl MapWriter {
             offset: bytes.len() as u64,
             cells,
             buffered: 0,
-            scratch: Scratch {
-                file: scratch_file,
-                name: scratch_name.clone(),
-                len: 0,
-                compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL).map_err(io)?,
-                decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
-                frame: Vec::new(),
-                payload: Vec::new(),
-                planes: Vec::new(),
-                frames_written: 0,
-            },
+            scratch: Scratch::new(scratch_file, scratch_name, SnapGrid::new(&bounds))?,
             summary: WriteSummary::default(),
         })
     }
 
-    /// Add photons (ids must be unique across the whole map).
+    /// Add photons. Each is first snapped to the map's grid (see
+    /// [`SnapGrid`]), so the map holds the same positions whether or not a
+    /// photon passed through the scratch file.
     pub fn push(&mut self, photons: &[StagedPhoton]) -> Result<()> {
         if let Some(p) = photons.iter().find(|p| p.photon.layer as usize >= LAYERS) {
             return Err(Error::invalid(
                 "photon layer",
-                format!("photon {} has layer {}", p.id, p.photon.layer),
+                format!(
+                    "a photon at {:?} has layer {}",
+                    p.photon.position, p.photon.layer
+                ),
             ));
         }
         let chunk_bytes = (self.plan.chunk_records * STAGED) as u64;
+        let grid = self.scratch.grid();
         for p in photons {
+            let mut p = *p;
+            if !grid.snap(&mut p) {
+                return Err(Error::invalid(
+                    "photon position",
+                    format!(
+                        "{:?} is not finite or lies far outside the map's bounds {:?}",
+                        p.photon.position, self.header.bounds
+                    ),
+                ));
+            }
             let index = p.photon.layer as usize * self.partition.cells() as usize
                 + self.partition.cell_of(p.pos()) as usize;
-            if self.cells[index].push(p, self.plan.chunk_records) {
+            if self.cells[index].push(&p, self.plan.chunk_records) {
                 self.buffered += chunk_bytes;
             }
             self.summary.photons += 1;
@@ -424,7 +300,7 @@ impl MapWriter {
             if self.buffered <= self.plan.buffer_bytes / 2 {
                 break;
             }
-            let freed = self.scratch.spill(&mut self.cells[i])?;
+            let freed = self.cells[i].spill(&mut self.scratch)?;
             self.buffered -= freed;
         }
         Ok(())
@@ -523,12 +399,17 @@ impl MapWriter {
         mut cell: CellBuf,
         frame_buf: &mut Vec<StagedPhoton>,
     ) -> Result<(CellBuf, CellBuf)> {
-        // Pass 1: an order-independent sample (chosen by id hash) of positions.
+        // Pass 1: an order-independent sample (chosen by a hash of the
+        // record) and the least and greatest records.
         let rate = cell.count.div_ceil(32_768).next_power_of_two();
-        let mut sample: Vec<glam::Vec3> = Vec::new();
+        let mut sample: Vec<[u64; 3]> = Vec::new();
+        let (mut least, mut most) = ([u64::MAX; 3], [0u64; 3]);
         let mut take = |p: &StagedPhoton| {
-            if mix64(p.id) & (rate - 1) == 0 {
-                sample.push(p.pos());
+            let key = p.key();
+            least = least.min(key);
+            most = most.max(key);
+            if mix64(key[0] ^ mix64(key[1] ^ mix64(key[2]))) & (rate - 1) == 0 {
+                sample.push(key);
             }
         };
         self.scratch
@@ -543,7 +424,10 @@ impl MapWriter {
         axes.sort_by(|&a, &b| extent[b].total_cmp(&extent[a]));
         let mut plane = None;
         for axis in axes {
-            let mut v: Vec<f32> = sample.iter().map(|p| p[axis]).collect();
+            let mut v: Vec<f32> = sample
+                .iter()
+                .map(|k| bytemuck::cast::<_, StagedPhoton>(*k).photon.position[axis])
+                .collect();
             if v.is_empty() {
                 break;
             }
@@ -562,10 +446,23 @@ impl MapWriter {
                 break;
             }
         }
+        // All sampled positions coincide: halve in the records' own order
+        // instead, at the sample's median record (below it, or up to it when
+        // it is the least). Only when every record is the same are they
+        // dealt out in turn; which copy goes where cannot change the map.
+        let pivot = match sample.len() {
+            0 => least,
+            n => *sample.select_nth_unstable(n / 2).1,
+        };
+        let turn = std::cell::Cell::new(0u64);
         let route = |p: &StagedPhoton| match plane {
             Some((axis, value)) => p.photon.position[axis] < value,
-            // All sampled positions coincide: halve by id instead.
-            None => mix64(p.id ^ 0x5eed) & 1 == 0,
+            None if least == most => {
+                turn.set(turn.get() + 1);
+                turn.get() & 1 == 0
+            }
+            None if pivot > least => p.key() < pivot,
+            None => p.key() <= pivot,
         };
 
         // Pass 2: route every photon to a child, spilling children as they grow.
@@ -592,7 +489,7 @@ impl MapWriter {
         let (kids, kid_bytes) = (split.kids, split.kid_bytes);
         let [left, right] = kids;
         self.buffered += kid_bytes[0] + kid_bytes[1];
-        debug_assert!(plane.is_none() || (left.count > 0 && right.count > 0));
+        debug_assert!(left.count > 0 && right.count > 0);
         Ok((left, right))
     }
 
@@ -606,7 +503,7 @@ impl MapWriter {
                 split.kid_bytes[k] += (split.chunk_records * STAGED) as u64;
             }
             if split.kid_bytes[k] > split.limit {
-                self.scratch.spill(kid)?;
+                kid.spill(&mut self.scratch)?;
                 split.kid_bytes[k] = 0;
             }
         }

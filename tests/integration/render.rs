@@ -46,11 +46,7 @@ impl PhotonSource for UniformBox {
                 power: 1.0,
                 group: littoral::photon::group_of_path(i),
             };
-            out.push(StagedPhoton::new(
-                &photon,
-                volume_layer(photon.direction),
-                i,
-            ));
+            out.push(StagedPhoton::new(&photon, volume_layer(photon.direction)));
         }
     }
     fn bands(&self) -> littoral::BandGrid {
@@ -216,7 +212,7 @@ impl PhotonSource for FloorPhotons {
                 power: 1.0,
                 group: littoral::photon::group_of_path(i),
             };
-            out.push(StagedPhoton::new(&photon, LAYER_SURFACE, i));
+            out.push(StagedPhoton::new(&photon, LAYER_SURFACE));
         }
     }
     fn bands(&self) -> littoral::BandGrid {

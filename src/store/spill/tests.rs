@@ -1,0 +1,208 @@
+use super::*;
+use crate::photon::Photon;
+use crate::rng::Pcg32;
+use glam::Vec3;
+
+fn scene_bounds() -> Aabb {
+    Aabb {
+        min: Vec3::new(-400.0, -400.0, -20.0),
+        max: Vec3::new(400.0, 400.0, 0.5),
+    }
+}
+
+fn scratch(bounds: &Aabb) -> Scratch {
+    let file = tempfile::tempfile().unwrap();
+    Scratch::new(file, PathBuf::from("test scratch"), SnapGrid::new(bounds)).unwrap()
+}
+
+/// `n` photons of `layer` in a box of `size` metres at `at`, snapped.
+fn photons(
+    n: usize,
+    seed: u64,
+    at: Vec3,
+    size: f32,
+    layer: u16,
+    grid: &SnapGrid,
+) -> Vec<StagedPhoton> {
+    let mut r = Pcg32::new(seed, 9);
+    (0..n)
+        .map(|i| {
+            let p = Photon {
+                position: at + Vec3::new(r.uniform_f32(), r.uniform_f32(), r.uniform_f32()) * size,
+                direction: Vec3::new(r.uniform_f32() - 0.5, r.uniform_f32() - 0.5, -1.0)
+                    .normalize(),
+                band: r.below(128) as u16,
+                power: [0.5, 0.25, 1.0][i % 3],
+                group: (i % 16) as u8,
+            };
+            let mut s = StagedPhoton::new(&p, layer);
+            assert!(grid.snap(&mut s));
+            s
+        })
+        .collect()
+}
+
+fn sorted(mut v: Vec<StagedPhoton>) -> Vec<[u64; 3]> {
+    let mut k: Vec<[u64; 3]> = v.drain(..).map(|p| p.key()).collect();
+    k.sort_unstable();
+    k
+}
+
+#[test]
+fn the_grid_is_the_f32_spacing_at_the_bounds_and_snapping_is_exact() {
+    let g = SnapGrid::new(&scene_bounds());
+    // 400 m lies in [256, 512): f32 spacing 2^(8-23); 20 m in [16, 32): 2^(4-23).
+    assert_eq!(g.step(), [2f64.powi(-15), 2f64.powi(-15), 2f64.powi(-19)]);
+    let mut r = Pcg32::new(5, 6);
+    for _ in 0..100_000 {
+        let x = [
+            (r.uniform_f32() - 0.5) * 800.0,
+            (r.uniform_f32() - 0.5) * 800.0,
+            -r.uniform_f32() * 20.0 * r.uniform_f32().powi(8),
+        ];
+        let i = g.index(x).unwrap();
+        let s = g.position(i);
+        for a in 0..3 {
+            // Within half a step, and snapping again changes nothing.
+            assert!(
+                (s[a] as f64 - x[a] as f64).abs() <= g.step()[a] / 2.0,
+                "{x:?} {s:?}"
+            );
+            assert_eq!(s[a] as f64, i[a] as f64 * g.step()[a], "not exact: {x:?}");
+        }
+        assert_eq!(g.index(s).unwrap(), i);
+        assert_eq!(g.position(g.index(s).unwrap()), s);
+    }
+    // Planes a scene is built on stay exactly where they are.
+    for z in [0.0f32, -10.0, -0.5, 0.25, -19.875] {
+        assert_eq!(g.position(g.index([1.0, 2.0, z]).unwrap())[2], z);
+    }
+    // Far beyond the bounds, or not finite: refused rather than wrapped.
+    assert!(g.index([1e30, 0.0, 0.0]).is_none());
+    assert!(g.index([f32::NAN, 0.0, 0.0]).is_none());
+    assert!(g.index([0.0, f32::INFINITY, 0.0]).is_none());
+    // Outside the bounds but in range: still exact (the f32 spacing there is
+    // a multiple of the step).
+    let far = [3000.3f32, -1.0e6, 40.0];
+    assert_eq!(g.position(g.index(far).unwrap())[..2], far[..2]);
+}
+
+#[test]
+fn frames_give_back_every_record_and_link_to_the_cells_previous_frame() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let a = photons(
+        FRAME_PHOTONS * 2 + 77,
+        1,
+        Vec3::new(-3.0, 5.0, -7.0),
+        4.0,
+        1,
+        &grid,
+    );
+    let b = photons(1000, 2, Vec3::new(100.0, -300.0, -19.0), 0.01, 1, &grid);
+    let mut last = s.spill(a.iter(), None).unwrap();
+    assert_eq!(s.frames_written, 3);
+    last = s.spill(b.iter(), last).unwrap();
+    assert_eq!(s.frames_written, 4);
+    let mut back = Vec::new();
+    let mut buf = Vec::new();
+    let mut counts = Vec::new();
+    s.for_each_frame(last, &mut buf, |r| {
+        counts.push(r.len());
+        back.extend_from_slice(r)
+    })
+    .unwrap();
+    assert_eq!(counts, vec![1000, 77, FRAME_PHOTONS, FRAME_PHOTONS]);
+    let mut all = a.clone();
+    all.extend_from_slice(&b);
+    assert_eq!(sorted(back), sorted(all));
+}
+
+#[test]
+fn coincident_and_extreme_positions_round_trip() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let mut v = photons(300, 3, Vec3::new(0.0, 0.0, -5.0), 0.0, 0, &grid);
+    v.extend(photons(
+        300,
+        4,
+        Vec3::new(-400.0, 400.0, -20.0),
+        800.0,
+        0,
+        &grid,
+    ));
+    // A photon far outside the bounds but inside the grid's range.
+    let mut far = v[0];
+    far.photon.position = [3.0e5, -3.0e5, 900.0];
+    assert!(grid.snap(&mut far));
+    v.push(far);
+    let last = s.spill(v.iter(), None).unwrap();
+    let mut back = Vec::new();
+    let mut buf = Vec::new();
+    s.for_each_frame(last, &mut buf, |r| back.extend_from_slice(r))
+        .unwrap();
+    assert_eq!(sorted(back), sorted(v));
+}
+
+/// Sorted grid deltas cost about 1.44 bits a photon more than log2(box
+/// volume in grid cells / photons), the entropy of the gaps of a uniform
+/// sorted sample. With the direction (at most 32 bits), band (7 bits) and
+/// one of three powers (1.6 bits), a frame must stay within that plus a
+/// byte of coding overhead per photon, where 32-byte records with raw f32
+/// positions cost over 20.
+#[test]
+fn a_frame_costs_about_the_entropy_of_its_records() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let n = FRAME_PHOTONS;
+    let size = 8.0f32;
+    let v = photons(n, 7, Vec3::new(10.0, 10.0, -12.0), size, 0, &grid);
+    s.spill(v.iter(), None).unwrap();
+    let step = grid.step();
+    let cells: f64 = (0..3).map(|a| size as f64 / step[a]).product();
+    let position_bits = (cells / n as f64).log2() + 1.44;
+    let entropy_bytes = (position_bits + 32.0 + 7.0 + 1.6) / 8.0;
+    let per_photon = s.len as f64 / n as f64;
+    assert!(
+        per_photon <= entropy_bytes + 1.0,
+        "{per_photon:.2} bytes a photon against {entropy_bytes:.2} of entropy"
+    );
+}
+
+#[test]
+fn damaged_frames_are_errors_not_panics() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let v = photons(500, 8, Vec3::ZERO, 1.0, 2, &grid);
+    let f = s.spill(v.iter(), None).unwrap().unwrap();
+    let mut buf = Vec::new();
+    for (at, byte) in [
+        (18u64, 0u8),
+        (18, 17),
+        (16, 9),
+        (60, 0xff),
+        (f.len as u64 - 2, 0x55),
+    ] {
+        let mut bytes = vec![0u8; f.len as usize];
+        crate::output::read_exact_at(&s.file, &mut bytes, f.offset).unwrap();
+        let saved = bytes[at as usize];
+        bytes[at as usize] ^= byte | 1;
+        crate::output::write_all_at(&s.file, &bytes, f.offset).unwrap();
+        let e = s.read(f, &mut buf).unwrap_err().to_string();
+        assert!(e.contains("test scratch"), "{e}");
+        bytes[at as usize] = saved;
+        crate::output::write_all_at(&s.file, &bytes, f.offset).unwrap();
+    }
+    // A frame that claims more photons than it holds.
+    let more = Frame {
+        count: f.count + 1,
+        ..f
+    };
+    assert!(s.read(more, &mut buf).is_err());
+    assert_eq!(s.read(f, &mut buf).unwrap().map(|p| p.count), None);
+    assert_eq!(buf.len(), 500);
+}
