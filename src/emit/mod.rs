@@ -277,7 +277,7 @@ pub fn emit_shard(
     emitter.provenance = provenance.clone();
     let pilot = crate::store::build::Pilot::trace(&emitter, options)?;
     let range = shard_range(emitter.indices(), shard, shards);
-    let mut writer = ShardWriter::create(path)?;
+    let mut writer = ShardWriter::create(path, &emitter.bounds())?;
     let pool = crate::parallel::pool(options.threads)?;
     let batch = crate::store::build::BATCH_INDICES;
     let batches = (range.end - range.start).div_ceil(batch);

@@ -1,33 +1,33 @@
-//! The map writer's scratch file: photons that did not fit in memory, kept
-//! as sorted, delta-coded, zstd-compressed frames until their tile is
-//! encoded.
+//! Photons at rest between tracing and the map: the map writer's scratch
+//! file (photons that did not fit in memory, kept until their tile is
+//! encoded) and, through the same [`FrameCodec`], shard files.
 //!
 //! Positions are fixed point here. The writer snaps every photon it is
 //! given to a [`SnapGrid`]: per axis, the multiples of the f32 spacing at
-//! the largest coordinate magnitude of the map's bounds (61 µm across a
-//! 1 km scene, 1.9 µm over 20 m of depth). Every multiple in range is an
-//! f32, so snapping is idempotent and exact in both directions, and it is
-//! far finer than the 16 bits per tile box a map stores. A frame then holds
-//! each photon as its integer grid coordinates relative to the frame's
-//! corner, sorted by their 126-bit Morton code and stored as the difference
-//! from the previous code in as few bytes as the frame needs, next to the
-//! direction, band and power. The records are byte-shuffled and each plane
-//! of like bytes is compressed on its own: one zstd frame a plane lets each
-//! have its own entropy table (one table for all planes cost 10 % more),
-//! and planes of noise, such as the low bytes of the deltas, are stored raw.
+//! the largest coordinate magnitude of the map's bounds (61 µm across an
+//! 800 m scene, 1.9 µm over 20 m of depth). Every multiple in range is an
+//! f32, so snapping is idempotent and exact both ways, and it is finer
+//! than the map's 16 bits per tile box unless a tile is under 65 536 steps
+//! across (4 m at 61 µm). A frame holds each photon as its integer grid
+//! coordinates relative to the frame's corner, sorted by their 126-bit
+//! Morton code and stored as the difference from the previous code in as
+//! few bytes as the frame needs, next to the direction, band, power and
+//! layer. The records are byte-shuffled and each plane of like bytes is
+//! compressed on its own: a zstd frame per plane gives each its own
+//! entropy table (one table for all planes cost 10 % more), and planes of
+//! noise, such as the low bytes of the deltas, are stored raw.
 //!
 //! Why: full-precision positions in arrival order do not compress (their
 //! low mantissa bits are noise), and at 10^9 photons under 256 MiB every
-//! photon is spilled. Sorted grid deltas cost about log2(cell volume /
-//! photons in the frame) bits, and the map's own record carries no more
-//! than direction, band and power besides.
+//! photon is spilled. Sorted grid deltas cost about 1.44 bits more than
+//! log2(frame volume in grid steps / photons in the frame); the rest of a
+//! record costs what the map's own record does. The map sorts 65 536
+//! photons at 16 bits per tile axis, a frame a few thousand at the grid's
+//! finer steps, so a spilled photon costs 1 to 2.5 bytes more than a
+//! stored one: spill traffic is 1.1 to 1.3 times the map, not less.
 //!
-//! Frame layout: the previous frame of the same cell (offset u64, length
-//! u32, count u32; zeros for none), layer u16, delta width u8, a zero byte,
-//! the corner (3 × i64 grid units), the CRC-32 of everything after it, then
-//! for each of the `width + 10` byte planes of the records (Morton delta,
-//! octahedral direction 2 × u16, band and group u16, power f32 bits) its
-//! length as u16 (`RAW_PLANE` for `count` raw bytes) and its bytes.
+//! Scratch frame layout: the previous frame of the same cell (offset u64,
+//! length u32, count u32; zeros for none), then a [`FrameCodec`] body.
 //!
 //! Not for: the map's tile format (`codec`), which quantises to the tile box.
 
@@ -49,15 +49,12 @@ pub const FRAME_PHOTONS: usize = 8192;
 /// of its Morton codes.
 const GRID_LIMIT: i64 = 1 << 41;
 
-/// Bytes of a frame before its compressed records.
-const FRAME_HEAD: usize = 16 + 4 + 24 + 4;
-
 /// A plane's length field when it is stored uncompressed.
 const RAW_PLANE: u16 = u16::MAX;
 const _: () = assert!(FRAME_PHOTONS < RAW_PLANE as usize);
 
 /// Bytes of a record besides its Morton delta.
-const PAYLOAD_BYTES: usize = 10;
+const PAYLOAD_BYTES: usize = 11;
 
 /// Per axis, the fixed-point grid photon positions are snapped to.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,101 +122,55 @@ impl SnapGrid {
     }
 }
 
-/// Where a spilled frame lies in the scratch file.
-#[derive(Clone, Copy, Debug)]
-pub struct Frame {
-    offset: u64,
-    len: u32,
-    pub count: u32,
-}
-
-/// The scratch file of spilled frames, with reusable zstd contexts and
-/// frame buffers.
-pub struct Scratch {
-    file: File,
-    /// How errors name the (anonymous) scratch file.
-    name: PathBuf,
+/// Encodes and decodes frame bodies: at most [`FRAME_PHOTONS`] staged
+/// photons, snapped to the grid, as sorted grid deltas and byte planes.
+///
+/// A body is: delta width u8, a zero byte, the corner (3 × i64 grid
+/// units), the CRC-32 of the rest of the body, then for each of the
+/// `width + 11` byte planes of the records (Morton delta, octahedral
+/// direction 2 × u16, band and group u16, power f32 bits, layer u8) its
+/// length as u16 (`RAW_PLANE` for raw bytes) and its bytes. The photon
+/// count is kept by the container (the scratch file's links, a shard's
+/// frame header).
+pub struct FrameCodec {
     grid: SnapGrid,
-    /// Bytes written so far (the file's length).
-    pub len: u64,
-    pub frames_written: u64,
     compressor: zstd::bulk::Compressor<'static>,
     decompressor: zstd::bulk::Decompressor<'static>,
-    batch: Vec<StagedPhoton>,
     keys: Vec<(u128, u32)>,
-    frame: Vec<u8>,
-    payload: Vec<u8>,
     planes: Vec<u8>,
+    packed: Vec<u8>,
 }
 
-impl Scratch {
-    /// A scratch space in `file`, named `name` in errors, for photons on `grid`.
-    pub fn new(file: File, name: PathBuf, grid: SnapGrid) -> Result<Scratch> {
-        let io = |e| Error::io(&name, "create", e);
-        Ok(Scratch {
-            compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL).map_err(io)?,
-            decompressor: zstd::bulk::Decompressor::new().map_err(io)?,
-            file,
-            name,
+/// Bytes of a body before its planes.
+const BODY_HEAD: usize = 2 + 24 + 4;
+
+impl FrameCodec {
+    /// A codec for photons snapped to `grid`.
+    pub fn new(grid: SnapGrid) -> std::io::Result<FrameCodec> {
+        Ok(FrameCodec {
             grid,
-            len: 0,
-            frames_written: 0,
-            batch: Vec::new(),
+            compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL)?,
+            decompressor: zstd::bulk::Decompressor::new()?,
             keys: Vec::new(),
-            frame: Vec::new(),
-            payload: Vec::new(),
             planes: Vec::new(),
+            packed: Vec::new(),
         })
     }
 
-    /// The grid photons must be snapped to before they are spilled.
+    /// The grid photons must be snapped to before they are encoded.
     pub fn grid(&self) -> SnapGrid {
         self.grid
     }
 
-    fn err(&self, action: &'static str, e: std::io::Error) -> Error {
-        Error::io(&self.name, action, e)
-    }
-
-    fn corrupt(&self, what: &str) -> Error {
-        self.err(
-            "read",
-            std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
-        )
-    }
-
-    /// Write `photons` (all of one layer, snapped to the grid) as frames of
-    /// at most [`FRAME_PHOTONS`] after `last`, the newest frame of their
-    /// cell; returns the new newest frame.
-    pub fn spill<'a>(
-        &mut self,
-        photons: impl IntoIterator<Item = &'a StagedPhoton>,
-        mut last: Option<Frame>,
-    ) -> Result<Option<Frame>> {
-        let mut batch = std::mem::take(&mut self.batch);
-        batch.clear();
-        for p in photons {
-            batch.push(*p);
-            if batch.len() == FRAME_PHOTONS {
-                last = Some(self.write_frame(&batch, last)?);
-                batch.clear();
-            }
-        }
-        if !batch.is_empty() {
-            last = Some(self.write_frame(&batch, last)?);
-        }
-        self.batch = batch;
-        Ok(last)
-    }
-
-    fn write_frame(&mut self, batch: &[StagedPhoton], prev: Option<Frame>) -> Result<Frame> {
+    /// Append the body of `batch` (1 to [`FRAME_PHOTONS`] photons, snapped
+    /// to the grid) to `out`.
+    pub fn encode(&mut self, batch: &[StagedPhoton], out: &mut Vec<u8>) -> std::io::Result<()> {
         let n = batch.len();
-        let layer = batch[0].photon.layer;
-        debug_assert!(batch.iter().all(|p| p.photon.layer == layer));
+        assert!((1..=FRAME_PHOTONS).contains(&n), "frame of {n} photons");
         let grid = self.grid;
         let index = |p: &StagedPhoton| {
             grid.index(p.photon.position)
-                .expect("the writer snaps photons inside the grid's range")
+                .expect("photons are snapped inside the grid's range before they are encoded")
         };
         let mut corner = [i64::MAX; 3];
         for p in batch {
@@ -246,10 +197,9 @@ impl Scratch {
             prev_code = code;
         }
         let width = (16 - widest.leading_zeros() as usize / 8).max(1);
-        let record = width + PAYLOAD_BYTES;
 
         self.planes.clear();
-        self.planes.resize(n * record, 0);
+        self.planes.resize(n * (width + PAYLOAD_BYTES), 0);
         let mut prev_code = 0u128;
         for (j, &(code, k)) in self.keys.iter().enumerate() {
             let p = &batch[k as usize].photon;
@@ -263,94 +213,67 @@ impl Scratch {
             payload[2..4].copy_from_slice(&p.oct[1].to_le_bytes());
             payload[4..6].copy_from_slice(&p.band_group.to_le_bytes());
             payload[6..10].copy_from_slice(&p.power.to_le_bytes());
+            payload[10] = p.layer as u8;
             for (b, &byte) in payload.iter().enumerate() {
                 self.planes[(width + b) * n + j] = byte;
             }
         }
 
-        let prev = prev.unwrap_or(Frame {
-            offset: 0,
-            len: 0,
-            count: 0,
-        });
-        self.frame.clear();
-        self.frame.extend_from_slice(&prev.offset.to_le_bytes());
-        self.frame.extend_from_slice(&prev.len.to_le_bytes());
-        self.frame.extend_from_slice(&prev.count.to_le_bytes());
-        self.frame.extend_from_slice(&layer.to_le_bytes());
-        self.frame.push(width as u8);
-        self.frame.push(0);
+        let start = out.len();
+        out.push(width as u8);
+        out.push(0);
         for c in corner {
-            self.frame.extend_from_slice(&c.to_le_bytes());
+            out.extend_from_slice(&c.to_le_bytes());
         }
-        self.frame.extend_from_slice(&[0; 4]);
-        debug_assert_eq!(self.frame.len(), FRAME_HEAD);
-        self.payload.clear();
-        self.payload.reserve(zstd::zstd_safe::compress_bound(n));
+        out.extend_from_slice(&[0; 4]);
+        self.packed.clear();
+        self.packed.reserve(zstd::zstd_safe::compress_bound(n));
         for plane in self.planes.chunks_exact(n) {
             let packed = self
                 .compressor
-                .compress_to_buffer(plane, &mut self.payload)
-                .map_err(|e| self.err("compress spill", e))?;
+                .compress_to_buffer(plane, &mut self.packed)?;
             if packed < n {
-                self.frame.extend_from_slice(&(packed as u16).to_le_bytes());
-                self.frame.extend_from_slice(&self.payload);
+                out.extend_from_slice(&(packed as u16).to_le_bytes());
+                out.extend_from_slice(&self.packed);
             } else {
-                self.frame.extend_from_slice(&RAW_PLANE.to_le_bytes());
-                self.frame.extend_from_slice(plane);
+                out.extend_from_slice(&RAW_PLANE.to_le_bytes());
+                out.extend_from_slice(plane);
             }
         }
-        let crc = crc32fast::hash(&self.frame[FRAME_HEAD..]);
-        self.frame[FRAME_HEAD - 4..FRAME_HEAD].copy_from_slice(&crc.to_le_bytes());
-        crate::output::write_all_at(&self.file, &self.frame, self.len)
-            .map_err(|e| self.err("write", e))?;
-        let written = Frame {
-            offset: self.len,
-            len: self.frame.len() as u32,
-            count: n as u32,
-        };
-        self.len += self.frame.len() as u64;
-        self.frames_written += 1;
-        Ok(written)
+        let crc = body_crc(&out[start..]);
+        out[start + BODY_HEAD - 4..start + BODY_HEAD].copy_from_slice(&crc.to_le_bytes());
+        Ok(())
     }
 
-    /// Read frame `f` back into `out` (cleared first); returns the frame
-    /// before it in the same cell.
-    pub fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
-        self.frame.clear();
-        self.frame.resize(f.len as usize, 0);
-        crate::output::read_exact_at(&self.file, &mut self.frame, f.offset)
-            .map_err(|e| self.err("read", e))?;
-        if self.frame.len() < FRAME_HEAD {
-            return Err(self.corrupt("spill frame too short"));
+    /// Decode the body of `n` photons in `body` into `out` (cleared first);
+    /// a damaged body is an error saying what is wrong, never a panic.
+    pub fn decode(
+        &mut self,
+        body: &[u8],
+        n: usize,
+        out: &mut Vec<StagedPhoton>,
+    ) -> std::result::Result<(), String> {
+        if body.len() < BODY_HEAD || !(1..=FRAME_PHOTONS).contains(&n) {
+            return Err(format!("frame too short or of {n} photons"));
         }
-        let head = &self.frame[..FRAME_HEAD];
-        let word = |at: usize| u64::from_le_bytes(head[at..at + 8].try_into().unwrap());
-        let half = |at: usize| u32::from_le_bytes(head[at..at + 4].try_into().unwrap());
-        let prev = Frame {
-            offset: word(0),
-            len: half(8),
-            count: half(12),
-        };
-        let layer = u16::from_le_bytes([head[16], head[17]]);
-        let width = head[18] as usize;
-        let corner = [word(20) as i64, word(28) as i64, word(36) as i64];
-        if half(44) != crc32fast::hash(&self.frame[FRAME_HEAD..]) {
-            return Err(self.corrupt("spill frame checksum mismatch"));
+        let word = |at: usize| i64::from_le_bytes(body[at..at + 8].try_into().unwrap());
+        let width = body[0] as usize;
+        let corner = [word(2), word(10), word(18)];
+        let crc = u32::from_le_bytes(body[26..30].try_into().unwrap());
+        if crc != body_crc(body) {
+            return Err("frame checksum mismatch".into());
         }
-        if layer as usize >= LAYERS || !(1..=16).contains(&width) {
-            return Err(self.corrupt("spill frame header"));
+        if !(1..=16).contains(&width) || body[1] != 0 {
+            return Err(format!("frame delta width {width}"));
         }
-        let n = f.count as usize;
         self.planes.clear();
         self.planes.resize(n * (width + PAYLOAD_BYTES), 0);
         unpack_planes(
             &mut self.decompressor,
-            &self.frame[FRAME_HEAD..],
+            &body[BODY_HEAD..],
             &mut self.planes,
             n,
-        )
-        .map_err(|e| self.corrupt(&e))?;
+        )?;
         out.clear();
         out.reserve(n);
         let planes = &self.planes;
@@ -369,6 +292,10 @@ impl Scratch {
                 corner[2].wrapping_add(u[2] as i64),
             ];
             let at = |b: usize| byte(width + b, j);
+            let layer = at(10) as u16;
+            if layer as usize >= LAYERS {
+                return Err(format!("photon of layer {layer}"));
+            }
             out.push(StagedPhoton {
                 photon: PackedPhoton {
                     position: self.grid.position(i),
@@ -382,6 +309,135 @@ impl Scratch {
                 },
             });
         }
+        Ok(())
+    }
+}
+
+/// Where a spilled frame lies in the scratch file.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    offset: u64,
+    len: u32,
+    pub count: u32,
+}
+
+/// Bytes before a scratch frame's body: its link to the previous frame.
+const FRAME_LINK: usize = 16;
+
+/// The scratch file of spilled frames: each a link to the previous frame
+/// of the same cell (offset u64, length u32, count u32; zeros for none)
+/// and a [`FrameCodec`] body.
+pub struct Scratch {
+    file: File,
+    /// How errors name the (anonymous) scratch file.
+    name: PathBuf,
+    codec: FrameCodec,
+    /// Bytes written so far (the file's length).
+    pub len: u64,
+    pub frames_written: u64,
+    batch: Vec<StagedPhoton>,
+    frame: Vec<u8>,
+}
+
+impl Scratch {
+    /// A scratch space in `file`, named `name` in errors, for photons on `grid`.
+    pub fn new(file: File, name: PathBuf, grid: SnapGrid) -> Result<Scratch> {
+        let codec = FrameCodec::new(grid).map_err(|e| Error::io(&name, "create", e))?;
+        Ok(Scratch {
+            file,
+            name,
+            codec,
+            len: 0,
+            frames_written: 0,
+            batch: Vec::new(),
+            frame: Vec::new(),
+        })
+    }
+
+    /// The grid photons must be snapped to before they are spilled.
+    pub fn grid(&self) -> SnapGrid {
+        self.codec.grid()
+    }
+
+    fn err(&self, action: &'static str, e: std::io::Error) -> Error {
+        Error::io(&self.name, action, e)
+    }
+
+    fn corrupt(&self, what: &str) -> Error {
+        self.err(
+            "read",
+            std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
+        )
+    }
+
+    /// Write `photons` (snapped to the grid) as frames of at most
+    /// [`FRAME_PHOTONS`] after `last`, the newest frame of their cell;
+    /// returns the new newest frame.
+    pub fn spill<'a>(
+        &mut self,
+        photons: impl IntoIterator<Item = &'a StagedPhoton>,
+        mut last: Option<Frame>,
+    ) -> Result<Option<Frame>> {
+        let mut batch = std::mem::take(&mut self.batch);
+        batch.clear();
+        for p in photons {
+            batch.push(*p);
+            if batch.len() == FRAME_PHOTONS {
+                last = Some(self.write_frame(&batch, last)?);
+                batch.clear();
+            }
+        }
+        if !batch.is_empty() {
+            last = Some(self.write_frame(&batch, last)?);
+        }
+        self.batch = batch;
+        Ok(last)
+    }
+
+    fn write_frame(&mut self, batch: &[StagedPhoton], prev: Option<Frame>) -> Result<Frame> {
+        let prev = prev.unwrap_or(Frame {
+            offset: 0,
+            len: 0,
+            count: 0,
+        });
+        self.frame.clear();
+        self.frame.extend_from_slice(&prev.offset.to_le_bytes());
+        self.frame.extend_from_slice(&prev.len.to_le_bytes());
+        self.frame.extend_from_slice(&prev.count.to_le_bytes());
+        let encoded = self.codec.encode(batch, &mut self.frame);
+        encoded.map_err(|e| self.err("compress spill", e))?;
+        crate::output::write_all_at(&self.file, &self.frame, self.len)
+            .map_err(|e| self.err("write", e))?;
+        let written = Frame {
+            offset: self.len,
+            len: self.frame.len() as u32,
+            count: batch.len() as u32,
+        };
+        self.len += self.frame.len() as u64;
+        self.frames_written += 1;
+        Ok(written)
+    }
+
+    /// Read frame `f` back into `out` (cleared first); returns the frame
+    /// before it in the same cell.
+    pub fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
+        self.frame.clear();
+        self.frame.resize(f.len as usize, 0);
+        crate::output::read_exact_at(&self.file, &mut self.frame, f.offset)
+            .map_err(|e| self.err("read", e))?;
+        if self.frame.len() < FRAME_LINK {
+            return Err(self.corrupt("spill frame too short"));
+        }
+        let link = &self.frame[..FRAME_LINK];
+        let prev = Frame {
+            offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
+            len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
+            count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
+        };
+        let decoded = self
+            .codec
+            .decode(&self.frame[FRAME_LINK..], f.count as usize, out);
+        decoded.map_err(|e| self.corrupt(&format!("spill {e}")))?;
         Ok((prev.count > 0).then_some(prev))
     }
 
@@ -401,7 +457,15 @@ impl Scratch {
     }
 }
 
-/// Fill `planes` (`n` bytes each) from a frame's stored planes.
+/// CRC-32 of a body but for its CRC field.
+fn body_crc(body: &[u8]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    h.update(&body[..BODY_HEAD - 4]);
+    h.update(&body[BODY_HEAD..]);
+    h.finalize()
+}
+
+/// Fill `planes` (`n` bytes each) from a body's stored planes.
 fn unpack_planes(
     decompressor: &mut zstd::bulk::Decompressor<'static>,
     stored: &[u8],
@@ -410,7 +474,7 @@ fn unpack_planes(
 ) -> std::result::Result<(), String> {
     let mut at = 0;
     for plane in planes.chunks_exact_mut(n) {
-        let short = || "spill frame length".to_string();
+        let short = || "frame length".to_string();
         let len = stored.get(at..at + 2).ok_or_else(short)?;
         let len = u16::from_le_bytes([len[0], len[1]]);
         at += 2;
@@ -422,14 +486,14 @@ fn unpack_planes(
         } else {
             let got = decompressor
                 .decompress_to_buffer(bytes, plane)
-                .map_err(|e| format!("spill plane: {e}"))?;
+                .map_err(|e| format!("frame plane: {e}"))?;
             if got != n {
                 return Err(short());
             }
         }
     }
     if at != stored.len() {
-        return Err("spill frame length".to_string());
+        return Err("frame length".to_string());
     }
     Ok(())
 }

@@ -180,13 +180,12 @@ fn damaged_frames_are_errors_not_panics() {
     let v = photons(500, 8, Vec3::ZERO, 1.0, 2, &grid);
     let f = s.spill(v.iter(), None).unwrap().unwrap();
     let mut buf = Vec::new();
-    for (at, byte) in [
-        (18u64, 0u8),
-        (18, 17),
-        (16, 9),
-        (60, 0xff),
-        (f.len as u64 - 2, 0x55),
-    ] {
+    // Width, pad, corner, CRC, a plane's length, plane bytes, the last byte.
+    let spots = [16u64, 17, 20, 41, 43, 47, 60, f.len as u64 - 2];
+    for (at, byte) in spots
+        .into_iter()
+        .zip([9u8, 1, 2, 0x80, 4, 0x11, 0xff, 0x55])
+    {
         let mut bytes = vec![0u8; f.len as usize];
         crate::output::read_exact_at(&s.file, &mut bytes, f.offset).unwrap();
         let saved = bytes[at as usize];
@@ -205,4 +204,34 @@ fn damaged_frames_are_errors_not_panics() {
     assert!(s.read(more, &mut buf).is_err());
     assert_eq!(s.read(f, &mut buf).unwrap().map(|p| p.count), None);
     assert_eq!(buf.len(), 500);
+}
+
+/// Shard frames mix layers; the layer is a record field.
+#[test]
+fn a_frame_of_mixed_layers_round_trips() {
+    let bounds = scene_bounds();
+    let mut codec = FrameCodec::new(SnapGrid::new(&bounds)).unwrap();
+    let grid = codec.grid();
+    let mut v = Vec::new();
+    for layer in 0..LAYERS as u16 {
+        v.extend(photons(
+            700,
+            10 + layer as u64,
+            Vec3::new(-50.0, 20.0, -9.0),
+            30.0,
+            layer,
+            &grid,
+        ));
+    }
+    let mut body = Vec::new();
+    codec.encode(&v, &mut body).unwrap();
+    let mut back = Vec::new();
+    codec.decode(&body, v.len(), &mut back).unwrap();
+    assert_eq!(sorted(back.clone()), sorted(v.clone()));
+    // A body decoded with the wrong count, or cut short, is an error.
+    assert!(codec.decode(&body, v.len() - 1, &mut back).is_err());
+    assert!(codec
+        .decode(&body[..body.len() - 1], v.len(), &mut back)
+        .is_err());
+    assert!(codec.decode(&body[..10], v.len(), &mut back).is_err());
 }
