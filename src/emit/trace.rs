@@ -37,7 +37,8 @@ use crate::scene::Scene;
 use crate::store::StagedPhoton;
 use glam::Vec3;
 
-/// Events per photon path before it is stopped (ids keep 20 bits for them).
+/// Events per photon path before it is stopped: a guard against paths that
+/// never end (the emission report counts those truncated).
 pub const MAX_EVENTS: u32 = (1 << 20) - 1;
 
 /// A path of full weight splits when it turns into a direction whose

@@ -333,6 +333,10 @@ impl GeometryBuilder {
             }
         }
         let has_floor = is_floor.iter().any(|&f| f);
+        let epsilon_m = (EPSILON_REL * scale).max(EPSILON_MIN_M);
+        // Four epsilons above the highest vertex: far beyond the rounding of
+        // the watertight test and of the hit points.
+        let ceiling = super::ceiling::Ceiling::new(&tris, &bounds, 4.0 * epsilon_m);
         Geometry {
             bvh,
             tris,
@@ -342,8 +346,9 @@ impl GeometryBuilder {
             has_floor,
             bounds,
             domain_size_m: self.domain_size_m,
-            epsilon_m: (EPSILON_REL * scale).max(EPSILON_MIN_M),
+            epsilon_m,
             skipped,
+            ceiling,
         }
     }
 

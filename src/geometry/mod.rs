@@ -34,6 +34,7 @@
 //! list indexed by [`SurfaceId`]).
 
 mod builder;
+mod ceiling;
 mod parse;
 #[cfg(test)]
 mod tests;
@@ -110,6 +111,9 @@ pub struct Geometry {
     domain_size_m: [f32; 2],
     epsilon_m: f32,
     skipped: usize,
+    /// The highest triangle over each (x, y) column, for segments that
+    /// cannot hit anything.
+    ceiling: Option<ceiling::Ceiling>,
 }
 
 impl std::fmt::Debug for Geometry {
@@ -237,6 +241,9 @@ impl Geometry {
         let Some(t_min) = self.t_min(origin, dir, t_max) else {
             return false;
         };
+        if self.clear(origin, dir, t_max) {
+            return false;
+        }
         let dir = positive_zeros(dir);
         let prep = PreparedRay::new(origin, dir, t_min);
         let ray = Ray::new(origin.into(), dir.into(), t_min, t_max);
@@ -355,8 +362,21 @@ impl Geometry {
         Some(t_min)
     }
 
+    /// True when the segment from `origin` to t_max (in units of `dir`)
+    /// passes above every triangle near it (see `ceiling`).
+    #[inline]
+    fn clear(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        match &self.ceiling {
+            Some(c) => c.clear(origin, origin + dir * t_max),
+            None => false,
+        }
+    }
+
     fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32, floor_only: bool) -> Option<Hit> {
         let t_min = self.t_min(origin, dir, t_max)?;
+        if self.clear(origin, dir, t_max) {
+            return None;
+        }
         let dir = positive_zeros(dir);
         let prep = PreparedRay::new(origin, dir, t_min);
         // obvhs accepts a primitive only if t < tmax; one ulp past t_max makes

@@ -13,9 +13,17 @@
 //! | 12..16 | power (f32 bits) |
 //!
 //! The records are then byte-shuffled (byte k of every record forms plane k)
-//! and the 16 planes compressed as one zstd frame. Sorting makes the deltas
-//! small and the shuffle puts their zero high bytes — and the few distinct
-//! band and power values — into long runs that zstd removes.
+//! and each plane is compressed as its own zstd frame, or stored raw when
+//! that is no smaller. Sorting makes the deltas small and the shuffle puts
+//! their zero high bytes — and the few distinct band and power values —
+//! into long runs that zstd removes; a frame per plane gives each plane its
+//! own entropy table (zstd keeps one per block, and one frame for all 16
+//! planes made the maps 10 % larger), and the noise planes (the low bytes
+//! of the deltas and directions) decode as a copy.
+//!
+//! Blob layout (format 5): a u16 mask of the planes stored raw, the stored
+//! length of each of the 16 planes (u32), then the planes in order.
+//! Format 4 compressed all 16 planes as one zstd frame.
 
 use super::format::TileEntry;
 use crate::bounds::Aabb;
@@ -150,11 +158,15 @@ impl EncodedTile {
     }
 }
 
+/// Bytes of a blob's plane table: the raw-plane mask and 16 lengths.
+const PLANE_TABLE: usize = 2 + 4 * RECORD_BYTES;
+
 /// Reusable scratch for [`encode_tile`] (keeps allocations out of the loop).
 #[derive(Default)]
 pub struct TileEncoder {
     keys: Vec<EncodeKey>,
     raw: Vec<u8>,
+    packed: Vec<u8>,
     zstd: Option<zstd::bulk::Compressor<'static>>,
 }
 
@@ -203,7 +215,23 @@ impl TileEncoder {
             Some(c) => c,
             none => none.insert(zstd::bulk::Compressor::new(ZSTD_LEVEL)?),
         };
-        let blob = zstd.compress(&self.raw)?;
+        let mut blob = vec![0u8; PLANE_TABLE];
+        let mut raw_planes = 0u16;
+        for (k, plane) in self.raw.chunks_exact(n).enumerate() {
+            self.packed.clear();
+            self.packed.reserve(zstd::zstd_safe::compress_bound(n));
+            let packed = zstd.compress_to_buffer(plane, &mut self.packed)?;
+            let stored = if packed < n {
+                blob.extend_from_slice(&self.packed);
+                packed
+            } else {
+                raw_planes |= 1 << k;
+                blob.extend_from_slice(plane);
+                n
+            };
+            blob[2 + 4 * k..6 + 4 * k].copy_from_slice(&(stored as u32).to_le_bytes());
+        }
+        blob[0..2].copy_from_slice(&raw_planes.to_le_bytes());
         let crc = crc32fast::hash(&blob);
         Ok(EncodedTile {
             blob,
@@ -223,7 +251,7 @@ pub enum DecodeError {
     Checksum { stored: u32, computed: u32 },
     #[error("zstd frame is corrupt: {0}")]
     Zstd(std::io::Error),
-    #[error("decompressed to {got} bytes, expected {expected} for {count} photons")]
+    #[error("a plane decompressed to {got} bytes, expected {expected} for {count} photons")]
     Length {
         got: usize,
         expected: usize,
@@ -231,6 +259,8 @@ pub enum DecodeError {
     },
     #[error("position codes run past 48 bits")]
     Order,
+    #[error("plane table does not match the blob")]
+    Table,
 }
 
 /// Reusable scratch for [`TileDecoder::decode`].
@@ -270,24 +300,44 @@ impl TileDecoder {
         let (count, quant, layer) = (entry.count, &entry.quant, entry.layer as u16);
         let n = count as usize;
         let expected = n * RECORD_BYTES;
-        self.raw.clear();
-        // zstd writes at most `capacity()` bytes; a frame longer than
-        // expected fails here or below, never overruns.
-        self.raw.reserve_exact(expected.max(1));
+        if blob.len() < PLANE_TABLE || n == 0 {
+            return Err(DecodeError::Table);
+        }
+        let raw_planes = u16::from_le_bytes([blob[0], blob[1]]);
+        let stored = |k: usize| {
+            u32::from_le_bytes(blob[2 + 4 * k..6 + 4 * k].try_into().expect("4 bytes")) as usize
+        };
+        let total = (0..RECORD_BYTES).try_fold(PLANE_TABLE, |t: usize, k| t.checked_add(stored(k)));
+        if total != Some(blob.len()) {
+            return Err(DecodeError::Table);
+        }
+        // Only the growth is zeroed; every byte is written below.
+        self.raw.resize(expected, 0);
         let zstd = match &mut self.zstd {
             Some(d) => d,
             none => none.insert(zstd::bulk::Decompressor::new().map_err(DecodeError::Zstd)?),
         };
-        // One spare byte of capacity tells "exactly expected" from "more".
-        let got = zstd
-            .decompress_to_buffer(blob, &mut self.raw)
-            .map_err(DecodeError::Zstd)?;
-        if got != expected {
-            return Err(DecodeError::Length {
-                got,
-                expected,
-                count,
-            });
+        let mut at = PLANE_TABLE;
+        for (k, plane) in self.raw.chunks_exact_mut(n).enumerate() {
+            let src = &blob[at..at + stored(k)];
+            at += stored(k);
+            // zstd writes at most the plane's length: a longer frame fails.
+            let got = if raw_planes & (1 << k) != 0 {
+                if src.len() == n {
+                    plane.copy_from_slice(src);
+                }
+                src.len()
+            } else {
+                zstd.decompress_to_buffer(src, plane)
+                    .map_err(DecodeError::Zstd)?
+            };
+            if got != n {
+                return Err(DecodeError::Length {
+                    got,
+                    expected: n,
+                    count,
+                });
+            }
         }
         let q = BoxQuantizer::new(quant);
         let raw = &self.raw[..];

@@ -6,7 +6,8 @@
 //!                     provenance digest [32], provenance record length u32
 //!                     and UTF-8 JSON, metadata offset u64, length u64,
 //!                     crc32), crc32 of everything before it
-//!            blobs    one zstd frame per tile (see `codec`)
+//!            blobs    one per tile: a plane table and 16 byte planes, each
+//!                     zstd-compressed or raw (see `codec`)
 //!            metadata UTF-8 JSON the producer reported at the end (for an
 //!                     emitted map, the emission report)
 //!            index    one 72-byte entry per tile (offset, length, count,
@@ -37,7 +38,7 @@ pub const HEADER_MAGIC: [u8; 8] = *b"LTRLMAP\0";
 /// Magic at the end of a map file.
 pub const FOOTER_MAGIC: [u8; 8] = *b"LTRLEND\0";
 /// The format version this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Size of the footer in bytes.
 pub const FOOTER_LEN: usize = 40;
 /// Size of one index entry in bytes.
@@ -277,7 +278,7 @@ impl Header {
             return Err(Error::format(
                 path,
                 format!(
-                    "format version {version} keeps volume photons in one layer (version 2 records no photon groups, version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
+                    "format version {version} compresses a tile as one zstd frame (version 3 keeps volume photons in one layer, version 2 records no photon groups, version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
                 ),
             ));
         }

@@ -91,8 +91,11 @@ impl WriterPlan {
         let target = DEFAULT_TILE_PHOTONS.min(max_tile / 2);
         let buffer_bytes = rest - merge;
         let cells = expected_photons.div_ceil(target as u64).max(1);
-        // At least 8 chunks per cell fit in the buffers, so spills are sizeable.
-        let chunk_records = ((buffer_bytes / cells / 8) as usize / STAGED).clamp(256, 4096);
+        // At least 8 chunks per cell fit in the buffers, so spills are
+        // sizeable, and no cell holds much unused capacity: with 10^5 cells
+        // (10^9 photons) chunks of 256 records filled the buffers with
+        // mostly empty chunks, and spills wrote frames of a few dozen photons.
+        let chunk_records = ((buffer_bytes / cells / 8) as usize / STAGED).clamp(32, 4096);
         Ok(WriterPlan {
             budget,
             target_tile_photons: target,
@@ -291,11 +294,18 @@ impl MapWriter {
         Ok(())
     }
 
-    /// Spill the largest buffers until half the buffer share is free.
+    /// Spill the fullest buffers until half the buffer share is free: the
+    /// most photons per frame, so the smallest deltas and the least
+    /// overhead per photon.
     fn spill_largest(&mut self) -> Result<()> {
         self.summary.peak_buffered_bytes = self.summary.peak_buffered_bytes.max(self.buffered);
-        let mut order: Vec<usize> = (0..self.cells.len()).collect();
-        order.sort_by_key(|&i| std::cmp::Reverse(self.cells[i].chunks.len()));
+        let held: Vec<usize> = self
+            .cells
+            .iter()
+            .map(|c| c.chunks.iter().map(Vec::len).sum())
+            .collect();
+        let mut order: Vec<usize> = (0..self.cells.len()).filter(|&i| held[i] > 0).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(held[i]));
         for i in order {
             if self.buffered <= self.plan.buffer_bytes / 2 {
                 break;

@@ -119,3 +119,46 @@ fn blob_is_a_function_of_the_multiset_of_records() {
     let b = TileEncoder::default().encode(&photons).unwrap();
     assert_eq!(a.blob, b.blob);
 }
+
+/// A blob whose plane table disagrees with its length, or whose raw plane
+/// is short, is an error rather than a panic or a wrong tile.
+#[test]
+fn damaged_plane_tables_are_rejected() {
+    let photons = staged(3000, 8);
+    let t = TileEncoder::default().encode(&photons).unwrap();
+    let raw_mask = u16::from_le_bytes([t.blob[0], t.blob[1]]);
+    // Some planes are noise (stored raw), some compress.
+    assert!(raw_mask != 0 && raw_mask != u16::MAX, "{raw_mask:016b}");
+    let mut dec = TileDecoder::default();
+    let mut out = Vec::new();
+    let check = |blob: Vec<u8>, dec: &mut TileDecoder, out: &mut Vec<PackedPhoton>| {
+        let e = TileEntry {
+            crc: crc32fast::hash(&blob),
+            ..t.entry(0)
+        };
+        dec.decode(&blob, &e, out).unwrap_err()
+    };
+    // A plane's stored length one longer than the blob holds.
+    let mut longer = t.blob.clone();
+    longer[2] = longer[2].wrapping_add(1);
+    assert!(matches!(
+        check(longer, &mut dec, &mut out),
+        DecodeError::Table
+    ));
+    // A compressed plane marked raw.
+    let k = (0..16).find(|k| raw_mask & (1 << k) == 0).unwrap();
+    let mut flipped = t.blob.clone();
+    flipped[0..2].copy_from_slice(&(raw_mask | 1 << k).to_le_bytes());
+    assert!(matches!(
+        check(flipped, &mut dec, &mut out),
+        DecodeError::Length { .. }
+    ));
+    // Shorter than the table.
+    assert!(matches!(
+        check(t.blob[..20].to_vec(), &mut dec, &mut out),
+        DecodeError::Table
+    ));
+    // The intact blob still decodes.
+    dec.decode(&t.blob, &t.entry(0), &mut out).unwrap();
+    assert_eq!(out.len(), 3000);
+}

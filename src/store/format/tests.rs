@@ -34,24 +34,29 @@ fn header_round_trips() {
     assert_eq!(back, h);
 }
 
-/// A version-1 header (no provenance) is refused with a message that
-/// says what to do, not a checksum or length complaint.
+/// A version-1 header (no provenance) or version-4 header (one zstd frame a
+/// tile) is refused with a message that says what to do, not a checksum or
+/// length complaint.
 #[test]
-fn version_one_maps_are_refused_clearly() {
-    let mut out = ByteWriter::default();
-    out.0.extend_from_slice(&HEADER_MAGIC);
-    out.u32(1);
-    let body = [0u8; 40];
-    out.u32(body.len() as u32 + 4);
-    out.0.extend_from_slice(&body);
-    let crc = crc32fast::hash(&out.0);
-    out.u32(crc);
-    let e = Header::decode(&out.0, Path::new("old.map")).unwrap_err();
-    let msg = e.to_string();
-    assert!(
-        msg.contains("old.map") && msg.contains("version 1") && msg.contains("emit the map again"),
-        "{msg}"
-    );
+fn older_maps_are_refused_clearly() {
+    for version in [1u32, 4] {
+        let mut out = ByteWriter::default();
+        out.0.extend_from_slice(&HEADER_MAGIC);
+        out.u32(version);
+        let body = [0u8; 40];
+        out.u32(body.len() as u32 + 4);
+        out.0.extend_from_slice(&body);
+        let crc = crc32fast::hash(&out.0);
+        out.u32(crc);
+        let e = Header::decode(&out.0, Path::new("old.map")).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("old.map")
+                && msg.contains(&format!("version {version}"))
+                && msg.contains("emit the map again"),
+            "{msg}"
+        );
+    }
 }
 
 #[test]
