@@ -53,6 +53,12 @@ fn moller_trumbore(o: Vec3, d: Vec3, tri: &[Vec3; 3], t_min: f32, t_max: f32) ->
     (t > t_min as f64 && t <= t_max as f64).then_some(t as f32)
 }
 
+/// Any brute-force hit with t in (t_min, t_max): what `occluded` answers.
+fn brute_occluded(tris: &[[Vec3; 3]], o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> bool {
+    tris.iter()
+        .any(|tri| moller_trumbore(o, d, tri, t_min, t_max).is_some_and(|t| t < t_max))
+}
+
 /// The smallest ray parameter the queries accept, as `Geometry` computes it.
 fn t_min_of(geom: &Geometry, dir: Vec3) -> f32 {
     (geom.epsilon_m() / dir.length()).max(EPSILON_MIN_M)
@@ -208,10 +214,7 @@ fn occluded_matches_brute_force() {
         } else {
             10.0 + (i % 50) as f32
         };
-        let t_min = t_min_of(&geom, d);
-        let want = tris
-            .iter()
-            .any(|tri| moller_trumbore(o, d, tri, t_min, t_max).is_some_and(|t| t < t_max));
+        let want = brute_occluded(&tris, o, d, t_min_of(&geom, d), t_max);
         assert_eq!(
             geom.occluded(o, d, t_max),
             want,
@@ -872,9 +875,7 @@ fn the_ceiling_clears_only_segments_that_hit_nothing() {
             hits += 1;
             assert!(close(h.t, t, 1e-5), "segment {i}: t {} vs {t}", h.t);
         }
-        let want_blocked = tris
-            .iter()
-            .any(|tri| moller_trumbore(o, d, tri, t_min, t_max).is_some_and(|t| t < t_max));
+        let want_blocked = brute_occluded(&tris, o, d, t_min, t_max);
         assert_eq!(
             geom.occluded(o, d, t_max),
             want_blocked,

@@ -150,7 +150,6 @@ pub struct ShardWriter {
     temp: tempfile::NamedTempFile,
     out: Counting<BufWriter<File>>,
     codec: FrameCodec,
-    bounds: Aabb,
     batch: Vec<StagedPhoton>,
     frame: Vec<u8>,
     photons: u64,
@@ -180,7 +179,6 @@ impl ShardWriter {
                 bytes: 0,
             },
             codec,
-            bounds: *bounds,
             batch: Vec::with_capacity(FRAME_PHOTONS),
             frame: Vec::new(),
             photons: 0,
@@ -191,17 +189,7 @@ impl ShardWriter {
     pub fn push(&mut self, photons: &[StagedPhoton]) -> Result<()> {
         let grid = self.codec.grid();
         for p in photons {
-            let mut p = *p;
-            if !grid.snap(&mut p) {
-                return Err(Error::invalid(
-                    "photon position",
-                    format!(
-                        "{:?} is not finite or lies far outside the map's bounds {:?}",
-                        p.photon.position, self.bounds
-                    ),
-                ));
-            }
-            self.batch.push(p);
+            self.batch.push(grid.snapped(p)?);
             if self.batch.len() == FRAME_PHOTONS {
                 self.write_frame()?;
             }

@@ -61,6 +61,8 @@ const PAYLOAD_BYTES: usize = 11;
 pub struct SnapGrid {
     /// Grid spacing per axis, a power of two.
     step: [f64; 3],
+    /// The map bounds it was made for (named in errors).
+    bounds: Aabb,
 }
 
 impl SnapGrid {
@@ -76,6 +78,7 @@ impl SnapGrid {
         };
         SnapGrid {
             step: [step(0), step(1), step(2)],
+            bounds: *bounds,
         }
     }
 
@@ -107,6 +110,21 @@ impl SnapGrid {
             (i[1] as f64 * self.step[1]) as f32,
             (i[2] as f64 * self.step[2]) as f32,
         ]
+    }
+
+    /// `p` snapped to the grid, or the error for a photon outside its range.
+    pub fn snapped(&self, p: &StagedPhoton) -> Result<StagedPhoton> {
+        let mut p = *p;
+        if self.snap(&mut p) {
+            return Ok(p);
+        }
+        Err(Error::invalid(
+            "photon position",
+            format!(
+                "{:?} is not finite or lies far outside the map's bounds {:?}",
+                p.photon.position, self.bounds
+            ),
+        ))
     }
 
     /// Snap `p` to the grid in place; false if it lies outside the grid's range.
