@@ -24,6 +24,10 @@ pub struct MapSummary {
     pub bytes_per_photon: f64,
     /// Compressed bytes the sort spilled to scratch space (0 for a reused map).
     pub spilled_bytes: u64,
+    /// Frames those bytes were written as (photons per frame set how well
+    /// they compress; 0 for a reused map).
+    #[serde(default)]
+    pub spilled_frames: u64,
     /// SHA-256 of the emission inputs (see `provenance`).
     pub provenance: String,
 }
@@ -38,6 +42,7 @@ impl MapSummary {
             file_bytes: summary.file_bytes,
             bytes_per_photon: summary.file_bytes as f64 / summary.photons.max(1) as f64,
             spilled_bytes: summary.spilled_bytes,
+            spilled_frames: summary.spilled_frames,
             provenance,
         }
     }
@@ -52,6 +57,7 @@ impl MapSummary {
             file_bytes: map.file_bytes(),
             bytes_per_photon: map.file_bytes() as f64 / h.photons.max(1) as f64,
             spilled_bytes: 0,
+            spilled_frames: 0,
             provenance: h.provenance.digest_hex(),
         }
     }

@@ -57,6 +57,7 @@ const UNITS: &[(&str, &str)] = &[
     ("map.file_bytes", "bytes"),
     ("map.bytes_per_photon", "bytes per photon"),
     ("map.spilled_bytes", "bytes"),
+    ("map.spilled_frames", "frames"),
     ("radiometers[].depth_m", "m"),
     ("radiometers[].position_m", "m"),
     ("radiometers[].L", SPECTRAL_RADIANCE),
