@@ -23,8 +23,8 @@
 //! log2(frame volume in grid steps / photons in the frame); the rest of a
 //! record costs what the map's own record does. The map sorts 65 536
 //! photons at 16 bits per tile axis, a frame a few thousand at the grid's
-//! finer steps, so a spilled photon costs 1 to 2.5 bytes more than a
-//! stored one: spill traffic is 1.1 to 1.3 times the map, not less.
+//! finer steps, so a spilled photon costs 1 to 4 bytes more than a
+//! stored one: spill traffic is 1.1 to 1.4 times the map, not less.
 //!
 //! Scratch frame layout: the previous frame of the same cell (offset u64,
 //! length u32, count u32; zeros for none), then a [`FrameCodec`] body.
