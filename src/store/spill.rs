@@ -154,6 +154,8 @@ pub struct FrameCodec {
     grid: SnapGrid,
     compressor: zstd::bulk::Compressor<'static>,
     decompressor: zstd::bulk::Decompressor<'static>,
+    /// The batch's grid coordinates, then its sort keys.
+    cells: Vec<[i64; 3]>,
     keys: Vec<(u128, u32)>,
     planes: Vec<u8>,
     packed: Vec<u8>,
@@ -169,6 +171,7 @@ impl FrameCodec {
             grid,
             compressor: zstd::bulk::Compressor::new(ZSTD_LEVEL)?,
             decompressor: zstd::bulk::Decompressor::new()?,
+            cells: Vec::new(),
             keys: Vec::new(),
             planes: Vec::new(),
             packed: Vec::new(),
@@ -186,27 +189,27 @@ impl FrameCodec {
         let n = batch.len();
         assert!((1..=FRAME_PHOTONS).contains(&n), "frame of {n} photons");
         let grid = self.grid;
-        let index = |p: &StagedPhoton| {
+        self.cells.clear();
+        self.cells.extend(batch.iter().map(|p| {
             grid.index(p.photon.position)
                 .expect("photons are snapped inside the grid's range before they are encoded")
-        };
+        }));
         let mut corner = [i64::MAX; 3];
-        for p in batch {
-            let i = index(p);
+        for i in &self.cells {
             for a in 0..3 {
                 corner[a] = corner[a].min(i[a]);
             }
         }
         self.keys.clear();
-        self.keys.extend(batch.iter().enumerate().map(|(k, p)| {
-            let i = index(p);
-            let u = [
-                (i[0] - corner[0]) as u64,
-                (i[1] - corner[1]) as u64,
-                (i[2] - corner[2]) as u64,
-            ];
-            (morton3_wide(u), k as u32)
-        }));
+        self.keys
+            .extend(self.cells.iter().enumerate().map(|(k, i)| {
+                let u = [
+                    (i[0] - corner[0]) as u64,
+                    (i[1] - corner[1]) as u64,
+                    (i[2] - corner[2]) as u64,
+                ];
+                (morton3_wide(u), k as u32)
+            }));
         self.keys.sort_unstable();
         let mut widest = 0u128;
         let mut prev_code = 0u128;
