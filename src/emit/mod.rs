@@ -18,6 +18,7 @@ pub mod trace;
 
 use crate::bounds::Aabb;
 use crate::error::Result;
+use crate::optics::majorant::MajorantGrid;
 use crate::progress::Progress;
 use crate::provenance::Provenance;
 use crate::rng::Pcg32;
@@ -38,6 +39,8 @@ pub struct Emitter<'s> {
     cdf: Vec<f64>,
     /// Power per photon of each band (W nm^-1).
     photon_power: Vec<f64>,
+    /// The water's local majorants and IOP bounds for delta tracking.
+    grid: MajorantGrid,
     totals: Mutex<Totals>,
     /// Recorded in the map's header ([`emit`] sets it).
     provenance: Provenance,
@@ -74,6 +77,7 @@ impl<'s> Emitter<'s> {
             scene,
             cdf,
             photon_power,
+            grid: MajorantGrid::new(&scene.water, nb),
             totals: Mutex::new(Totals::new(nb, scene.tally_depths.len())),
             provenance: Provenance::unrecorded(),
             report: OnceLock::new(),
@@ -115,6 +119,7 @@ impl<'s> Emitter<'s> {
         tally.clear();
         let t = trace::trace(
             self.scene,
+            &self.grid,
             i,
             &mut rng,
             source,

@@ -1,11 +1,12 @@
 //! Tracing one photon from the sky or the sun through the sea surface,
 //! the water, the floor and the targets.
 //!
-//! Free paths use delta tracking against the band's majorant extinction, so
-//! heterogeneous water is sampled without bias: a tentative collision is
-//! real with probability c(x)/c_max, then absorption (a/c), pure-water
-//! scattering (b_w/c) or particle scattering (b_p/c) is chosen; otherwise it
-//! is a null collision and the flight goes on. Absorption is analog (the
+//! Free paths use delta tracking against the band's local majorant
+//! extinction ([`MajorantGrid`]: piecewise constant along the axis the
+//! water varies on), so heterogeneous water is sampled without bias: a
+//! tentative collision is real with probability c(x)/c_maj, then absorption
+//! (a/c), pure-water scattering (b_w/c) or particle scattering (b_p/c) is
+//! chosen; otherwise it is a null collision and the flight goes on. Absorption is analog (the
 //! photon ends). The floor and targets are Lambertian: a photon is absorbed
 //! with probability 1 - R, else reflected into a cosine-weighted direction.
 //!
@@ -30,6 +31,7 @@
 //! directly.
 
 use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LD, LU, MIN_ABS_MU};
+use crate::optics::majorant::{Collision, MajorantGrid};
 use crate::optics::phase::{cosine_hemisphere, scatter};
 use crate::photon::{volume_layer, Photon, LAYER_SURFACE};
 use crate::rng::Pcg32;
@@ -83,7 +85,8 @@ struct Path<'a> {
     band: usize,
     power: f32,
     group: u8,
-    c_max: f64,
+    /// The water's local majorants and IOP bounds.
+    grid: &'a MajorantGrid,
     split: usize,
     events: u32,
     result: Traced,
@@ -91,11 +94,12 @@ struct Path<'a> {
     pending: Vec<Branch>,
 }
 
-/// Trace photon `index` of band `band` from `source`; stored photons go to
-/// `out`, tallies to `tally`.
+/// Trace photon `index` of band `band` from `source` through water whose
+/// majorants are `grid`; stored photons go to `out`, tallies to `tally`.
 #[allow(clippy::too_many_arguments)]
 pub fn trace(
     scene: &Scene,
+    grid: &MajorantGrid,
     index: u64,
     rng: &mut Pcg32,
     source: Source,
@@ -111,7 +115,7 @@ pub fn trace(
         band,
         power,
         group: crate::photon::group_of_path(index),
-        c_max: scene.water.majorant(band),
+        grid,
         split: scene.upward_split.max(1),
         events: 0,
         result: Traced {
@@ -200,10 +204,13 @@ impl Path<'_> {
                 self.result.truncated = true;
                 return (Fate::AbsorbedWater, b.weight);
             }
-            let t_flight = rng.exponential(self.c_max);
+            let tau = rng.exponential(1.0);
             let t_surface = crate::scene::Domain::surface_distance(b.pos, b.dir);
             let t_edge = scene.domain.edge_distance(b.pos, b.dir);
-            let t_limit = t_flight.min(t_surface).min(t_edge);
+            let t_wall = t_surface.min(t_edge);
+            let flight = self.grid.free_path(self.band, b.pos, b.dir, t_wall, tau);
+            let (t_flight, cell) = flight.unwrap_or((f64::INFINITY, 0));
+            let t_limit = t_flight.min(t_wall);
             let hit = scene
                 .geometry
                 .intersect(b.pos, b.dir, t_limit.min(f32::MAX as f64) as f32);
@@ -262,18 +269,12 @@ impl Path<'_> {
             let next = b.pos + b.dir * t_flight as f32;
             tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
             b.pos = next;
-            let iop = scene.water.iop(b.pos, self.band);
-            let xi = rng.uniform_f64() * self.c_max;
-            if xi < iop.a {
-                return (Fate::AbsorbedWater, b.weight);
-            }
-            if xi >= iop.c() {
-                continue; // null collision
-            }
-            let phase = if xi < iop.a + iop.b_w {
-                &scene.water_phase
-            } else {
-                &scene.particle_phase
+            let xi = rng.uniform_f64() * self.grid.majorant(self.band, cell);
+            let phase = match self.grid.collide(&scene.water, self.band, cell, b.pos, xi) {
+                Collision::Absorbed => return (Fate::AbsorbedWater, b.weight),
+                Collision::Null => continue,
+                Collision::WaterScatter => &scene.water_phase,
+                Collision::ParticleScatter => &scene.particle_phase,
             };
             if !b.direct || scene.store_direct {
                 self.store(&b, volume_layer(b.dir), out);

@@ -48,11 +48,18 @@ impl Constituents {
             nap_440: self.nap_440 + (o.nap_440 - self.nap_440) * t,
         }
     }
-    fn max(&self, o: &Constituents) -> Constituents {
+    pub(crate) fn max(&self, o: &Constituents) -> Constituents {
         Constituents {
             chl: self.chl.max(o.chl),
             cdom_440: self.cdom_440.max(o.cdom_440),
             nap_440: self.nap_440.max(o.nap_440),
+        }
+    }
+    pub(crate) fn min(&self, o: &Constituents) -> Constituents {
+        Constituents {
+            chl: self.chl.min(o.chl),
+            cdom_440: self.cdom_440.min(o.cdom_440),
+            nap_440: self.nap_440.min(o.nap_440),
         }
     }
 }
@@ -90,6 +97,11 @@ impl ConstituentGrid {
         self.values
             .iter()
             .fold(Constituents::default(), |m, c| m.max(c))
+    }
+
+    fn min(&self) -> Constituents {
+        let first = self.values.first().copied().unwrap_or_default();
+        self.values.iter().fold(first, |m, c| m.min(c))
     }
 }
 
@@ -161,6 +173,18 @@ impl ConstituentField {
                 layers.iter().fold(*base, |m, l| m.max(&l.2))
             }
             ConstituentField::Grid(g) => g.max(),
+        }
+    }
+
+    /// The smallest concentrations anywhere.
+    pub fn min(&self) -> Constituents {
+        match self {
+            ConstituentField::Uniform(c) => *c,
+            ConstituentField::Gradient { from, to, .. } => from.min(to),
+            ConstituentField::Layers { base, layers } => {
+                layers.iter().fold(*base, |m, l| m.min(&l.2))
+            }
+            ConstituentField::Grid(g) => g.min(),
         }
     }
 }

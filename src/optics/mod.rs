@@ -2,6 +2,7 @@
 //! sky's radiance distribution and the sea surface.
 
 pub mod iop;
+pub mod majorant;
 pub mod phase;
 pub mod sky;
 pub mod surface;
