@@ -21,8 +21,16 @@ pub const FF_BB_RATIO_RANGE: RangeInclusive<f64> = 1e-4..=0.15;
 const FF_SERIES_RADIUS: f64 = 0.05;
 /// Series terms: 0.05^16 is far below f64 round-off.
 const FF_SERIES_TERMS: usize = 18;
-/// Nodes of the sampler's starting table, even in ln sin^2(psi/2).
+/// Nodes of the table the sampler's inverse table is solved from, even in
+/// ln sin^2(psi/2).
 const FF_GUIDE_NODES: usize = 4097;
+/// Nodes of the sampler's inverse table, even in z = ln P - ln(1 - P),
+/// which resolves both the forward peak (small P) and the backward end
+/// (P near 1).
+const FF_INVERSE_NODES: usize = 4097;
+/// The table's last z: that of the largest P below 1 that a sample can ask
+/// for (1 - 2^-53, z = 36.74).
+const FF_INVERSE_Z_MAX: f64 = 37.0;
 /// Simpson intervals for the mean cosine.
 const FF_MEAN_INTERVALS: usize = 4096;
 
@@ -37,9 +45,13 @@ pub struct FournierForand {
     cdf_min: f64,
     backscatter: f64,
     mean_cos: f64,
-    /// ln P(<psi) at FF_GUIDE_NODES values of ln s2 evenly spaced over
-    /// [ln S2_MIN, 0]: brackets and first guesses for the sampler.
-    guide_ln_cdf: Arc<[f64]>,
+    /// The sampler's start: at FF_INVERSE_NODES values of z = ln P -
+    /// ln(1 - P) evenly spaced over [z(cdf_min), FF_INVERSE_Z_MAX], the root
+    /// ln s2 and its slope d ln s2 / dz, for cubic Hermite interpolation.
+    inverse: Arc<[[f64; 2]]>,
+    /// The table's first z, and its nodes per unit of z.
+    z_min: f64,
+    inverse_scale: f64,
 }
 
 /// The constants the density and CDF share.
@@ -113,17 +125,45 @@ impl FournierForand {
     fn build(n: f64, mu: f64) -> Self {
         let shape = FfShape::new(n, mu);
         let ln_s2_min = S2_MIN.ln();
-        let guide_ln_cdf: Arc<[f64]> = (0..FF_GUIDE_NODES)
+        let guide_ln_cdf: Vec<f64> = (0..FF_GUIDE_NODES)
             .map(|i| shape.cdf(ff_guide_s2(ln_s2_min, i)).ln())
             .collect();
+        let cdf_min = shape.cdf(S2_MIN);
+        let z_min = cdf_min.ln() - (-cdf_min).ln_1p();
+        let last = FF_INVERSE_NODES - 1;
+        let h = (FF_INVERSE_Z_MAX - z_min) / last as f64;
+        let mut inverse: Vec<[f64; 2]> = (0..FF_INVERSE_NODES)
+            .map(|j| {
+                let z = z_min + j as f64 * h;
+                // ln P = -ln(1 + e^-z); d ln P / dz = 1 - P.
+                let ln_v = -(-z).exp().ln_1p();
+                let t = if j == 0 {
+                    ln_s2_min
+                } else {
+                    shape.solve_ln_s2(&guide_ln_cdf, ln_v)
+                };
+                let s2 = t.exp();
+                let dt_dlnv = shape.cdf(s2) / (FOUR_PI * s2 * shape.density(s2));
+                [t, dt_dlnv * -ln_v.exp_m1()]
+            })
+            .collect();
+        // Where P is within round-off of 1 the roots are only known to
+        // some 1e-12 and may step back by as much: keep the table (and so
+        // the sampler's brackets) monotone.
+        for j in 1..inverse.len() {
+            inverse[j][0] = inverse[j][0].max(inverse[j - 1][0]);
+        }
+        let inverse: Arc<[[f64; 2]]> = inverse.into();
         FournierForand {
             n,
             mu,
             shape,
-            cdf_min: shape.cdf(S2_MIN),
+            cdf_min,
             backscatter: 1.0 - shape.cdf(0.5),
             mean_cos: shape.mean_cos(),
-            guide_ln_cdf,
+            inverse,
+            z_min,
+            inverse_scale: 1.0 / h,
         }
     }
 
@@ -162,32 +202,37 @@ impl FournierForand {
         if v >= 1.0 {
             return -1.0;
         }
-        1.0 - 2.0 * self.sample_ln_s2(v.ln()).exp()
+        1.0 - 2.0 * self.sample_ln_s2(v.ln(), u.ln()).exp()
     }
 
-    /// ln s2 at which ln P(<psi) = `ln_v`, for ln cdf_min < ln_v < 0.
-    fn sample_ln_s2(&self, ln_v: f64) -> f64 {
-        let guide = &self.guide_ln_cdf;
-        let last = guide.len() - 1;
-        // guide[0] = ln cdf_min < ln_v < 0 = guide[last], so i is in 1..=last.
-        let i = guide.partition_point(|&g| g <= ln_v).clamp(1, last);
-        let ln_s2_min = S2_MIN.ln();
-        let (t_lo, t_hi) = (ff_guide_tau(ln_s2_min, i - 1), ff_guide_tau(ln_s2_min, i));
-        let frac = (ln_v - guide[i - 1]) / (guide[i] - guide[i - 1]);
-        let t0 = if frac.is_finite() {
-            t_lo + frac * (t_hi - t_lo)
-        } else {
-            0.5 * (t_lo + t_hi)
-        };
-        // ln P is nearly linear in ln s2 (P ~ s2^-nu near the peak), so Newton
-        // on it converges in a few steps; dP/d ln s2 = 4 pi s2 p. A Newton
-        // step below 1e-7 leaves an error of order its square (1e-14 in
-        // ln s2, round-off for the s2 it gives), so it is taken as the last.
-        solve_increasing_quadratic(t_lo, t_hi, t0, 1e-7, 1e-13, |t| {
-            let s2 = t.exp();
-            let cdf = self.shape.cdf(s2);
-            (cdf.ln() - ln_v, FOUR_PI * s2 * self.shape.density(s2) / cdf)
-        })
+    /// ln s2 at which ln P(<psi) = `ln_v` (`ln_u` = ln(1 - P)), for
+    /// cdf_min < P < 1: a cubic Hermite start from the inverse table (within
+    /// 1e-8 in ln s2, tested), then Newton (see [`FfShape::newton_ln_s2`]),
+    /// whose first step is then its last.
+    fn sample_ln_s2(&self, ln_v: f64, ln_u: f64) -> f64 {
+        let (lo, hi, start) = self.start_ln_s2(ln_v - ln_u);
+        self.shape.newton_ln_s2(lo, hi, start, ln_v)
+    }
+
+    /// A bracket and the Hermite start of [`Self::sample_ln_s2`] at z =
+    /// ln P - ln(1 - P).
+    fn start_ln_s2(&self, z: f64) -> (f64, f64, f64) {
+        let inv = &self.inverse;
+        let last = inv.len() - 1;
+        let x = ((z - self.z_min) * self.inverse_scale).clamp(0.0, last as f64);
+        let j = (x as usize).min(last - 1);
+        let f = x - j as f64;
+        let ([t0, m0], [t1, m1]) = (inv[j], inv[j + 1]);
+        let h = 1.0 / self.inverse_scale;
+        let g = 1.0 - f;
+        let start =
+            (1.0 + 2.0 * f) * g * g * t0 + f * g * g * h * m0 + f * f * (3.0 - 2.0 * f) * t1
+                - f * f * g * h * m1;
+        // The root lies between the nodes; a node either side more allows
+        // for rounding of x.
+        let lo = inv[j.saturating_sub(1)][0];
+        let hi = inv[(j + 2).min(last)][0];
+        (lo, hi, start)
     }
 }
 
@@ -204,6 +249,37 @@ fn ff_guide_s2(ln_s2_min: f64, i: usize) -> f64 {
 }
 
 impl FfShape {
+    /// ln s2 at which ln P(<psi) = `ln_v`, started from `guide` (ln P at
+    /// FF_GUIDE_NODES values of ln s2 evenly spaced over [ln S2_MIN, 0]):
+    /// bracketed by the guide, started by linear interpolation in it.
+    fn solve_ln_s2(&self, guide: &[f64], ln_v: f64) -> f64 {
+        let last = guide.len() - 1;
+        // guide[0] = ln cdf_min < ln_v < 0 = guide[last], so i is in 1..=last.
+        let i = guide.partition_point(|&g| g <= ln_v).clamp(1, last);
+        let ln_s2_min = S2_MIN.ln();
+        let (t_lo, t_hi) = (ff_guide_tau(ln_s2_min, i - 1), ff_guide_tau(ln_s2_min, i));
+        let frac = (ln_v - guide[i - 1]) / (guide[i] - guide[i - 1]);
+        let t0 = if frac.is_finite() {
+            t_lo + frac * (t_hi - t_lo)
+        } else {
+            0.5 * (t_lo + t_hi)
+        };
+        self.newton_ln_s2(t_lo, t_hi, t0, ln_v)
+    }
+
+    /// Newton on ln P(ln s2) = `ln_v` from `t0` within [`lo`, `hi`]. ln P is
+    /// nearly linear in ln s2 (P ~ s2^-nu near the peak), so Newton
+    /// converges in a few steps; dP/d ln s2 = 4 pi s2 p. A Newton step
+    /// below 1e-7 leaves an error of order its square (1e-14 in ln s2,
+    /// round-off for the s2 it gives), so it is taken as the last.
+    fn newton_ln_s2(&self, lo: f64, hi: f64, t0: f64, ln_v: f64) -> f64 {
+        solve_increasing_quadratic(lo, hi, t0, 1e-7, 1e-13, |t| {
+            let s2 = t.exp();
+            let cdf = self.cdf(s2);
+            (cdf.ln() - ln_v, FOUR_PI * s2 * self.density(s2) / cdf)
+        })
+    }
+
     fn new(n: f64, mu: f64) -> Self {
         let nu = 0.5 * (3.0 - mu);
         let k = 0.75 * (n - 1.0) * (n - 1.0);

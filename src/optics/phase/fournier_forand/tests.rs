@@ -87,7 +87,7 @@ fn sampler_inverts_the_cdf_to_round_off() {
         for i in 1..4000 {
             // ln P targets from the forward peak to the backward end.
             let ln_v = ln_min * (1.0 - i as f64 / 4000.0);
-            let tau = ff.sample_ln_s2(ln_v);
+            let tau = ff.sample_ln_s2(ln_v, (-ln_v.exp_m1()).ln());
             let s2 = tau.exp();
             worst_cdf = worst_cdf.max((ff.shape.cdf(s2).ln() - ln_v).abs());
             let reference = super::super::solve_increasing(S2_MIN.ln(), 0.0, tau, 1e-15, |t| {
@@ -99,5 +99,38 @@ fn sampler_inverts_the_cdf_to_round_off() {
         }
         assert!(worst_cdf < 1e-12, "B {bb}: ln P off by {worst_cdf:e}");
         assert!(worst_root < 1e-12, "B {bb}: root off by {worst_root:e}");
+    }
+}
+
+/// The inverse table's Hermite start is within 1e-8 of the root in ln s2
+/// everywhere (halfway between nodes, where it is worst, and at random
+/// points), so Newton's first step is below 1e-7 and is the last: one CDF
+/// and density evaluation per sample.
+#[test]
+fn hermite_start_is_within_one_newton_step() {
+    let mut rng = crate::rng::Pcg32::new(5, 0);
+    for bb in [1e-4, 0.0183, 0.05, 0.15] {
+        let ff = FournierForand::from_backscatter(bb).unwrap();
+        let h = 1.0 / ff.inverse_scale;
+        let mut worst = 0.0f64;
+        let mids = (0..FF_INVERSE_NODES - 1).map(|j| ff.z_min + (j as f64 + 0.5) * h);
+        let randoms: Vec<f64> = (0..20_000)
+            .map(|_| ff.z_min + rng.uniform_f64() * (FF_INVERSE_Z_MAX - ff.z_min))
+            .collect();
+        for z in mids.chain(randoms) {
+            // P = 1 / (1 + e^-z), 1 - P = 1 / (1 + e^z).
+            let (ln_v, ln_u) = (-(-z).exp().ln_1p(), -z.exp().ln_1p());
+            if ln_v >= 0.0 || ln_v <= ff.cdf_min.ln() {
+                continue;
+            }
+            let (lo, hi, start) = ff.start_ln_s2(z);
+            let root = ff.sample_ln_s2(ln_v, ln_u);
+            assert!(
+                lo <= root && root <= hi,
+                "B {bb}: {root} outside [{lo}, {hi}]"
+            );
+            worst = worst.max((start - root).abs());
+        }
+        assert!(worst < 1e-8, "B {bb}: start off by {worst:e}");
     }
 }
