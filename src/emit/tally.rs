@@ -49,7 +49,14 @@ pub const MIN_ABS_MU: f64 = 0.001;
 const SCALE: f64 = (1u64 << 32) as f64;
 
 fn fixed(x: f64) -> i128 {
-    (x * SCALE).round() as i128
+    let v = (x * SCALE).round();
+    // The same value either way; the i64 conversion is one instruction,
+    // the i128 one a library call.
+    if v.abs() < 9.0e18 {
+        v as i64 as i128
+    } else {
+        v as i128
+    }
 }
 
 /// What one photon contributed (indices: depth x quantity, then the two

@@ -43,6 +43,34 @@ pub struct CellBounds {
     pub c: [f64; 2],
 }
 
+/// [`CellBounds`] without the majorant, rounded outward to f32.
+#[derive(Clone, Copy, Debug)]
+struct PackedBounds {
+    a: [f32; 2],
+    a_bw: [f32; 2],
+    c_lo: f32,
+}
+
+/// The largest f32 not above `x`.
+fn f32_below(x: f64) -> f32 {
+    let y = x as f32;
+    if y as f64 > x {
+        y.next_down()
+    } else {
+        y
+    }
+}
+
+/// The smallest f32 not below `x`.
+fn f32_above(x: f64) -> f32 {
+    let y = x as f32;
+    if (y as f64) < x {
+        y.next_up()
+    } else {
+        y
+    }
+}
+
 /// What a tentative collision turns out to be.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Collision {
@@ -100,8 +128,9 @@ pub struct MajorantGrid {
     /// without a search.
     equal: Option<(f64, f64)>,
     cells: usize,
-    /// `[band * cells + cell]`.
-    bounds: Vec<CellBounds>,
+    /// `[band * cells + cell]`, in f32 rounded outward (20 bytes rather
+    /// than 56: the table of 128 bands stays in cache).
+    bounds: Vec<PackedBounds>,
     /// The bounds' majorants alone, in the same order: the free path reads
     /// only these, and a compact table stays in cache.
     majorants: Vec<f64>,
@@ -169,7 +198,14 @@ impl MajorantGrid {
             equal,
             cells,
             majorants: bounds.iter().map(|b| b.majorant).collect(),
-            bounds,
+            bounds: bounds
+                .iter()
+                .map(|b| PackedBounds {
+                    a: [f32_below(b.a[0]), f32_above(b.a[1])],
+                    a_bw: [f32_below(b.a_bw[0]), f32_above(b.a_bw[1])],
+                    c_lo: f32_below(b.c[0]),
+                })
+                .collect(),
         }
     }
 
@@ -190,9 +226,17 @@ impl MajorantGrid {
         }
     }
 
-    /// Bounds of `band` in `cell`.
-    pub fn bounds(&self, band: usize, cell: usize) -> &CellBounds {
-        &self.bounds[band * self.cells + cell]
+    /// Bounds of `band` in `cell` (as the collision test uses them).
+    pub fn bounds(&self, band: usize, cell: usize) -> CellBounds {
+        let i = band * self.cells + cell;
+        let b = &self.bounds[i];
+        let f = |r: [f32; 2]| [r[0] as f64, r[1] as f64];
+        CellBounds {
+            majorant: self.majorants[i],
+            a: f(b.a),
+            a_bw: f(b.a_bw),
+            c: [b.c_lo as f64, self.majorants[i]],
+        }
     }
 
     /// The majorant of `band` in `cell`.
@@ -271,14 +315,14 @@ impl MajorantGrid {
         p: Vec3,
         xi: f64,
     ) -> Collision {
+        // xi is below the majorant, c's upper bound: a null collision is
+        // never certain from the bounds, and is rare.
         let b = &self.bounds[band * self.cells + cell];
-        if xi < b.a[0] {
+        if xi < b.a[0] as f64 {
             Collision::Absorbed
-        } else if xi >= b.c[1] {
-            Collision::Null
-        } else if xi >= b.a[1] && xi < b.a_bw[0] {
+        } else if xi >= b.a[1] as f64 && xi < b.a_bw[0] as f64 {
             Collision::WaterScatter
-        } else if xi >= b.a_bw[1] && xi < b.c[0] {
+        } else if xi >= b.a_bw[1] as f64 && xi < b.c_lo as f64 {
             Collision::ParticleScatter
         } else {
             Collision::decide(&water.iop(p, band), xi)
