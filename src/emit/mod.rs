@@ -37,6 +37,8 @@ pub struct Emitter<'s> {
     scene: &'s Scene,
     /// Cumulative distribution over (source, band): sun bands then sky bands.
     cdf: Vec<f64>,
+    /// Where to start looking in `cdf` for u in [i/n, (i+1)/n), n its length.
+    cdf_guide: Vec<u32>,
     /// Power per photon of each band (W nm^-1).
     photon_power: Vec<f64>,
     /// The water's local majorants and IOP bounds for delta tracking.
@@ -69,6 +71,9 @@ impl<'s> Emitter<'s> {
                 acc += x / total;
                 acc
             })
+            .collect::<Vec<f64>>();
+        let cdf_guide = (0..cdf.len())
+            .map(|i| cdf.partition_point(|&c| c <= i as f64 / cdf.len() as f64) as u32)
             .collect();
         let n = scene.photons as f64;
         let area = scene.domain.area_m2();
@@ -76,6 +81,7 @@ impl<'s> Emitter<'s> {
         Ok(Emitter {
             scene,
             cdf,
+            cdf_guide,
             photon_power,
             grid: MajorantGrid::new(&scene.water, nb),
             totals: Mutex::new(Totals::new(nb, scene.tally_depths.len())),
@@ -97,6 +103,20 @@ impl<'s> Emitter<'s> {
         self.photon_power[band]
     }
 
+    /// The (source, band) index of `u`: the first with `cdf > u` (the
+    /// last if none), found from the guide by a short walk either way.
+    fn pick(&self, u: f64) -> usize {
+        let n = self.cdf.len();
+        let mut k = self.cdf_guide[((u * n as f64) as usize).min(n - 1)] as usize;
+        while k > 0 && self.cdf[k - 1] > u {
+            k -= 1;
+        }
+        while k < n && self.cdf[k] <= u {
+            k += 1;
+        }
+        k.min(n - 1)
+    }
+
     /// Trace photon `i`; appends what it stores to `out`.
     fn trace_one(
         &self,
@@ -106,10 +126,7 @@ impl<'s> Emitter<'s> {
     ) -> (usize, trace::Traced) {
         let mut rng = Pcg32::new(self.scene.seed, i);
         let u = rng.uniform_f64();
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.cdf.len() - 1);
+        let k = self.pick(u);
         let nb = self.scene.bands.len();
         let (source, band) = if k < nb {
             (Source::Sun, k)
@@ -478,3 +495,6 @@ pub fn merge_shards(
     )?;
     Ok(Emission { map, report })
 }
+
+#[cfg(test)]
+mod tests;

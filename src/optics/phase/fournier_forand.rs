@@ -275,9 +275,33 @@ impl FfShape {
     fn newton_ln_s2(&self, lo: f64, hi: f64, t0: f64, ln_v: f64) -> f64 {
         solve_increasing_quadratic(lo, hi, t0, 1e-7, 1e-13, |t| {
             let s2 = t.exp();
-            let cdf = self.cdf(s2);
-            (cdf.ln() - ln_v, FOUR_PI * s2 * self.density(s2) / cdf)
+            let (cdf, density) = self.cdf_and_density(s2);
+            (cdf.ln() - ln_v, FOUR_PI * s2 * density / cdf)
         })
+    }
+
+    /// [`Self::cdf`] and [`Self::density`] at once, for S2_MIN <= s2 <= 1:
+    /// the printed forms share ln delta and delta^-nu (three transcendental
+    /// calls instead of five).
+    fn cdf_and_density(&self, s2: f64) -> (f64, f64) {
+        let (nu, delta) = (self.nu, s2 / self.k);
+        let x = 1.0 - delta;
+        let (cdf, density) = if x.abs() < FF_SERIES_RADIUS {
+            (self.cdf_series(s2), self.density_series(s2))
+        } else {
+            let nu_ln = nu * delta.ln();
+            let d_minus_nu = (-nu_ln).exp();
+            let cdf = (d_minus_nu * (1.0 - s2) - delta * (1.0 - self.k)) / x;
+            let one_minus_dn = -nu_ln.exp_m1();
+            let bracket = nu * x - one_minus_dn + (delta * one_minus_dn - nu * x) / s2;
+            (cdf, bracket * d_minus_nu / (FOUR_PI * x * x))
+        };
+        let cos = 1.0 - 2.0 * s2;
+        let sin_sq = 4.0 * s2 * (1.0 - s2);
+        (
+            (cdf + TWO_PI * self.c2 * cos * sin_sq).clamp(0.0, 1.0),
+            density + self.c2 * (3.0 * cos * cos - 1.0),
+        )
     }
 
     fn new(n: f64, mu: f64) -> Self {

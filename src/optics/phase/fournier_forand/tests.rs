@@ -134,3 +134,22 @@ fn hermite_start_is_within_one_newton_step() {
         assert!(worst < 1e-8, "B {bb}: start off by {worst:e}");
     }
 }
+
+/// The fused CDF and density are the separate ones to round-off, across
+/// ln s2 from S2_MIN to 1 (both sides of the series radius).
+#[test]
+fn fused_cdf_and_density_match_the_separate_forms() {
+    for bb in [1e-4, 0.0183, 0.15] {
+        let ff = FournierForand::from_backscatter(bb).unwrap();
+        let sh = ff.shape;
+        for i in 0..=20_000 {
+            let s2 = (S2_MIN.ln() * (1.0 - i as f64 / 20_000.0)).exp();
+            let (c, d) = sh.cdf_and_density(s2);
+            assert!((c / sh.cdf(s2) - 1.0).abs() < 1e-13, "B {bb} s2 {s2}: cdf");
+            assert!(
+                (d / sh.density(s2) - 1.0).abs() < 1e-13,
+                "B {bb} s2 {s2}: density"
+            );
+        }
+    }
+}
