@@ -153,7 +153,7 @@ fn planned_writer(
     options: &BuildOptions,
 ) -> Result<MapWriter> {
     let expected = pilot.expected(description.indices);
-    let mut plan = WriterPlan::new(options.mem_budget, expected)?;
+    let mut plan = WriterPlan::new(options.mem_budget, expected)?.with_threads(options.threads);
     if let Some(t) = options.tile_photons {
         plan = plan.with_tile_photons(t);
     }

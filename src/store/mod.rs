@@ -18,10 +18,10 @@ pub mod tiletree;
 pub mod writer;
 
 pub use build::{build_map, BuildOptions, PhotonSource};
-pub use codec::StagedPhoton;
+pub use codec::{StagedPhoton, ENCODE_BYTES_PER_PHOTON};
 pub use format::{Header, TileEntry};
 pub use memory::InMemoryMap;
 pub use partition::Partition;
 pub use query::{Neighbour, PhotonMap, PhotonQuery, Search};
 pub use reader::MapFile;
-pub use writer::{MapWriter, WriteSummary, WriterPlan};
+pub use writer::{MapWriter, WriteSummary, WriterPlan, EXTRA_ENCODER_BYTES};

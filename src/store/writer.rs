@@ -24,7 +24,7 @@
 //!
 //! Not for: reading maps (see `reader`), or choosing which photons to store.
 
-use super::codec::{StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON};
+use super::codec::{EncodedTile, StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON};
 use super::format::{ByteWriter, Footer, Header, Section, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
 use super::spill::{Frame, Scratch, SnapGrid};
@@ -46,6 +46,11 @@ const STAGED: usize = std::mem::size_of::<StagedPhoton>();
 /// output I/O buffer, the spill frame's sort keys and planes (about 1 MiB),
 /// the producer channel and spill metadata.
 pub const WRITER_FIXED_BYTES: u64 = 7 * MIB;
+
+/// Memory of each tile encoder beyond the first (its zstd context and
+/// buffers not counted per photon), charged to the encode share when tiles
+/// are encoded in parallel.
+pub const EXTRA_ENCODER_BYTES: u64 = 2 * MIB;
 
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
@@ -70,6 +75,10 @@ pub struct WriterPlan {
     pub buffer_bytes: u64,
     /// Records per buffer chunk.
     pub chunk_records: usize,
+    /// Threads that may encode tiles at once at the end (0 = one per
+    /// core); how many do is bounded by the encode share too
+    /// ([`WriterPlan::encode_width`]).
+    pub threads: usize,
 }
 
 impl WriterPlan {
@@ -103,7 +112,31 @@ impl WriterPlan {
             max_tile_photons: max_tile,
             buffer_bytes,
             chunk_records,
+            threads: 1,
         })
+    }
+
+    /// Encode tiles on up to `threads` threads (0 = one per core).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = threads;
+        self
+    }
+
+    /// Tiles encoded at once: at most the threads, and as many tiles of the
+    /// split threshold (plus an encoder each beyond the first) as the
+    /// encode share holds. The encode share is what one tile of
+    /// `max_tile_photons` may take.
+    pub fn encode_width(&self) -> usize {
+        let threads = match self.threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        };
+        let share = self.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        let tile = self.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        let fit = (1..=threads)
+            .take_while(|&w| w as u64 * tile + (w as u64 - 1) * EXTRA_ENCODER_BYTES <= share)
+            .last();
+        fit.unwrap_or(1)
     }
 
     /// Aim for `photons` per tile (at least 1, at most what the encode share allows).
@@ -308,54 +341,14 @@ impl MapWriter {
     }
 
     /// Encode every cell, write `metadata` (e.g. the emission report), the
-    /// index and footer, and publish the file under its final name.
+    /// index and footer, and publish the file under its final name. Cells
+    /// are read back in order and encoded [`WriterPlan::encode_width`] at a
+    /// time in parallel; tiles are written in the same order whatever the
+    /// width, and a tile's bytes depend only on its photons.
     pub fn finish(mut self, metadata: &[u8], progress: &dyn Progress) -> Result<WriteSummary> {
         progress.stage("encode tiles", self.summary.photons);
-        let mut entries: Vec<TileEntry> = Vec::new();
-        let mut encoder = TileEncoder::default();
-        let mut staged: Vec<StagedPhoton> = Vec::new();
-        let mut frame_buf: Vec<StagedPhoton> = Vec::new();
-        let cells = std::mem::take(&mut self.cells);
-        for cell in cells {
-            let mut stack = vec![cell];
-            while let Some(mut cell) = stack.pop() {
-                if cell.count == 0 {
-                    continue;
-                }
-                if cell.count > self.plan.split_threshold as u64 {
-                    let (left, right) = self.split(cell, &mut frame_buf)?;
-                    self.summary.splits += 1;
-                    stack.push(right);
-                    stack.push(left);
-                    continue;
-                }
-                staged.clear();
-                staged.reserve_exact(cell.count as usize);
-                self.scratch
-                    .for_each_frame(cell.last_frame.take(), &mut frame_buf, |records| {
-                        staged.extend_from_slice(records)
-                    })?;
-                for chunk in cell.chunks.drain(..) {
-                    staged.extend_from_slice(&chunk);
-                    self.buffered -= (chunk.capacity() * STAGED) as u64;
-                }
-                let tile = encoder
-                    .encode(&staged)
-                    .map_err(|e| Error::tile(&self.path, entries.len() as u32, e.to_string()))?;
-                self.out
-                    .write_all(&tile.blob)
-                    .map_err(|e| Error::io(&self.path, "write", e))?;
-                entries.push(tile.entry(self.offset));
-                self.offset += tile.blob.len() as u64;
-                progress.advance(tile.count as u64);
-                // Free the largest encode buffers between tiles.
-                if staged.capacity() > 4 * self.plan.target_tile_photons as usize {
-                    staged = Vec::new();
-                }
-            }
-        }
+        let entries = self.encode_cells(progress)?;
         progress.finish();
-        drop(staged);
 
         let io = |e| Error::io(&self.path, "write", e);
         self.header.metadata = Section {
@@ -392,6 +385,104 @@ impl MapWriter {
         self.summary.spilled_frames = self.scratch.frames_written;
         self.summary.spilled_bytes = self.scratch.len;
         Ok(self.summary)
+    }
+
+    /// Read every cell back in order (splitting the overfull) and encode
+    /// its tile on one of [`WriterPlan::encode_width`] encoder threads,
+    /// appending the tiles to the map in cell order. Reading the next cell
+    /// overlaps the encoding of the ones before it, and at most the width's
+    /// tiles are held at once (read, or being encoded).
+    fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
+        let width = self.plan.encode_width();
+        let (work_tx, work_rx) = crossbeam_channel::bounded::<(u32, Vec<StagedPhoton>)>(width);
+        let (done_tx, done_rx) = crossbeam_channel::unbounded::<Encoded>();
+        std::thread::scope(|scope| {
+            for _ in 0..width {
+                let (rx, tx) = (work_rx.clone(), done_tx.clone());
+                scope.spawn(move || {
+                    let mut encoder = TileEncoder::default();
+                    for (index, staged) in rx {
+                        let tile = encoder.encode(&staged);
+                        if tx.send((index, tile, staged)).is_err() {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop((work_rx, done_tx));
+            let mut tiles = TileQueue {
+                width,
+                done: done_rx,
+                sent: 0,
+                received: 0,
+                waiting: std::collections::BTreeMap::new(),
+                entries: Vec::new(),
+                spare: Vec::new(),
+            };
+            let read = self.read_cells(&mut tiles, &work_tx, progress);
+            // Closing the queue ends the encoders once they are done.
+            drop(work_tx);
+            read?;
+            while tiles.received < tiles.sent {
+                tiles.receive(self, progress)?;
+            }
+            Ok(tiles.entries)
+        })
+    }
+
+    /// The reading side of [`Self::encode_cells`].
+    fn read_cells(
+        &mut self,
+        tiles: &mut TileQueue,
+        work: &crossbeam_channel::Sender<(u32, Vec<StagedPhoton>)>,
+        progress: &dyn Progress,
+    ) -> Result<()> {
+        let mut frame_buf: Vec<StagedPhoton> = Vec::new();
+        let cells = std::mem::take(&mut self.cells);
+        for cell in cells {
+            let mut stack = vec![cell];
+            while let Some(mut cell) = stack.pop() {
+                if cell.count == 0 {
+                    continue;
+                }
+                if cell.count > self.plan.split_threshold as u64 {
+                    let (left, right) = self.split(cell, &mut frame_buf)?;
+                    self.summary.splits += 1;
+                    stack.push(right);
+                    stack.push(left);
+                    continue;
+                }
+                // Room for one more tile first.
+                while tiles.sent - tiles.received >= tiles.width as u32 {
+                    tiles.receive(self, progress)?;
+                }
+                let mut staged = tiles.spare.pop().unwrap_or_default();
+                staged.clear();
+                staged.reserve_exact(cell.count as usize);
+                self.scratch
+                    .for_each_frame(cell.last_frame.take(), &mut frame_buf, |records| {
+                        staged.extend_from_slice(records)
+                    })?;
+                for chunk in cell.chunks.drain(..) {
+                    staged.extend_from_slice(&chunk);
+                    self.buffered -= (chunk.capacity() * STAGED) as u64;
+                }
+                work.send((tiles.sent, staged))
+                    .map_err(|_| tiles.stopped(&self.path))?;
+                tiles.sent += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Append an encoded tile to the map.
+    fn append(&mut self, tile: &EncodedTile, entries: &mut Vec<TileEntry>) -> Result<()> {
+        self.out
+            .write_all(&tile.blob)
+            .map_err(|e| Error::io(&self.path, "write", e))?;
+        entries.push(tile.entry(self.offset));
+        self.offset += tile.blob.len() as u64;
+        Ok(())
     }
 
     /// Split an overfull cell in two, streaming, without holding it in memory.
@@ -509,6 +600,49 @@ impl MapWriter {
             }
         }
         Ok(())
+    }
+}
+
+/// A tile from an encoder thread: its index, the encoding, and the photon
+/// buffer back for reuse.
+type Encoded = (u32, std::io::Result<EncodedTile>, Vec<StagedPhoton>);
+
+/// The tiles handed to the encoder threads, and their results put back in
+/// order.
+struct TileQueue {
+    width: usize,
+    done: crossbeam_channel::Receiver<Encoded>,
+    /// Tiles sent to the encoders, and results received.
+    sent: u32,
+    received: u32,
+    /// Results that arrived before an earlier tile's.
+    waiting: std::collections::BTreeMap<u32, std::io::Result<EncodedTile>>,
+    entries: Vec<TileEntry>,
+    /// Photon buffers to reuse.
+    spare: Vec<Vec<StagedPhoton>>,
+}
+
+impl TileQueue {
+    /// Wait for one encoded tile, then append every tile now next in order.
+    fn receive(&mut self, writer: &mut MapWriter, progress: &dyn Progress) -> Result<()> {
+        let (index, tile, staged) = self.done.recv().map_err(|_| self.stopped(&writer.path))?;
+        self.received += 1;
+        if staged.capacity() <= 4 * writer.plan.target_tile_photons as usize {
+            self.spare.push(staged);
+        }
+        self.waiting.insert(index, tile);
+        while let Some(tile) = self.waiting.remove(&(self.entries.len() as u32)) {
+            let index = self.entries.len() as u32;
+            let tile = tile.map_err(|e| Error::tile(&writer.path, index, e.to_string()))?;
+            writer.append(&tile, &mut self.entries)?;
+            progress.advance(tile.count as u64);
+        }
+        Ok(())
+    }
+
+    /// The error when the encoder threads stopped early.
+    fn stopped(&self, path: &Path) -> Error {
+        Error::tile(path, self.received, "the tile encoder threads stopped")
     }
 }
 

@@ -57,10 +57,13 @@ fn overfull_tiles_are_split_deterministically() {
     let src = source(120_000, 16, 11, Distribution::Water);
     let mut staged: Vec<StagedPhoton> = Vec::new();
     src.generate(0..120_000, &mut staged);
-    let write = |name: &str, budget: u64, photons: &[StagedPhoton]| {
+    let write = |name: &str, budget: u64, threads: usize, photons: &[StagedPhoton]| {
         let plan = WriterPlan::new(budget, 120_000)
             .unwrap()
-            .with_tile_photons(3_000);
+            .with_tile_photons(3_000)
+            .with_threads(threads);
+        // The small budget encodes one tile at a time, the large two.
+        assert_eq!(plan.encode_width(), threads);
         let path = dir.path().join(name);
         let mut w = MapWriter::create(
             &path,
@@ -77,9 +80,9 @@ fn overfull_tiles_are_split_deterministically() {
         let summary = w.finish(b"{}", &Silent).unwrap();
         (path, summary)
     };
-    let (a, sa) = write("a.map", 12 * MIB, &staged);
+    let (a, sa) = write("a.map", 12 * MIB, 1, &staged);
     staged.reverse();
-    let (b, sb) = write("b.map", 512 * MIB, &staged);
+    let (b, sb) = write("b.map", 512 * MIB, 2, &staged);
     // Three non-empty cells (volume down and up, surface layer); each split
     // adds a tile.
     assert_eq!(sa.splits + 3, sa.tiles, "{sa:?}");
@@ -94,4 +97,32 @@ fn overfull_tiles_are_split_deterministically() {
         "largest tile {max} exceeds the split threshold"
     );
     map.verify(&Silent).unwrap();
+}
+
+/// Tiles are encoded in parallel only as far as the encode share holds
+/// them: one at a time at the smallest budget whatever the threads, up to
+/// the threads at a large one.
+#[test]
+fn parallel_encoding_stays_within_the_encode_share() {
+    use littoral::store::{WriterPlan, ENCODE_BYTES_PER_PHOTON, EXTRA_ENCODER_BYTES};
+    for (budget, threads) in [
+        (12 * MIB, 8),
+        (64 * MIB, 2),
+        (256 * MIB, 2),
+        (256 * MIB, 16),
+    ] {
+        let plan = WriterPlan::new(budget, 1_000_000_000)
+            .unwrap()
+            .with_threads(threads);
+        let w = plan.encode_width() as u64;
+        assert!(w >= 1 && w <= threads as u64);
+        let share = plan.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        let tile = plan.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        assert!(w == 1 || w * tile + (w - 1) * EXTRA_ENCODER_BYTES <= share);
+        // One more would not fit (or there are no more threads).
+        assert!(w == threads as u64 || (w + 1) * tile + w * EXTRA_ENCODER_BYTES > share);
+    }
+    let plan = WriterPlan::new(256 * MIB, 1_000_000_000).unwrap();
+    assert_eq!(plan.with_threads(2).encode_width(), 2);
+    assert_eq!(plan.with_threads(1).encode_width(), 1);
 }
