@@ -5,7 +5,8 @@
 //!   `[estimate]` settings and defaults ([`scene::EstimateSettings`]) and its
 //!   emission inputs for map provenance.
 //! - [`optics`]: embedded spectral tables averaged over the band grid
-//!   ([`optics::tables::Table`]), IOPs, phase functions with exact samplers
+//!   ([`optics::tables::Table`]), IOPs and their local majorants for delta
+//!   tracking ([`optics::majorant::MajorantGrid`]), phase functions with exact samplers
 //!   ([`optics::phase::PhaseFunction`]), the sky's radiance distribution
 //!   ([`optics::sky::SkyModel`]), the sea surface with Smith shadowing, and
 //!   the water's refractive index per band ([`optics::water_index`]).
@@ -79,6 +80,8 @@ pub mod size;
 pub mod spectral;
 pub mod store;
 pub mod synth;
+#[cfg(test)]
+mod testing;
 
 pub use error::{Error, Result};
 pub use photon::Photon;

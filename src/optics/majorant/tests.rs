@@ -233,7 +233,7 @@ fn delta_tracking_transmits_exp_minus_optical_depth() {
         let want = (-tau).exp();
         let n = 100_000;
         let mut rng = Pcg32::new(3, 0);
-        let mut through = 0u32;
+        let mut through = 0u64;
         for _ in 0..n {
             let mut pos = start;
             let mut left = len;
@@ -251,12 +251,7 @@ fn delta_tracking_transmits_exp_minus_optical_depth() {
                 }
             }
         }
-        let got = through as f64 / n as f64;
-        let se = (want * (1.0 - want) / n as f64).sqrt();
-        assert!(
-            (got - want).abs() < 4.0 * se,
-            "{name}: transmitted {got}, expected {want} (se {se})"
-        );
+        crate::testing::assert_binomial(through, n, want, name);
     }
 }
 

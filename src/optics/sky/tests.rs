@@ -101,9 +101,7 @@ fn sampled_sky_photons_follow_the_distribution() {
         aureole += usize::from(in_aureole(s));
         cap += usize::from(in_cap(s));
     }
-    for (count, p) in [(aureole, p_aureole), (cap, p_cap)] {
-        let se = (p * (1.0 - p) / n as f64).sqrt();
-        let got = count as f64 / n as f64;
-        assert!((got - p).abs() < 4.0 * se, "{got} vs {p} +- {se}");
+    for (count, p, what) in [(aureole, p_aureole, "aureole"), (cap, p_cap, "cap")] {
+        crate::testing::assert_binomial(count as u64, n, p, what);
     }
 }

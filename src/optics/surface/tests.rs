@@ -43,12 +43,7 @@ fn flat_surface_transmits_fresnel_fraction() {
             }
         }
         let want = 1.0 - fresnel_reflectance(t.cos(), 1.0, 1.34);
-        let got = through as f64 / n as f64;
-        let se = (want * (1.0 - want) / n as f64).sqrt();
-        assert!(
-            (got - want).abs() < 4.0 * se,
-            "theta {theta}: {got} vs {want}"
-        );
+        crate::testing::assert_binomial(through, n, want, &format!("theta {theta}"));
     }
 }
 
