@@ -55,7 +55,7 @@ pub struct EmitJob<'a> {
 impl EmitJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
-        crate::mem::fixed_mmap_threshold();
+        crate::mem::tune_allocator();
         let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
@@ -95,7 +95,7 @@ pub struct MergeJob<'a> {
 impl MergeJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
-        crate::mem::fixed_mmap_threshold();
+        crate::mem::tune_allocator();
         let sampler = crate::mem::PeakSampler::start();
         let em =
             crate::emit::merge_shards(self.parts, &self.map, &self.budget.emission(0), progress)?;
@@ -154,7 +154,7 @@ struct MapStage {
 impl RenderJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<RunReport> {
         let start = Instant::now();
-        crate::mem::fixed_mmap_threshold();
+        crate::mem::tune_allocator();
         let sampler = crate::mem::PeakSampler::start();
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.

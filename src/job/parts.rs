@@ -191,7 +191,7 @@ pub struct RenderPartJob<'a> {
 impl RenderPartJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<PartManifest> {
         let start = Instant::now();
-        crate::mem::fixed_mmap_threshold();
+        crate::mem::tune_allocator();
         let sampler = crate::mem::PeakSampler::start();
         let scene = self.scene;
         let (part, parts) = self.tiles;

@@ -162,7 +162,7 @@ fn render_builtin_scene_within_64mib() {
 /// from a 300 k-photon map under `--mem-budget 14MiB`: about 5 MiB of cache
 /// for 15 MiB of decoded tiles) stays inside the budget plus the fixed overhead. Tile
 /// buffers freed by eviction go back to the system
-/// (`mem::fixed_mmap_threshold`); with glibc's sliding threshold they
+/// (`mem::tune_allocator`); with glibc's sliding threshold they
 /// fragmented the heap (47 M photons under 256 MiB peaked at 333 MiB
 /// anonymous, see benches/README.md).
 #[test]

@@ -106,7 +106,7 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         None => None,
     };
     if let Some(shard) = a.shard {
-        littoral::mem::fixed_mmap_threshold();
+        littoral::mem::tune_allocator();
         let sampler = littoral::mem::PeakSampler::start();
         let provenance = littoral::emit::emission_provenance(&scene)?;
         let h = littoral::emit::emit_shard(
