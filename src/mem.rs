@@ -58,7 +58,8 @@ pub const MMAP_THRESHOLD: usize = 256 << 10;
 pub fn tune_allocator() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only sets allocator parameters; safe to call at any
-    // time (arenas made before the call stay, so stages call it first).
+    // time. Arenas made before the call stay, and threads started later
+    // may share them, so the programs call it first thing in `main`.
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD as libc::c_int);
         libc::mallopt(libc::M_ARENA_MAX, 1);

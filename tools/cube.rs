@@ -198,6 +198,8 @@ enum Command {
 const SCAN_VALUES: usize = 1 << 20;
 
 fn main() -> ExitCode {
+    // Before any thread exists, so that every thread shares the one arena.
+    littoral::mem::tune_allocator();
     cli::remove_temporaries_on_signals("littoral-cube");
     cli::exit("littoral-cube", run(Cli::parse()))
 }

@@ -14,6 +14,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 fn main() -> ExitCode {
+    // Before any thread exists, so that every thread shares the one arena.
+    littoral::mem::tune_allocator();
     cli::remove_temporaries_on_signals("littoral");
     cli::exit("littoral", run(Cli::parse()))
 }
