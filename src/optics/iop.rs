@@ -29,6 +29,16 @@
 
 use glam::Vec3;
 
+/// Particle scattering at 550 nm of case-1 water, 0.30 Chl^0.62 (1/m;
+/// 0 without chlorophyll).
+pub(crate) fn case1_bp_550(chl: f64) -> f64 {
+    if chl > 0.0 {
+        0.30 * chl.powf(0.62)
+    } else {
+        0.0
+    }
+}
+
 /// Concentrations at a point.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Constituents {
@@ -458,14 +468,7 @@ impl WaterModel {
                 field,
                 bp_550,
             } => {
-                let bp550 = bp_550.unwrap_or_else(|| {
-                    let chl = field.at(p).chl;
-                    if chl > 0.0 {
-                        0.30 * chl.powf(0.62)
-                    } else {
-                        0.0
-                    }
-                });
+                let bp550 = bp_550.unwrap_or_else(|| case1_bp_550(field.at(p).chl));
                 spectra.b_w[band] + bp550 * spectra.bp_shape[band]
             }
         }

@@ -22,7 +22,7 @@
 //! bound is widened by [`WIDEN`] of itself so that rounding in the IOP
 //! formulas cannot step outside it.
 
-use super::iop::{BandSpectra, ConstituentField, Constituents, Iop, WaterModel};
+use super::iop::{case1_bp_550, BandSpectra, ConstituentField, Constituents, Iop, WaterModel};
 use glam::Vec3;
 
 /// Cells along the axis of a horizontal gradient.
@@ -124,9 +124,9 @@ pub struct MajorantGrid {
     /// Cell faces along the axis, ascending: cell `i` spans
     /// `[cuts[i - 1], cuts[i])`, the first and last cells are unbounded.
     cuts: Vec<f64>,
-    /// Equal cells: the first face and 1 / the cell width, to find a cell
-    /// without a search.
-    equal: Option<(f64, f64)>,
+    /// Equal cells from 0: 1 / the cell width, to find a cell without a
+    /// search.
+    inv_width: Option<f64>,
     cells: usize,
     /// `[band * cells + cell]`, in f32 rounded outward (20 bytes rather
     /// than 56: the table of 128 bands stays in cache).
@@ -137,15 +137,15 @@ pub struct MajorantGrid {
 }
 
 impl MajorantGrid {
-    /// The grid of `water` over a domain `size_m` wide, in `bands` bands.
+    /// The grid of `water` in `bands` bands.
     pub fn new(water: &WaterModel, bands: usize) -> MajorantGrid {
-        let (axis, cuts, equal) = match water {
+        let (axis, cuts, inv_width) = match water {
             WaterModel::Constituents { field, .. } => match field {
                 ConstituentField::Gradient { axis, size_m, .. } => {
                     let axis = if *axis == 0 { Axis::X } else { Axis::Y };
                     let w = size_m / GRADIENT_CELLS as f64;
                     let cuts = (1..GRADIENT_CELLS).map(|i| i as f64 * w).collect();
-                    (axis, cuts, Some((0.0, 1.0 / w)))
+                    (axis, cuts, Some(1.0 / w))
                 }
                 ConstituentField::Layers { .. } => {
                     // Depth d is z = -d.
@@ -195,7 +195,7 @@ impl MajorantGrid {
         MajorantGrid {
             axis,
             cuts,
-            equal,
+            inv_width,
             cells,
             majorants: bounds.iter().map(|b| b.majorant).collect(),
             bounds: bounds
@@ -218,10 +218,8 @@ impl MajorantGrid {
     /// bounds of either cell hold a point on their common face).
     pub fn locate(&self, p: Vec3) -> usize {
         let u = self.axis.of(p);
-        match self.equal {
-            Some((first, inv_w)) => {
-                ((u - first) * inv_w).clamp(0.0, (self.cells - 1) as f64) as usize
-            }
+        match self.inv_width {
+            Some(inv_w) => (u * inv_w).clamp(0.0, (self.cells - 1) as f64) as usize,
             None => self.cuts.partition_point(|&c| c <= u),
         }
     }
@@ -415,13 +413,7 @@ fn iop_range(
             0.0
         }
     };
-    let b_p = |chl: f64| {
-        bp_550.unwrap_or(if chl > 0.0 {
-            0.30 * chl.powf(0.62)
-        } else {
-            0.0
-        }) * s.bp_shape[band]
-    };
+    let b_p = |chl: f64| bp_550.unwrap_or_else(|| case1_bp_550(chl)) * s.bp_shape[band];
     let span = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| {
         let (x, y) = (f(a), f(b));
         (x.min(y), x.max(y))
