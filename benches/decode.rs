@@ -33,7 +33,7 @@ fn decode(c: &mut Criterion) {
     g.bench_function("decode_and_build_tree", |b| {
         b.iter(|| {
             file.decode_tile(t, &mut dec, &mut out).unwrap();
-            TileTree::from_morton(dec.codes(), &e.quant)
+            TileTree::from_morton(dec.codes(), dec.cells(), &e.quant)
         })
     });
     // What a miss cost before: a kiddo tree built over the decoded positions.

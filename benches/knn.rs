@@ -147,7 +147,7 @@ fn knn(c: &mut Criterion) {
         let mut photons = Vec::new();
         file.decode_tile(t, &mut dec, &mut photons).unwrap();
         photons.shrink_to_fit();
-        let tree = TileTree::from_morton(dec.codes(), &file.tiles()[t as usize].quant);
+        let tree = TileTree::from_morton(dec.codes(), dec.cells(), &file.tiles()[t as usize].quant);
         decoded += DecodedTile { photons, tree }.bytes();
     }
     let budget = decoded / 20;

@@ -67,7 +67,7 @@ fn tile_bytes_bounds_photons_and_tree() {
         let before = LIVE.load(Ordering::SeqCst);
         decoder.decode(&tile.blob, &entry, &mut photons).unwrap();
         photons.shrink_to_fit();
-        let tree = TileTree::from_morton(decoder.codes(), &entry.quant);
+        let tree = TileTree::from_morton(decoder.codes(), decoder.cells(), &entry.quant);
         let decoded = DecodedTile { photons, tree };
         let held = (LIVE.load(Ordering::SeqCst) - before) as u64;
         assert_eq!(

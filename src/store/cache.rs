@@ -39,13 +39,16 @@ impl DecodedTile {
 }
 
 /// Upper bound of the bytes a tile of `count` photons occupies in the cache:
-/// 24 B per decoded photon, 6 B of cell coordinates and at most two 12 B
-/// tree nodes per photon (every leaf holds one photon or more). The cache
-/// reserves this while a tile decodes and keeps [`DecodedTile::bytes`] once
-/// it is built (about 32 B per photon: a node per five photons or so).
+/// 24 B per decoded photon, 6 B of cell coordinates (and the tree's padding
+/// after them) and at most two tree nodes per photon (every leaf holds one
+/// photon or more). The cache reserves this while a tile decodes and keeps
+/// [`DecodedTile::bytes`] once it is built (about 32 B per photon: a node
+/// per five photons or so).
 pub fn tile_bytes(count: u32) -> u64 {
     let n = count as u64;
-    n * (std::mem::size_of::<PackedPhoton>() as u64 + 6) + 24 * n.max(1)
+    n * (std::mem::size_of::<PackedPhoton>() as u64 + 6)
+        + TileTree::PAD_BYTES
+        + 2 * TileTree::NODE_BYTES * n.max(1)
 }
 
 /// Cache counters, summed over all threads.
@@ -355,7 +358,7 @@ impl TileCache {
             let mut d = d.borrow_mut();
             map.decode_tile(t, &mut d, &mut photons)?;
             photons.shrink_to_fit();
-            let tree = TileTree::from_morton(d.codes(), &map.tiles()[t as usize].quant);
+            let tree = TileTree::from_morton(d.codes(), d.cells(), &map.tiles()[t as usize].quant);
             Ok(DecodedTile { photons, tree })
         })
     }

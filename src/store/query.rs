@@ -299,8 +299,7 @@ impl PhotonMap {
                     boxes,
                     |_, item| {
                         let tile = self.cache.get(&self.file, index.tiles[item as usize])?;
-                        tile.tree.nearest(&q, nearest);
-                        nearest.take_records(&tile.photons);
+                        tile.tree.nearest(&tile.photons, &q, nearest);
                         Ok::<_, crate::error::Error>(nearest.bound_sq() * PRUNE_SLACK)
                     },
                 )?;

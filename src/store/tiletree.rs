@@ -8,14 +8,20 @@
 //! highest bit in which its first and last codes differ (a binary radix
 //! tree, as in Karras 2012), down to leaves of at most [`LEAF`] photons.
 //! Each cut is a plane on the axis that bit encodes, at the first cell of
-//! the upper half, so a node is 12 bytes (plane, axis, second child) and
+//! the upper half, so a node is 16 bytes (plane, axis, second child and
+//! its first item, from which a query prefetches that side's cells) and
 //! the build needs no sort, no median search and no pass over the
 //! positions: one binary search per node. A cache miss costs the decode
 //! and little more. Nothing beyond the codes is stored, so the map format
 //! is unchanged and maps written before read as they are.
 //!
 //! The tree keeps the photons' 16-bit cells (6 bytes a photon) and scans
-//! those rather than the 24-byte records; a query walks it depth first,
+//! those rather than the 24-byte records. A leaf's cells are stored axis by
+//! axis (its x cells, then its y cells, then its z cells), so a leaf's
+//! distances are computed [`LEAF`] lanes at a time in SIMD registers, as
+//! the same f32 operations a photon's own distance takes; lanes past the
+//! leaf read the next leaf's cells (or the padding at the end) and are
+//! ignored. A query walks the tree depth first,
 //! nearer side first, keeping the distance to each side's cell per axis,
 //! and prunes a side whose cell lies beyond the current bound. The cell
 //! distance and the photon distance are computed with the same f32
@@ -31,7 +37,6 @@
 //! (`store::query`).
 
 use crate::bounds::Aabb;
-use crate::morton::demorton3;
 use crate::photon::PackedPhoton;
 use crate::store::codec::BoxQuantizer;
 use glam::Vec3;
@@ -44,7 +49,7 @@ pub const LEAF: usize = 16;
 /// level.
 const MAX_DEPTH: usize = 96;
 
-#[inline(always)]
+#[cfg(test)]
 fn point_distance_sq(p: &[f32; 3], q: &[f32; 3]) -> f32 {
     let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
     dx * dx + dy * dy + dz * dz
@@ -60,30 +65,53 @@ fn norm_sq(o: &[f32; 3]) -> f32 {
 /// A node of a tile's tree, in pre-order. A leaf (`count > 0`) holds
 /// items `link..link + count`. An internal node's first child follows it
 /// and holds the photons below `split` on `axis`; its second child, at
-/// `link`, those at or above it.
+/// `link`, those at or above it, from item `mid` on.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 struct KdNode {
     split: f32,
     link: u32,
+    mid: u32,
     axis: u8,
     count: u8,
 }
 
-const _: () = assert!(std::mem::size_of::<KdNode>() == 12);
+const _: () = assert!(std::mem::size_of::<KdNode>() == 16);
+
+/// One side of an internal node: its node and its first item.
+#[derive(Clone, Copy)]
+struct Side {
+    node: usize,
+    first: usize,
+}
 
 impl KdNode {
-    /// For this internal node at index `node`: the side holding `q`, the
-    /// other side, and the per-axis distance from `q` to the other side's
-    /// cell, given `offset`, the distance to this node's cell.
+    /// For this internal node at index `node`, whose items start at
+    /// `first`: the side holding `q`, the other side, and the per-axis
+    /// distance from `q` to the other side's cell, given `offset`, the
+    /// distance to this node's cell.
     #[inline(always)]
-    fn sides(&self, node: usize, q: &[f32; 3], offset: &[f32; 3]) -> (usize, usize, [f32; 3]) {
+    fn sides(
+        &self,
+        node: usize,
+        first: usize,
+        q: &[f32; 3],
+        offset: &[f32; 3],
+    ) -> (Side, Side, [f32; 3]) {
         let a = self.axis as usize;
         let diff = q[a] - self.split;
+        let lower = Side {
+            node: node + 1,
+            first,
+        };
+        let upper = Side {
+            node: self.link as usize,
+            first: self.mid as usize,
+        };
         let (near, far) = if diff < 0.0 {
-            (node + 1, self.link as usize)
+            (lower, upper)
         } else {
-            (self.link as usize, node + 1)
+            (upper, lower)
         };
         let mut far_offset = *offset;
         far_offset[a] = diff.abs();
@@ -95,10 +123,19 @@ impl KdNode {
 #[derive(Clone, Debug)]
 pub struct TileTree {
     nodes: Vec<KdNode>,
-    /// The photons' 16-bit cells in the tile's box.
-    cells: Vec<[u16; 3]>,
-    quant: BoxQuantizer,
+    /// The photons' 16-bit cells in the tile's box, leaf by leaf: for the
+    /// leaf of items `lo..lo + n`, their x cells from `3 lo`, y cells from
+    /// `3 lo + n` and z cells from `3 lo + 2 n`; then [`CELL_PAD`] zeros.
+    cells: Vec<u16>,
+    /// Per axis, the box minimum and the cell size: a cell `c` decodes to
+    /// `min + c * step` (`AxisQuantizer::decode`).
+    min: [f32; 3],
+    step: [f32; 3],
 }
+
+/// Zeros after the last leaf's cells, so that every leaf can be read as
+/// [`LEAF`] lanes per axis.
+const CELL_PAD: usize = 3 * LEAF;
 
 /// A pending item of [`Nearest`]: an index into the tile being searched,
 /// not yet copied out of it.
@@ -143,47 +180,16 @@ impl Nearest {
         if self.heap.len() < self.k {
             if d <= self.limit_sq {
                 self.heap.push((d, item | PENDING));
-                self.sift_up(self.heap.len() - 1);
+                sift_up(&mut self.heap);
             }
         } else if d < self.heap[0].0 {
-            self.heap[0] = (d, item | PENDING);
-            self.sift_down(0);
-        }
-    }
-
-    fn sift_up(&mut self, mut i: usize) {
-        let h = &mut self.heap;
-        while i > 0 {
-            let parent = (i - 1) / 2;
-            if h[parent].0 >= h[i].0 {
-                break;
-            }
-            h.swap(parent, i);
-            i = parent;
-        }
-    }
-
-    fn sift_down(&mut self, mut i: usize) {
-        let h = &mut self.heap;
-        let n = h.len();
-        loop {
-            let l = 2 * i + 1;
-            if l >= n {
-                break;
-            }
-            let r = l + 1;
-            let c = if r < n && h[r].0 > h[l].0 { r } else { l };
-            if h[c].0 <= h[i].0 {
-                break;
-            }
-            h.swap(c, i);
-            i = c;
+            replace_top(&mut self.heap, (d, item | PENDING));
         }
     }
 
     /// Copy the records of the photons taken from the tile just searched
     /// (whose photons are `photons`).
-    pub fn take_records(&mut self, photons: &[PackedPhoton]) {
+    fn take_records(&mut self, photons: &[PackedPhoton]) {
         for e in &mut self.heap {
             if e.1 & PENDING != 0 {
                 self.records.push(photons[(e.1 & !PENDING) as usize]);
@@ -206,6 +212,64 @@ impl Nearest {
     }
 }
 
+/// Restore the max-heap order of `h` after a push: the last entry moves
+/// up past every parent nearer than it (a hole moves down instead of
+/// swaps; the heap is the one swaps would give).
+#[inline(always)]
+fn sift_up(h: &mut [(f32, u32)]) {
+    let mut i = h.len() - 1;
+    let v = h[i];
+    while i > 0 {
+        let parent = (i - 1) / 2;
+        if h[parent].0 >= v.0 {
+            break;
+        }
+        h[i] = h[parent];
+        i = parent;
+    }
+    h[i] = v;
+}
+
+/// Replace the farthest entry of the max-heap `h` by the nearer `v`: the
+/// hole left at the top moves down past every child farther than `v`,
+/// taking the farther child of two without a branch.
+#[inline(always)]
+fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
+    let n = h.len();
+    let mut i = 0;
+    loop {
+        let l = 2 * i + 1;
+        if l >= n {
+            break;
+        }
+        let r = l + 1;
+        let c = if r < n {
+            l + (h[r].0 > h[l].0) as usize
+        } else {
+            l
+        };
+        if h[c].0 <= v.0 {
+            break;
+        }
+        h[i] = h[c];
+        i = c;
+    }
+    h[i] = v;
+}
+
+/// Ask for the cache line holding `p`, without waiting for it.
+#[inline(always)]
+fn prefetch<T>(p: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint; it reads nothing and cannot fault.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((p as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// The traversal state of one side not yet visited.
 #[derive(Clone, Copy)]
 struct Pending {
@@ -213,31 +277,53 @@ struct Pending {
     offset: [f32; 3],
     distance_sq: f32,
     node: u32,
+    /// The side's first item.
+    first: u32,
 }
 
 impl TileTree {
     /// The tree over a tile's photons given their Morton `codes` (sorted,
-    /// the order a tile is stored and decoded in) of 16-bit cells in the
-    /// box `quant`.
-    pub fn from_morton(codes: &[u64], quant: &Aabb) -> TileTree {
+    /// the order a tile is stored and decoded in) of 16-bit `cells` (the
+    /// codes un-interleaved) in the box `quant`.
+    pub fn from_morton(codes: &[u64], cells: &[[u16; 3]], quant: &Aabb) -> TileTree {
         debug_assert!(codes.windows(2).all(|w| w[0] <= w[1]));
+        debug_assert_eq!(codes.len(), cells.len());
+        let quant = BoxQuantizer::new(quant);
         let mut tree = TileTree {
             nodes: Vec::with_capacity(4 * codes.len().div_ceil(LEAF) + 1),
-            cells: codes.iter().map(|&c| demorton3(c)).collect(),
-            quant: BoxQuantizer::new(quant),
+            cells: vec![0; 3 * codes.len() + CELL_PAD],
+            min: [0, 1, 2].map(|a| quant.decode_axis(a, 0)),
+            step: [0, 1, 2].map(|a| quant.step(a)),
         };
         if !codes.is_empty() {
-            tree.radix(codes, 0, codes.len());
+            tree.radix(codes, cells, 0, codes.len());
         }
         tree.nodes.shrink_to_fit();
         tree
     }
 
-    fn radix(&mut self, codes: &[u64], lo: usize, hi: usize) {
+    /// Bytes of one node.
+    pub const NODE_BYTES: u64 = std::mem::size_of::<KdNode>() as u64;
+
+    /// Bytes of padding after the cells.
+    pub const PAD_BYTES: u64 = (CELL_PAD * std::mem::size_of::<u16>()) as u64;
+
+    fn decode_axis(&self, axis: usize, c: u16) -> f32 {
+        self.min[axis] + c as f32 * self.step[axis]
+    }
+
+    fn radix(&mut self, codes: &[u64], cells: &[[u16; 3]], lo: usize, hi: usize) {
         if hi - lo <= LEAF {
+            let n = hi - lo;
+            for (j, c) in cells[lo..hi].iter().enumerate() {
+                for (a, &ca) in c.iter().enumerate() {
+                    self.cells[3 * lo + a * n + j] = ca;
+                }
+            }
             self.nodes.push(KdNode {
                 split: 0.0,
                 link: lo as u32,
+                mid: lo as u32,
                 axis: 0,
                 count: (hi - lo) as u8,
             });
@@ -247,7 +333,7 @@ impl TileTree {
         let (mid, axis, split) = if differ == 0 {
             // A run of equal codes: split it by count, at their position.
             let mid = lo + (hi - lo) / 2;
-            (mid, 0, self.quant.decode_axis(0, self.cells[mid][0]))
+            (mid, 0, self.decode_axis(0, cells[mid][0]))
         } else {
             let bit = 63 - differ.leading_zeros();
             let mid = lo + codes[lo..hi].partition_point(|&c| c & (1 << bit) == 0);
@@ -255,25 +341,26 @@ impl TileTree {
             // cells on that axis start at the first one's with lower bits
             // cleared.
             let (axis, j) = ((bit % 3) as usize, bit / 3);
-            let first = (self.cells[mid][axis] >> j) << j;
-            (mid, axis, self.quant.decode_axis(axis, first))
+            let first = (cells[mid][axis] >> j) << j;
+            (mid, axis, self.decode_axis(axis, first))
         };
         let at = self.nodes.len();
         self.nodes.push(KdNode {
             split,
             link: 0,
+            mid: mid as u32,
             axis: axis as u8,
             count: 0,
         });
-        self.radix(codes, lo, mid);
+        self.radix(codes, cells, lo, mid);
         self.nodes[at].link = self.nodes.len() as u32;
-        self.radix(codes, mid, hi);
+        self.radix(codes, cells, mid, hi);
     }
 
     /// Bytes this tree holds.
     pub fn heap_bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<KdNode>()
-            + self.cells.capacity() * std::mem::size_of::<[u16; 3]>()
+            + self.cells.capacity() * std::mem::size_of::<u16>()
     }
 
     /// Nodes in the tree.
@@ -286,21 +373,43 @@ impl TileTree {
         self.nodes.is_empty()
     }
 
-    /// Position of item `i`: its cell decoded, as the tile's decoder gives it.
+    /// Squared distances from `q` to the photons of the leaf of items
+    /// `lo..lo + n` (lane `j` for item `lo + j`, lanes from `n` on
+    /// meaningless): each `point_distance_sq(position, q)` of the photon's
+    /// cell decoded as the tile's decoder decodes it, bit for bit.
     #[inline(always)]
-    fn position(&self, i: usize) -> [f32; 3] {
-        let c = self.cells[i];
-        [
-            self.quant.decode_axis(0, c[0]),
-            self.quant.decode_axis(1, c[1]),
-            self.quant.decode_axis(2, c[2]),
-        ]
+    fn leaf_distances(&self, lo: usize, n: usize, q: &[f32; 3]) -> [f32; LEAF] {
+        let at = |a: usize| -> &[u16; LEAF] {
+            let from = 3 * lo + a * n;
+            self.cells[from..from + LEAF].try_into().unwrap()
+        };
+        let (xs, ys, zs) = (at(0), at(1), at(2));
+        let mut d = [0.0f32; LEAF];
+        for j in 0..LEAF {
+            let dx = (self.min[0] + xs[j] as f32 * self.step[0]) - q[0];
+            let dy = (self.min[1] + ys[j] as f32 * self.step[1]) - q[1];
+            let dz = (self.min[2] + zs[j] as f32 * self.step[2]) - q[2];
+            d[j] = dx * dx + dy * dy + dz * dz;
+        }
+        d
     }
 
-    /// Offer every photon that could be among the nearest to `q` to
-    /// `nearest` (as an index into this tile; then call
-    /// [`Nearest::take_records`] with the tile's photons).
-    pub fn nearest(&self, q: &[f32; 3], nearest: &mut Nearest) {
+    /// Position of item `i` of the leaf of items `lo..lo + n`.
+    #[cfg(test)]
+    fn position(&self, lo: usize, n: usize, i: usize) -> [f32; 3] {
+        [0, 1, 2].map(|a| self.decode_axis(a, self.cells[3 * lo + a * n + (i - lo)]))
+    }
+
+    /// Offer every photon of this tile (whose photons, in stored order,
+    /// are `photons`) that could be among the nearest to `q` to `nearest`,
+    /// and copy out the records of those it keeps.
+    pub fn nearest(&self, photons: &[PackedPhoton], q: &[f32; 3], nearest: &mut Nearest) {
+        debug_assert_eq!(photons.len() * 3 + CELL_PAD, self.cells.len());
+        self.offer_nearest(photons, q, nearest);
+        nearest.take_records(photons);
+    }
+
+    fn offer_nearest(&self, photons: &[PackedPhoton], q: &[f32; 3], nearest: &mut Nearest) {
         if self.nodes.is_empty() {
             return;
         }
@@ -308,31 +417,43 @@ impl TileTree {
             offset: [0.0; 3],
             distance_sq: 0.0,
             node: 0,
+            first: 0,
         }; MAX_DEPTH];
         let mut top = 0;
-        let mut node = 0usize;
+        let (mut node, mut first) = (0usize, 0usize);
         let mut offset = [0.0f32; 3];
         loop {
             let n = self.nodes[node];
             if n.count == 0 {
-                let (near, far, far_offset) = n.sides(node, q, &offset);
+                let (near, far, far_offset) = n.sides(node, first, q, &offset);
                 let far_sq = norm_sq(&far_offset);
                 if far_sq <= nearest.bound_sq() {
+                    // It is read when popped unless the bound has shrunk
+                    // past it by then: its node, and (if it is a leaf) the
+                    // cells from its first item.
+                    prefetch(&self.nodes[far.node]);
+                    prefetch(&self.cells[3 * far.first]);
+                    prefetch(&self.cells[3 * far.first + 32]);
                     stack[top] = Pending {
                         offset: far_offset,
                         distance_sq: far_sq,
-                        node: far as u32,
+                        node: far.node as u32,
+                        first: far.first as u32,
                     };
                     top += 1;
                 }
-                node = near;
+                (node, first) = (near.node, near.first);
                 continue;
             }
-            let lo = n.link as usize;
-            for i in lo..lo + n.count as usize {
-                let d = point_distance_sq(&self.position(i), q);
-                if d <= nearest.bound_sq() {
-                    nearest.offer(d, i as u32);
+            let (lo, count) = (n.link as usize, n.count as usize);
+            let d = self.leaf_distances(lo, count, q);
+            let mut bound = nearest.bound_sq();
+            for (j, &dj) in d[..count].iter().enumerate() {
+                if dj <= bound {
+                    // Its record is read if it stays: start that load now.
+                    prefetch(&photons[lo + j]);
+                    nearest.offer(dj, (lo + j) as u32);
+                    bound = nearest.bound_sq();
                 }
             }
             // The next side still within reach.
@@ -343,7 +464,7 @@ impl TileTree {
                 top -= 1;
                 let p = &stack[top];
                 if p.distance_sq <= nearest.bound_sq() {
-                    (node, offset) = (p.node as usize, p.offset);
+                    (node, first, offset) = (p.node as usize, p.first as usize, p.offset);
                     break;
                 }
             }
@@ -370,19 +491,19 @@ impl TileTree {
             loop {
                 let n = self.nodes[node];
                 if n.count == 0 {
-                    let (near, far, far_offset) = n.sides(node, q, &offset);
+                    let (near, far, far_offset) = n.sides(node, 0, q, &offset);
                     if norm_sq(&far_offset) <= radius_sq {
-                        stack[top] = (far_offset, far as u32);
+                        stack[top] = (far_offset, far.node as u32);
                         top += 1;
                     }
-                    node = near;
+                    node = near.node;
                     continue;
                 }
-                let lo = n.link as usize;
-                for (i, p) in photons[lo..lo + n.count as usize].iter().enumerate() {
-                    let d = point_distance_sq(&self.position(lo + i), q);
-                    if d <= radius_sq {
-                        out.push((d, *p));
+                let (lo, count) = (n.link as usize, n.count as usize);
+                let d = self.leaf_distances(lo, count, q);
+                for (p, &dj) in photons[lo..lo + count].iter().zip(&d) {
+                    if dj <= radius_sq {
+                        out.push((dj, *p));
                     }
                 }
                 break;
@@ -607,7 +728,7 @@ fn pop_min(h: &mut Vec<(f32, u32)>) -> Option<(f32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::morton::morton3;
+    use crate::morton::{demorton3, morton3};
     use crate::rng::Pcg32;
     use crate::store::codec::BoxQuantizer;
 
@@ -635,7 +756,7 @@ mod tests {
                 [rng.uniform_f32(), rng.uniform_f32(), z]
             };
             let code = morton3(q.encode(p));
-            let position = q.decode(crate::morton::demorton3(code)).to_array();
+            let position = q.decode(demorton3(code)).to_array();
             v.push((
                 code,
                 PackedPhoton {
@@ -647,6 +768,10 @@ mod tests {
         }
         v.sort_by_key(|x| x.0);
         v.into_iter().unzip()
+    }
+
+    fn cells(codes: &[u64]) -> Vec<[u16; 3]> {
+        codes.iter().map(|&c| demorton3(c)).collect()
     }
 
     fn brute(photons: &[PackedPhoton], q: &[f32; 3]) -> Vec<f32> {
@@ -662,7 +787,7 @@ mod tests {
     fn nearest_equals_brute_force() {
         for (n, seed) in [(1, 1), (LEAF, 2), (LEAF + 1, 3), (1000, 4), (20_000, 5)] {
             let (codes, photons) = tile(n, seed);
-            let tree = TileTree::from_morton(&codes, &UNIT);
+            let tree = TileTree::from_morton(&codes, &cells(&codes), &UNIT);
             let mut rng = Pcg32::new(seed, 9);
             let mut nearest = Nearest::default();
             for _ in 0..200 {
@@ -674,8 +799,7 @@ mod tests {
                 let all = brute(&photons, &q);
                 for (k, limit) in [(1, f32::INFINITY), (50, f32::INFINITY), (200, 0.01)] {
                     nearest.reset(k, limit);
-                    tree.nearest(&q, &mut nearest);
-                    nearest.take_records(&photons);
+                    tree.nearest(&photons, &q, &mut nearest);
                     let got: Vec<f32> = nearest.results(true).map(|x| x.0).collect();
                     let want: Vec<f32> = all
                         .iter()
@@ -705,7 +829,7 @@ mod tests {
     #[test]
     fn leaves_cover_each_photon_once_and_planes_separate_the_sides() {
         let (codes, photons) = tile(5000, 7);
-        let tree = TileTree::from_morton(&codes, &UNIT);
+        let tree = TileTree::from_morton(&codes, &cells(&codes), &UNIT);
         let mut seen = vec![0u8; photons.len()];
         /// The items under node `i`, checking each plane against them.
         fn walk(
@@ -721,7 +845,8 @@ mod tests {
                     (n.link as usize..(n.link + n.count as u32) as usize).collect();
                 for &j in &items {
                     seen[j] += 1;
-                    assert_eq!(t.position(j), photons[j].position);
+                    let (lo, count) = (n.link as usize, n.count as usize);
+                    assert_eq!(t.position(lo, count, j), photons[j].position);
                 }
                 return (1, items);
             }

@@ -162,3 +162,27 @@ fn damaged_plane_tables_are_rejected() {
     dec.decode(&t.blob, &t.entry(0), &mut out).unwrap();
     assert_eq!(out.len(), 3000);
 }
+
+/// The SIMD un-shuffle is the byte transpose it stands for, at every
+/// offset of planes of odd length.
+#[test]
+fn unshuffle16_transposes_the_byte_planes() {
+    let mut rng = crate::rng::Pcg32::new(11, 3);
+    let n = 77;
+    let raw: Vec<u8> = (0..RECORD_BYTES * n)
+        .map(|_| rng.next_u32() as u8)
+        .collect();
+    for base in 0..=n - 16 {
+        let mut out = [[0u8; RECORD_BYTES]; 16];
+        unshuffle16(&raw, n, base, &mut out);
+        for (j, rec) in out.iter().enumerate() {
+            for (k, &byte) in rec.iter().enumerate() {
+                assert_eq!(
+                    byte,
+                    raw[k * n + base + j],
+                    "base {base} record {j} byte {k}"
+                );
+            }
+        }
+    }
+}
