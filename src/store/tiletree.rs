@@ -230,11 +230,12 @@ fn sift_up(h: &mut [(f32, u32)]) {
     h[i] = v;
 }
 
-/// Replace the farthest entry of the max-heap `h` by the nearer `v`: the
-/// hole left at the top moves down past every child farther than `v`,
-/// taking the farther child of two without a branch.
+/// Put `v` at the top of the heap `h` and move it down to its place: the
+/// hole moves down past every child that `above` puts above `v`, taking
+/// the child of two that it puts above the other without a branch.
+/// `above(a, b)`: `a` belongs nearer the top than `b`.
 #[inline(always)]
-fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
+fn sift_down<T: Copy>(h: &mut [T], v: T, above: impl Fn(T, T) -> bool) {
     let n = h.len();
     let mut i = 0;
     loop {
@@ -244,17 +245,23 @@ fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
         }
         let r = l + 1;
         let c = if r < n {
-            l + (h[r].0 > h[l].0) as usize
+            l + above(h[r], h[l]) as usize
         } else {
             l
         };
-        if h[c].0 <= v.0 {
+        if !above(h[c], v) {
             break;
         }
         h[i] = h[c];
         i = c;
     }
     h[i] = v;
+}
+
+/// Replace the farthest entry of the max-heap `h` by the nearer `v`.
+#[inline(always)]
+fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
+    sift_down(h, v, |a, b| a.0 > b.0);
 }
 
 /// Ask for the cache line holding `p`, without waiting for it.
@@ -701,28 +708,12 @@ fn push_min(h: &mut Vec<(f32, u32)>, v: (f32, u32)) {
 }
 
 fn pop_min(h: &mut Vec<(f32, u32)>) -> Option<(f32, u32)> {
-    if h.is_empty() {
-        return None;
-    }
-    let last = h.len() - 1;
-    h.swap(0, last);
-    let v = h.pop();
-    let n = h.len();
-    let mut i = 0;
-    loop {
-        let l = 2 * i + 1;
-        if l >= n {
-            break;
-        }
-        let r = l + 1;
-        let c = if r < n && before(h[r], h[l]) { r } else { l };
-        if !before(h[c], h[i]) {
-            break;
-        }
-        h.swap(c, i);
-        i = c;
-    }
-    v
+    let last = h.pop()?;
+    let Some(&top) = h.first() else {
+        return Some(last);
+    };
+    sift_down(h, last, before);
+    Some(top)
 }
 
 #[cfg(test)]
