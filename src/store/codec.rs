@@ -133,8 +133,15 @@ fn unshuffle16(raw: &[u8], n: usize, base: usize, out: &mut [[u8; RECORD_BYTES]]
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
+    unshuffle(raw, n, base, out);
+}
+
+/// The records of the `out.len()` photons from `base` on, out of the byte
+/// planes of `raw`, a byte at a time (what [`unshuffle16`] does for 16).
+fn unshuffle(raw: &[u8], n: usize, base: usize, out: &mut [[u8; RECORD_BYTES]]) {
+    let len = out.len();
     for (k, plane) in raw.chunks_exact(n).enumerate() {
-        for (rec, &byte) in out.iter_mut().zip(&plane[base..base + 16]) {
+        for (rec, &byte) in out.iter_mut().zip(&plane[base..base + len]) {
             rec[k] = byte;
         }
     }
@@ -416,12 +423,7 @@ impl TileDecoder {
                     unshuffle16(raw, n, base + RECORD_BYTES * i, sub);
                 }
             } else {
-                for k in 0..RECORD_BYTES {
-                    let plane = &raw[k * n + base..k * n + base + len];
-                    for (rec, &byte) in recs.iter_mut().zip(plane) {
-                        rec[k] = byte;
-                    }
-                }
+                unshuffle(raw, n, base, &mut recs[..len]);
             }
             out.extend(recs[..len].iter().map(|r| {
                 let delta = u64::from_le_bytes([r[0], r[1], r[2], r[3], r[4], r[5], 0, 0]);
