@@ -418,6 +418,11 @@ pub struct SurfaceSplit {
 /// variance `slope_variance`: [exp(-nu^2) / (sqrt(pi) nu) - erfc(nu)] / 2,
 /// nu = mu / (sigma sqrt(1 - mu^2)). 0 looking straight up or down,
 /// growing without bound toward the horizon.
+///
+/// Above nu = [`SMITH_NU_NEGLIGIBLE`] it is 0: there Lambda is below the
+/// first term, exp(-nu^2) / (2 sqrt(pi) nu) < 2e-18, less than half an ulp
+/// of 1, so G1 = 1 / (1 + Lambda) is exactly 1 either way and the
+/// exponential and erfc (most rays leaving the surface steeply) are saved.
 pub fn smith_lambda(mu: f64, slope_variance: f64) -> f64 {
     let mu = mu.clamp(0.0, 1.0);
     let sin = (1.0 - mu * mu).sqrt();
@@ -428,6 +433,17 @@ pub fn smith_lambda(mu: f64, slope_variance: f64) -> f64 {
     if nu <= 0.0 {
         return f64::INFINITY;
     }
+    if nu > SMITH_NU_NEGLIGIBLE {
+        return 0.0;
+    }
+    smith_lambda_nu(nu)
+}
+
+/// Above this nu, Smith's Lambda is negligible against 1 (see [`smith_lambda`]).
+pub const SMITH_NU_NEGLIGIBLE: f64 = 6.0;
+
+/// Smith's Lambda at nu > 0, as printed.
+fn smith_lambda_nu(nu: f64) -> f64 {
     if nu > 26.0 {
         return 0.0; // exp(-nu^2) underflows
     }

@@ -364,3 +364,20 @@ fn single_facet_reflections_follow_the_shadowed_glint() {
         );
     }
 }
+
+/// Beyond SMITH_NU_NEGLIGIBLE the printed Lambda cannot move G1 = 1 / (1 +
+/// Lambda) off 1, so cutting it to 0 there changes no masking probability.
+#[test]
+fn smith_lambda_cut_changes_no_masking() {
+    for i in 0..=20_000 {
+        let nu = SMITH_NU_NEGLIGIBLE + i as f64 * 1e-3;
+        let lambda = smith_lambda_nu(nu);
+        assert!(lambda < f64::EPSILON / 2.0, "nu {nu}: {lambda:e}");
+        assert_eq!(1.0 / (1.0 + lambda), 1.0, "nu {nu}");
+    }
+    // And just below the cut Lambda is still computed.
+    let mu = |nu: f64, var: f64| nu * var.sqrt() / (1.0 + nu * nu * var).sqrt();
+    let var = 0.02;
+    assert!(smith_lambda(mu(3.0, var), var) > 0.0);
+    assert_eq!(smith_lambda(mu(6.5, var), var), 0.0);
+}
