@@ -32,11 +32,17 @@ pub struct Ceiling {
     max: [f32; 2],
     inv_cell: [f32; 2],
     dims: [usize; 2],
+    /// The last column's index on each axis, as f32.
+    last: [f32; 2],
     /// How far (m) a segment's (x, y) box is widened against rounding.
     pad: f32,
     /// An upper bound (m) on the height of every triangle over the column,
     /// plus the margin; `-inf` for columns no triangle meets.
     top: Vec<f32>,
+    /// Per column, the greatest `top` of the 2 x 2 columns from it up in
+    /// x and y (those beyond the grid count as `-inf`): one load answers
+    /// a segment that crosses at most two columns per axis, most of them.
+    top2: Vec<f32>,
 }
 
 impl Ceiling {
@@ -60,15 +66,17 @@ impl Ceiling {
             max: [bounds.max.x, bounds.max.y],
             inv_cell,
             dims,
+            last: dims.map(|d| (d - 1) as f32),
             pad: margin,
             top: vec![f32::NEG_INFINITY; dims[0] * dims[1]],
+            top2: Vec::new(),
         };
         let cell_size = [0, 1].map(|a| size[a] as f64 / dims[a] as f64);
         for t in tris {
             let lo = t[0].min(t[1]).min(t[2]);
             let hi = t[0].max(t[1]).max(t[2]);
-            let (i0, i1) = c.range(0, lo.x - margin, hi.x + margin);
-            let (j0, j1) = c.range(1, lo.y - margin, hi.y + margin);
+            let (i0, i1) = (c.column(0, lo.x - margin), c.column(0, hi.x + margin));
+            let (j0, j1) = (c.column(1, lo.y - margin), c.column(1, hi.y + margin));
             // Over a column, a triangle is no higher than its highest vertex
             // nor, unless it is steep, than its plane at the column's corners
             // (a linear function's greatest value on a rectangle is at a
@@ -98,18 +106,28 @@ impl Ceiling {
                 }
             }
         }
+        c.top2 = (0..dims[1])
+            .flat_map(|j| (0..dims[0]).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (i1, j1) = ((i + 1).min(dims[0] - 1), (j + 1).min(dims[1] - 1));
+                [(i, j), (i1, j), (i, j1), (i1, j1)]
+                    .iter()
+                    .map(|&(i, j)| c.top[j * dims[0] + i])
+                    .fold(f32::NEG_INFINITY, f32::max)
+            })
+            .collect();
         Some(c)
     }
 
-    /// Columns on `axis` that [lo, hi] meets, clamped to the grid (no
-    /// geometry lies beyond it). The column of a value is monotonic in it,
-    /// so two intervals that share a point share a column.
+    /// The column on `axis` of `v`, clamped to the grid (no geometry lies
+    /// beyond it). Monotonic in `v`, so two intervals that share a point
+    /// share a column.
     #[inline]
-    fn range(&self, axis: usize, lo: f32, hi: f32) -> (usize, usize) {
-        let last = self.dims[axis] as f32 - 1.0;
+    fn column(&self, axis: usize, v: f32) -> usize {
         // Clamped first, so truncation is the floor (and NaN gives 0).
-        let cell = |v: f32| ((v - self.min[axis]) * self.inv_cell[axis]).clamp(0.0, last) as usize;
-        (cell(lo), cell(hi))
+        ((v - self.min[axis]) * self.inv_cell[axis])
+            .max(0.0)
+            .min(self.last[axis]) as i32 as usize
     }
 
     /// True when the segment from `a` to `b` lies above the ceiling of
@@ -125,21 +143,27 @@ impl Ceiling {
         let p = self.pad;
         let lo = [a.x.min(b.x) - p, a.y.min(b.y) - p];
         let hi = [a.x.max(b.x) + p, a.y.max(b.y) + p];
-        if (0..2).any(|k| hi[k] < self.min[k] || lo[k] > self.max[k]) {
+        if (hi[0] < self.min[0])
+            | (lo[0] > self.max[0])
+            | (hi[1] < self.min[1])
+            | (lo[1] > self.max[1])
+        {
             // Wholly beside the triangles' box.
             return true;
         }
-        let (i0, i1) = self.range(0, lo[0], hi[0]);
-        let (j0, j1) = self.range(1, lo[1], hi[1]);
+        let (i0, i1) = (self.column(0, lo[0]), self.column(0, hi[0]));
+        let (j0, j1) = (self.column(1, lo[1]), self.column(1, hi[1]));
+        let w = self.dims[0];
+        if i1 <= i0 + 1 && j1 <= j0 + 1 && low > self.top2[j0 * w + i0] {
+            return true;
+        }
         if (i1 - i0 + 1) * (j1 - j0 + 1) > MAX_COLUMNS {
             return false;
         }
-        for j in j0..=j1 {
-            let row = &self.top[j * self.dims[0]..(j + 1) * self.dims[0]];
-            if row[i0..=i1].iter().any(|&top| low <= top) {
-                return false;
-            }
-        }
-        true
+        (j0..=j1).all(|j| {
+            self.top[j * w + i0..=j * w + i1]
+                .iter()
+                .all(|&top| low > top)
+        })
     }
 }
