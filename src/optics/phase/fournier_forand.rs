@@ -1,10 +1,10 @@
-//! The Fournier–Forand phase function: density, CDF and exact sampler.
+//! The Fournier–Forand phase function: density, CDF and sampler.
 //!
 //! Written in s2 = sin^2(psi/2), in which the printed formulas (OPTICS.md;
 //! Fournier & Forand 1994, Fournier & Jonasz 1999) are algebraic, 1 - cos psi
 //! = 2 s2 keeps small angles, and ln P(<psi) is nearly linear in ln s2 over
-//! the forward peak (P ~ s2^((mu-3)/2)), which is what the sampler's Newton
-//! solve relies on. The printed forms are 0/0 at delta = 1 (about 10° for
+//! the forward peak (P ~ s2^((mu-3)/2)), which is what the Newton solve of
+//! the sampler's inverse table relies on. The printed forms are 0/0 at delta = 1 (about 10° for
 //! Petzold-like parameters); series replace them there.
 
 use std::ops::RangeInclusive;
