@@ -4,8 +4,9 @@
 //! Fournier & Forand 1994, Fournier & Jonasz 1999) are algebraic, 1 - cos psi
 //! = 2 s2 keeps small angles, and ln P(<psi) is nearly linear in ln s2 over
 //! the forward peak (P ~ s2^((mu-3)/2)), which is what the Newton solve of
-//! the sampler's inverse table relies on. The printed forms are 0/0 at delta = 1 (about 10° for
-//! Petzold-like parameters); series replace them there.
+//! the sampler's inverse table relies on. The printed forms are 0/0 at
+//! delta = 1 (about 10° for Petzold-like parameters); series replace them
+//! there.
 
 use std::ops::RangeInclusive;
 use std::sync::Arc;
@@ -215,7 +216,7 @@ impl FournierForand {
     /// That is a relative error in s2 = (1 - cos psi)/2, so the cosine is
     /// off by at most twice as much (4e-10) in absolute terms and the angle
     /// by half as much relatively, even in the forward peak: below the
-    /// f32 spacing of the cosine emission stores (6e-8 near 1), and six
+    /// f32 spacing of the cosine emission stores (6e-8 near 1), and five
     /// orders of magnitude below the 5e-5 rad a stored direction keeps. A
     /// Newton step on the analytic CDF would refine it to round-off at the
     /// price of four more transcendental calls, a third of a scattering
