@@ -169,21 +169,75 @@ pub fn oct_encode(d: Vec3) -> [u16; 2] {
         v = (1.0 - pu.abs()) * sign_not_zero(pv);
     }
     let (fu, fv) = (snorm16_floor(u) as i32, snorm16_floor(v) as i32);
+    let codes = OCT_STEPS.map(|(du, dv)| {
+        [
+            (fu + du).min(32767) as i16 as u16,
+            (fv + dv).min(32767) as i16 as u16,
+        ]
+    });
+    let errs = oct_errors(codes, d);
     let mut best = [fu as i16 as u16, fv as i16 as u16];
     // Compare by squared chord: a dot product near 1 has no f32 resolution left.
     let mut best_err = f32::INFINITY;
-    for (du, dv) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-        let code = [
-            (fu + du).min(32767) as i16 as u16,
-            (fv + dv).min(32767) as i16 as u16,
-        ];
-        let err = (oct_decode(code) - d).length_squared();
+    for (code, err) in codes.into_iter().zip(errs) {
         if err < best_err {
             best_err = err;
             best = code;
         }
     }
     best
+}
+
+/// The four neighbouring codes [`oct_encode`] chooses among.
+const OCT_STEPS: [(i32, i32); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+
+/// Squared distance from `d` to each code's [`oct_decode`].
+#[cfg(not(target_arch = "x86_64"))]
+#[inline]
+fn oct_errors(codes: [[u16; 2]; 4], d: Vec3) -> [f32; 4] {
+    codes.map(|c| (oct_decode(c) - d).length_squared())
+}
+
+/// Squared distance from `d` to each code's [`oct_decode`], the four
+/// decodes in the lanes of SSE registers: the same IEEE operations in the
+/// same order as the scalar decode (glam's `normalize` is `v * (1 /
+/// sqrt(x x + y y + z z))`, and SSE's square root and division are
+/// correctly rounded), so the same bits (tested against the scalar form).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn oct_errors(codes: [[u16; 2]; 4], d: Vec3) -> [f32; 4] {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86-64 baseline.
+    unsafe {
+        let lanes = |k: usize| {
+            let q = codes.map(|c| c[k] as i16 as i32);
+            let f = _mm_cvtepi32_ps(_mm_setr_epi32(q[0], q[1], q[2], q[3]));
+            _mm_max_ps(_mm_div_ps(f, _mm_set1_ps(32767.0)), _mm_set1_ps(-1.0))
+        };
+        let (u, v) = (lanes(0), lanes(1));
+        let sign = _mm_set1_ps(-0.0);
+        let abs = |x: __m128| _mm_andnot_ps(sign, x);
+        let z = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(1.0), abs(u)), abs(v));
+        let t = _mm_max_ps(_mm_xor_ps(z, sign), _mm_setzero_ps());
+        let copysign = |m: __m128, s: __m128| _mm_or_ps(abs(m), _mm_and_ps(s, sign));
+        let x = _mm_sub_ps(u, copysign(t, u));
+        let y = _mm_sub_ps(v, copysign(t, v));
+        let dot = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)),
+            _mm_mul_ps(z, z),
+        );
+        let r = _mm_div_ps(_mm_set1_ps(1.0), _mm_sqrt_ps(dot));
+        let ex = _mm_sub_ps(_mm_mul_ps(x, r), _mm_set1_ps(d.x));
+        let ey = _mm_sub_ps(_mm_mul_ps(y, r), _mm_set1_ps(d.y));
+        let ez = _mm_sub_ps(_mm_mul_ps(z, r), _mm_set1_ps(d.z));
+        let err = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(ex, ex), _mm_mul_ps(ey, ey)),
+            _mm_mul_ps(ez, ez),
+        );
+        let mut out = [0f32; 4];
+        _mm_storeu_ps(out.as_mut_ptr(), err);
+        out
+    }
 }
 
 /// Inverse of [`oct_encode`]; returns a unit vector. Branch-free (the

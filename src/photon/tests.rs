@@ -44,3 +44,57 @@ fn quantisation_error_is_half_a_step() {
     let flat = AxisQuantizer::new(-10.0, -10.0);
     assert_eq!(flat.decode(flat.encode(-10.0)), -10.0);
 }
+
+/// The four-lane error computation picks the same code as decoding each
+/// candidate with `oct_decode`, bit for bit, over a million random
+/// directions and the folds (poles, equator, octant seams).
+#[test]
+fn octahedral_lanes_match_the_scalar_decode() {
+    let scalar = |d: Vec3| {
+        let l1 = d.x.abs() + d.y.abs() + d.z.abs();
+        let (mut u, mut v) = (d.x / l1, d.y / l1);
+        if d.z < 0.0 {
+            let (pu, pv) = (u, v);
+            u = (1.0 - pv.abs()) * if pu >= 0.0 { 1.0 } else { -1.0 };
+            v = (1.0 - pu.abs()) * if pv >= 0.0 { 1.0 } else { -1.0 };
+        }
+        let fu = (u.clamp(-1.0, 1.0) * 32767.0).floor() as i32;
+        let fv = (v.clamp(-1.0, 1.0) * 32767.0).floor() as i32;
+        let mut best = [fu as i16 as u16, fv as i16 as u16];
+        let mut best_err = f32::INFINITY;
+        for (du, dv) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let code = [
+                (fu + du).min(32767) as i16 as u16,
+                (fv + dv).min(32767) as i16 as u16,
+            ];
+            let err = (oct_decode(code) - d).length_squared();
+            if err < best_err {
+                best_err = err;
+                best = code;
+            }
+        }
+        best
+    };
+    let mut rng = crate::rng::Pcg32::new(11, 3);
+    let mut dirs: Vec<Vec3> = (0..1_000_000)
+        .map(|_| {
+            let z = 2.0 * rng.uniform_f64() - 1.0;
+            let phi = std::f64::consts::TAU * rng.uniform_f64();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            glam::DVec3::new(r * phi.cos(), r * phi.sin(), z).as_vec3()
+        })
+        .collect();
+    for x in [-1.0f32, -0.5, 0.0, 0.5, 1.0] {
+        for y in [-1.0f32, -0.5, 0.0, 0.5, 1.0] {
+            for z in [-1.0f32, -1e-7, 0.0, 1e-7, 1.0] {
+                let d = Vec3::new(x, y, z);
+                if d.length() > 0.0 {
+                    dirs.push(d.normalize());
+                }
+            }
+        }
+    }
+    for d in dirs {
+        assert_eq!(oct_encode(d), scalar(d), "{d:?}");
+    }
+}
