@@ -157,6 +157,24 @@ pub const OCT_MAX_ANGLE_ERROR_RAD: f32 = 5.0e-5;
 /// the one that decodes closest to `d` ("precise" variant).
 #[inline]
 pub fn oct_encode(d: Vec3) -> [u16; 2] {
+    let codes = oct_candidates(d);
+    // Compare by squared chord: a dot product near 1 has no f32 resolution
+    // left. The first candidate (the floor) stands when no error is below
+    // infinity (a NaN direction).
+    let mut best = codes[0];
+    let mut best_err = f32::INFINITY;
+    for (code, err) in codes.into_iter().zip(oct_errors(codes, d)) {
+        if err < best_err {
+            best_err = err;
+            best = code;
+        }
+    }
+    best
+}
+
+/// The four codes around `d`'s octahedral point, the floor first.
+#[inline]
+fn oct_candidates(d: Vec3) -> [[u16; 2]; 4] {
     let l1 = d.x.abs() + d.y.abs() + d.z.abs();
     let (mut u, mut v) = if l1 > 0.0 {
         (d.x / l1, d.y / l1)
@@ -169,23 +187,12 @@ pub fn oct_encode(d: Vec3) -> [u16; 2] {
         v = (1.0 - pu.abs()) * sign_not_zero(pv);
     }
     let (fu, fv) = (snorm16_floor(u) as i32, snorm16_floor(v) as i32);
-    let codes = OCT_STEPS.map(|(du, dv)| {
+    OCT_STEPS.map(|(du, dv)| {
         [
             (fu + du).min(32767) as i16 as u16,
             (fv + dv).min(32767) as i16 as u16,
         ]
-    });
-    let errs = oct_errors(codes, d);
-    let mut best = [fu as i16 as u16, fv as i16 as u16];
-    // Compare by squared chord: a dot product near 1 has no f32 resolution left.
-    let mut best_err = f32::INFINITY;
-    for (code, err) in codes.into_iter().zip(errs) {
-        if err < best_err {
-            best_err = err;
-            best = code;
-        }
-    }
-    best
+    })
 }
 
 /// The four neighbouring codes [`oct_encode`] chooses among.
