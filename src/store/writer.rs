@@ -35,7 +35,7 @@ use crate::progress::Progress;
 use crate::provenance::Provenance;
 use crate::rng::mix64;
 use crate::spectral::BandGrid;
-use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 const MIB: u64 = 1 << 20;
@@ -229,7 +229,7 @@ pub struct MapWriter {
     partition: Partition,
     header: Header,
     header_len: u64,
-    out: BufWriter<tempfile::NamedTempFile>,
+    out: crate::output::StreamOut,
     offset: u64,
     cells: Vec<CellBuf>,
     buffered: u64,
@@ -266,7 +266,7 @@ impl MapWriter {
             metadata: Section::default(),
         };
         let bytes = header.encode();
-        let mut out = BufWriter::with_capacity(1 << 20, tmp);
+        let mut out = crate::output::StreamOut::new(tmp);
         out.write_all(&bytes)
             .map_err(|e| Error::io(path, "write", e))?;
         let cells = (0..partition.cells() as usize * LAYERS)
@@ -371,7 +371,7 @@ impl MapWriter {
         };
         self.out.write_all(&index.0).map_err(io)?;
         self.out.write_all(&footer.encode()).map_err(io)?;
-        let mut tmp = self.out.into_inner().map_err(|e| io(e.into_error()))?;
+        let mut tmp = self.out.finish().map_err(io)?;
         self.header.photons = self.summary.photons;
         self.header.tiles = entries.len() as u32;
         let header = self.header.encode();
