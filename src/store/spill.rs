@@ -61,6 +61,8 @@ const PAYLOAD_BYTES: usize = 11;
 pub struct SnapGrid {
     /// Grid spacing per axis, a power of two.
     step: [f64; 3],
+    /// Its reciprocal (exact: a power of two), to divide by multiplying.
+    per_m: [f64; 3],
     /// The map bounds it was made for (named in errors).
     bounds: Aabb,
 }
@@ -76,8 +78,10 @@ impl SnapGrid {
             let binade = f32::from_bits(m.to_bits() & 0x7f80_0000) as f64;
             (binade * (-23f64).exp2()).max((-40f64).exp2())
         };
+        let step = [step(0), step(1), step(2)];
         SnapGrid {
-            step: [step(0), step(1), step(2)],
+            step,
+            per_m: step.map(|s| 1.0 / s),
             bounds: *bounds,
         }
     }
@@ -92,7 +96,7 @@ impl SnapGrid {
     pub fn index(&self, position: [f32; 3]) -> Option<[i64; 3]> {
         let mut out = [0i64; 3];
         for axis in 0..3 {
-            let i = (position[axis] as f64 / self.step[axis]).round();
+            let i = (position[axis] as f64 * self.per_m[axis]).round();
             if i.is_nan() || i.abs() >= GRID_LIMIT as f64 {
                 return None;
             }
