@@ -384,8 +384,7 @@ impl SeaSurface {
             return None;
         }
         for _ in 0..1 << 20 {
-            let (zx, zy) = gaussian_pair(rng);
-            let (zx, zy) = (zx * s, zy * s);
+            let (zx, zy) = (rng.normal() * s, rng.normal() * s);
             if zx.abs() > s_max || zy.abs() > s_max {
                 continue;
             }
@@ -448,15 +447,6 @@ fn smith_lambda_nu(nu: f64) -> f64 {
         return 0.0; // exp(-nu^2) underflows
     }
     0.5 * ((-nu * nu).exp() / (std::f64::consts::PI.sqrt() * nu) - libm::erfc(nu)).max(0.0)
-}
-
-/// Two independent standard normal deviates (Box–Muller).
-pub fn gaussian_pair(rng: &mut Pcg32) -> (f64, f64) {
-    let u1 = 1.0 - rng.uniform_f64();
-    let u2 = rng.uniform_f64();
-    let r = (-2.0 * u1.ln()).sqrt();
-    let phi = std::f64::consts::TAU * u2;
-    (r * phi.cos(), r * phi.sin())
 }
 
 #[cfg(test)]
