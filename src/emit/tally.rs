@@ -60,11 +60,14 @@ fn fixed(x: f64) -> i128 {
 }
 
 /// What one photon contributed (indices: depth x quantity, then the two
-/// above-surface quantities).
+/// above-surface quantities), and which slots it touched: a path crosses a
+/// few of them, so [`Totals::record`] and [`PhotonTally::clear`] visit only
+/// those (bit `i` for slot `i`; bit 63 for any slot from 63 up).
 #[derive(Clone, Debug)]
 pub struct PhotonTally {
-    pub values: Vec<f64>,
+    values: Vec<f64>,
     depths: usize,
+    touched: u64,
 }
 
 impl PhotonTally {
@@ -72,24 +75,44 @@ impl PhotonTally {
         PhotonTally {
             values: vec![0.0; depths * QUANTITIES + 2],
             depths,
+            touched: 0,
         }
     }
     pub fn clear(&mut self) {
-        self.values.iter_mut().for_each(|v| *v = 0.0);
+        let mut m = self.touched;
+        while m != 0 {
+            let bit = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if bit < 63 {
+                self.values[bit] = 0.0;
+            } else {
+                self.values[63..].iter_mut().for_each(|v| *v = 0.0);
+            }
+        }
+        self.touched = 0;
+    }
+    /// Contribution in each slot.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+    #[inline]
+    fn add_slot(&mut self, slot: usize, x: f64) {
+        self.values[slot] += x;
+        self.touched |= 1 << slot.min(63);
     }
     #[inline]
     pub fn add(&mut self, depth: usize, q: usize, x: f64) {
-        self.values[depth * QUANTITIES + q] += x;
+        self.add_slot(depth * QUANTITIES + q, x);
     }
     /// Downward irradiance just above the surface.
     #[inline]
     pub fn add_above_down(&mut self) {
-        self.values[self.depths * QUANTITIES] += 1.0;
+        self.add_slot(self.depths * QUANTITIES, 1.0);
     }
     /// Upward irradiance just above the surface, of a path branch of weight `w`.
     #[inline]
     pub fn add_above_up(&mut self, w: f64) {
-        self.values[self.depths * QUANTITIES + 1] += w;
+        self.add_slot(self.depths * QUANTITIES + 1, w);
     }
 }
 
@@ -164,10 +187,22 @@ impl Totals {
         self.absorbed_water[band] += fates[Fate::AbsorbedWater.index()];
         self.absorbed_surfaces[band] += fates[Fate::AbsorbedSurface.index()];
         self.lost_edges[band] += fates[Fate::LostEdge.index()];
-        for (slot, &x) in t.values.iter().enumerate() {
+        let mut add = |slot: usize, x: f64| {
             if x != 0.0 {
                 self.sum[slot * self.bands + band] += fixed(x);
                 self.sum_sq[slot * self.bands + band] += fixed(x * x);
+            }
+        };
+        let mut m = t.touched;
+        while m != 0 {
+            let bit = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if bit < 63 {
+                add(bit, t.values[bit]);
+            } else {
+                for (slot, &x) in t.values.iter().enumerate().skip(63) {
+                    add(slot, x);
+                }
             }
         }
     }

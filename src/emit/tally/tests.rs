@@ -62,3 +62,50 @@ fn standard_error_matches_a_hand_computation() {
     // A quantity nothing contributed to has mean and error 0.
     assert_eq!(totals.mean_and_stderr(totals.slot(0, ED), 0), (0.0, 0.0));
 }
+
+/// One tally reused across photons (cleared between them), with more
+/// slots than the touched mask has bits (12 depths: 74 slots): the totals
+/// equal sums over every slot of every photon's contributions computed
+/// without the mask, and a cleared tally holds nothing.
+#[test]
+fn touched_slots_account_every_contribution() {
+    let depths = 12;
+    let slots = depths * QUANTITIES + 2;
+    let bands = 3;
+    let mut rng = crate::rng::Pcg32::new(9, 4);
+    let mut tally = PhotonTally::new(depths);
+    let mut totals = Totals::new(bands, depths);
+    let mut want = vec![0i128; slots * bands];
+    let mut want_sq = vec![0i128; slots * bands];
+    for photon in 0..500 {
+        tally.clear();
+        assert!(tally.values().iter().all(|&v| v == 0.0));
+        let band = photon % bands;
+        let mut values = vec![0.0; slots];
+        for _ in 0..rng.below(6) {
+            let slot = rng.below(slots as u32) as usize;
+            let x = rng.uniform_f64();
+            if slot == depths * QUANTITIES {
+                values[slot] += 1.0;
+                tally.add_above_down();
+                continue;
+            }
+            values[slot] += x;
+            if slot == depths * QUANTITIES + 1 {
+                tally.add_above_up(x);
+            } else {
+                tally.add(slot / QUANTITIES, slot % QUANTITIES, x);
+            }
+        }
+        for (slot, &x) in values.iter().enumerate() {
+            if x != 0.0 {
+                want[slot * bands + band] += fixed(x);
+                want_sq[slot * bands + band] += fixed(x * x);
+            }
+        }
+        assert_eq!(tally.values(), &values[..]);
+        totals.record(band, &ESCAPED, &tally);
+    }
+    assert_eq!(totals.sum, want);
+    assert_eq!(totals.sum_sq, want_sq);
+}
