@@ -209,6 +209,16 @@ impl MapFile {
         out: &mut Vec<PackedPhoton>,
     ) -> Result<()> {
         let e = &self.tiles[t as usize];
+        // The map is mapped for random access (no read-ahead), so a tile
+        // whose pages are not resident would be read a page per fault, each
+        // waiting on the disk in turn; asking for the whole blob first
+        // makes that one read. Advice only: failure changes nothing.
+        #[cfg(unix)]
+        let _ = self.mmap.advise_range(
+            memmap2::Advice::WillNeed,
+            e.offset as usize,
+            e.length as usize,
+        );
         decoder
             .decode(self.blob(t), e, out)
             .map_err(|err| Error::tile(&self.path, t, err.to_string()))?;
