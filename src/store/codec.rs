@@ -80,9 +80,12 @@ impl StagedPhoton {
     }
 }
 
-/// A tile sort key: Morton code, direction and power, band and group, and
-/// the photon's place in the input.
-type EncodeKey = (u64, u64, u16, u32);
+/// A tile sort key: Morton code, direction and power, band and group. It
+/// holds the whole record, so records are written from the sorted keys
+/// without going back to the photons (a random gather over a tile larger
+/// than the cache); photons with equal keys have equal records, so their
+/// order does not matter.
+type EncodeKey = (u64, u64, u16);
 
 /// Bytes of working memory the encoder needs per photon (staged record, sort
 /// key, raw record, compressed output bound and slack), used for budgeting
@@ -240,12 +243,11 @@ impl TileEncoder {
         }
         let q = BoxQuantizer::new(&quant);
         self.keys.clear();
-        self.keys.extend(photons.iter().enumerate().map(|(i, p)| {
+        self.keys.extend(photons.iter().map(|p| {
             (
                 morton3(q.encode(p.photon.position)),
                 p.payload_key(),
                 p.photon.band_group,
-                i as u32,
             )
         }));
         self.keys.sort_unstable();
@@ -254,16 +256,16 @@ impl TileEncoder {
         self.raw.resize(n * RECORD_BYTES, 0);
         let mut bounds = Aabb::EMPTY;
         let mut prev = 0u64;
-        for (i, &(m, _, _, idx)) in self.keys.iter().enumerate() {
-            let p = &photons[idx as usize].photon;
+        for (i, &(m, payload, band_group)) in self.keys.iter().enumerate() {
             bounds.grow(q.decode(demorton3(m)));
             let mut rec = [0u8; RECORD_BYTES];
             rec[0..6].copy_from_slice(&(m - prev).to_le_bytes()[..6]);
             prev = m;
-            rec[6..8].copy_from_slice(&p.oct[0].to_le_bytes());
-            rec[8..10].copy_from_slice(&p.oct[1].to_le_bytes());
-            rec[10..12].copy_from_slice(&p.band_group.to_le_bytes());
-            rec[12..16].copy_from_slice(&p.power.to_le_bytes());
+            // payload_key: direction u, direction v, power bits.
+            rec[6..8].copy_from_slice(&((payload >> 48) as u16).to_le_bytes());
+            rec[8..10].copy_from_slice(&((payload >> 32) as u16).to_le_bytes());
+            rec[10..12].copy_from_slice(&band_group.to_le_bytes());
+            rec[12..16].copy_from_slice(&(payload as u32).to_le_bytes());
             for (k, &b) in rec.iter().enumerate() {
                 self.raw[k * n + i] = b;
             }
