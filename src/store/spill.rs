@@ -37,7 +37,7 @@ use crate::error::{Error, Result};
 use crate::morton::{demorton3_wide, morton3_wide};
 use crate::photon::{PackedPhoton, LAYERS};
 use std::fs::File;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Most photons in one spilled frame: bounds the sort keys and frame
 /// buffers (about 1 MiB together) and still sorts runs long enough that
@@ -388,13 +388,6 @@ impl Scratch {
         Error::io(&self.name, action, e)
     }
 
-    fn corrupt(&self, what: &str) -> Error {
-        self.err(
-            "read",
-            std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
-        )
-    }
-
     /// Write `photons` (snapped to the grid) as frames of at most
     /// [`FRAME_PHOTONS`] after `last`, the newest frame of their cell;
     /// returns the new newest frame.
@@ -446,24 +439,14 @@ impl Scratch {
     /// Read frame `f` back into `out` (cleared first); returns the frame
     /// before it in the same cell.
     pub fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
-        self.frame.clear();
-        self.frame.resize(f.len as usize, 0);
-        crate::output::read_exact_at(&self.file, &mut self.frame, f.offset)
-            .map_err(|e| self.err("read", e))?;
-        if self.frame.len() < FRAME_LINK {
-            return Err(self.corrupt("spill frame too short"));
-        }
-        let link = &self.frame[..FRAME_LINK];
-        let prev = Frame {
-            offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
-            len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
-            count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
-        };
-        let decoded = self
-            .codec
-            .decode(&self.frame[FRAME_LINK..], f.count as usize, out);
-        decoded.map_err(|e| self.corrupt(&format!("spill {e}")))?;
-        Ok((prev.count > 0).then_some(prev))
+        read_frame(
+            &self.file,
+            &self.name,
+            &mut self.codec,
+            &mut self.frame,
+            f,
+            out,
+        )
     }
 
     /// Call `visit` with the records of every spilled frame of a cell,
@@ -480,6 +463,89 @@ impl Scratch {
         }
         Ok(())
     }
+
+    /// A reader of this scratch file for another thread (its own handle
+    /// and decoder): frames already written can be read while more are
+    /// appended.
+    pub fn reader(&self) -> Result<ScratchReader> {
+        let file = self.file.try_clone().map_err(|e| self.err("open", e))?;
+        let codec = FrameCodec::new(self.grid()).map_err(|e| self.err("open", e))?;
+        Ok(ScratchReader {
+            file,
+            name: self.name.clone(),
+            codec,
+            frame: Vec::new(),
+            buf: Vec::new(),
+        })
+    }
+}
+
+/// Reads the frames of a [`Scratch`] on another thread.
+pub struct ScratchReader {
+    file: File,
+    name: PathBuf,
+    codec: FrameCodec,
+    frame: Vec<u8>,
+    buf: Vec<StagedPhoton>,
+}
+
+impl ScratchReader {
+    /// Append the records of every frame of a cell, from its newest frame
+    /// `next` back, to `out`.
+    pub fn append_frames(
+        &mut self,
+        mut next: Option<Frame>,
+        out: &mut Vec<StagedPhoton>,
+    ) -> Result<()> {
+        while let Some(f) = next {
+            next = read_frame(
+                &self.file,
+                &self.name,
+                &mut self.codec,
+                &mut self.frame,
+                f,
+                &mut self.buf,
+            )?;
+            out.extend_from_slice(&self.buf);
+        }
+        Ok(())
+    }
+}
+
+/// Read frame `f` of the scratch file `file` (named `name` in errors) into
+/// `out` (cleared first) through the buffer `frame`; returns the frame
+/// before it in the same cell.
+fn read_frame(
+    file: &File,
+    name: &Path,
+    codec: &mut FrameCodec,
+    frame: &mut Vec<u8>,
+    f: Frame,
+    out: &mut Vec<StagedPhoton>,
+) -> Result<Option<Frame>> {
+    let corrupt = |what: &str| {
+        Error::io(
+            name,
+            "read",
+            std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
+        )
+    };
+    frame.clear();
+    frame.resize(f.len as usize, 0);
+    crate::output::read_exact_at(file, frame, f.offset).map_err(|e| Error::io(name, "read", e))?;
+    if frame.len() < FRAME_LINK {
+        return Err(corrupt("spill frame too short"));
+    }
+    let link = &frame[..FRAME_LINK];
+    let prev = Frame {
+        offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
+        len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
+        count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
+    };
+    codec
+        .decode(&frame[FRAME_LINK..], f.count as usize, out)
+        .map_err(|e| corrupt(&format!("spill {e}")))?;
+    Ok((prev.count > 0).then_some(prev))
 }
 
 /// CRC-32 of a body but for its CRC field.

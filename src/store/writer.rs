@@ -394,15 +394,32 @@ impl MapWriter {
     /// tiles are held at once (read, or being encoded).
     fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
         let width = self.plan.encode_width();
-        let (work_tx, work_rx) = crossbeam_channel::bounded::<(u32, Vec<StagedPhoton>)>(width);
+        let (work_tx, work_rx) = crossbeam_channel::bounded::<Job>(width);
         let (done_tx, done_rx) = crossbeam_channel::unbounded::<Encoded>();
+        let readers = (0..width)
+            .map(|_| self.scratch.reader())
+            .collect::<Result<Vec<_>>>()?;
         std::thread::scope(|scope| {
-            for _ in 0..width {
+            for mut reader in readers {
                 let (rx, tx) = (work_rx.clone(), done_tx.clone());
+                let path = self.path.clone();
                 scope.spawn(move || {
                     let mut encoder = TileEncoder::default();
-                    for (index, staged) in rx {
-                        let tile = encoder.encode(&staged);
+                    for job in rx {
+                        let Job {
+                            index,
+                            frames,
+                            chunks,
+                            mut staged,
+                        } = job;
+                        let tile = reader.append_frames(frames, &mut staged).and_then(|()| {
+                            for chunk in chunks {
+                                staged.extend_from_slice(&chunk);
+                            }
+                            encoder
+                                .encode(&staged)
+                                .map_err(|e| Error::tile(&path, index, e.to_string()))
+                        });
                         if tx.send((index, tile, staged)).is_err() {
                             break;
                         }
@@ -430,11 +447,14 @@ impl MapWriter {
         })
     }
 
-    /// The reading side of [`Self::encode_cells`].
+    /// The dispatching side of [`Self::encode_cells`]: cells in order,
+    /// overfull ones split first, each handed to an encoder thread with
+    /// its spilled frames and buffered chunks (the encoder reads and
+    /// decodes the frames itself, so both cores do that too).
     fn read_cells(
         &mut self,
         tiles: &mut TileQueue,
-        work: &crossbeam_channel::Sender<(u32, Vec<StagedPhoton>)>,
+        work: &crossbeam_channel::Sender<Job>,
         progress: &dyn Progress,
     ) -> Result<()> {
         let mut frame_buf: Vec<StagedPhoton> = Vec::new();
@@ -459,16 +479,17 @@ impl MapWriter {
                 let mut staged = tiles.spare.pop().unwrap_or_default();
                 staged.clear();
                 staged.reserve_exact(cell.count as usize);
-                self.scratch
-                    .for_each_frame(cell.last_frame.take(), &mut frame_buf, |records| {
-                        staged.extend_from_slice(records)
-                    })?;
-                for chunk in cell.chunks.drain(..) {
-                    staged.extend_from_slice(&chunk);
+                let chunks = std::mem::take(&mut cell.chunks);
+                for chunk in &chunks {
                     self.buffered -= (chunk.capacity() * STAGED) as u64;
                 }
-                work.send((tiles.sent, staged))
-                    .map_err(|_| tiles.stopped(&self.path))?;
+                let job = Job {
+                    index: tiles.sent,
+                    frames: cell.last_frame.take(),
+                    chunks,
+                    staged,
+                };
+                work.send(job).map_err(|_| tiles.stopped(&self.path))?;
                 tiles.sent += 1;
             }
         }
@@ -605,7 +626,17 @@ impl MapWriter {
 
 /// A tile from an encoder thread: its index, the encoding, and the photon
 /// buffer back for reuse.
-type Encoded = (u32, std::io::Result<EncodedTile>, Vec<StagedPhoton>);
+type Encoded = (u32, Result<EncodedTile>, Vec<StagedPhoton>);
+
+/// A cell for an encoder thread: its tile index, its newest spilled frame,
+/// its buffered chunks, and a buffer (reserved for the cell's photons) to
+/// gather them in.
+struct Job {
+    index: u32,
+    frames: Option<Frame>,
+    chunks: Vec<Vec<StagedPhoton>>,
+    staged: Vec<StagedPhoton>,
+}
 
 /// The tiles handed to the encoder threads, and their results put back in
 /// order.
@@ -616,7 +647,7 @@ struct TileQueue {
     sent: u32,
     received: u32,
     /// Results that arrived before an earlier tile's.
-    waiting: std::collections::BTreeMap<u32, std::io::Result<EncodedTile>>,
+    waiting: std::collections::BTreeMap<u32, Result<EncodedTile>>,
     entries: Vec<TileEntry>,
     /// Photon buffers to reuse.
     spare: Vec<Vec<StagedPhoton>>,
@@ -632,8 +663,7 @@ impl TileQueue {
         }
         self.waiting.insert(index, tile);
         while let Some(tile) = self.waiting.remove(&(self.entries.len() as u32)) {
-            let index = self.entries.len() as u32;
-            let tile = tile.map_err(|e| Error::tile(&writer.path, index, e.to_string()))?;
+            let tile = tile?;
             writer.append(&tile, &mut self.entries)?;
             progress.advance(tile.count as u64);
         }
