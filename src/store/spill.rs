@@ -122,13 +122,18 @@ impl SnapGrid {
         if self.snap(&mut p) {
             return Ok(p);
         }
-        Err(Error::invalid(
+        Err(self.outside(&p))
+    }
+
+    /// The error for a photon [`SnapGrid::snap`] refused.
+    pub fn outside(&self, p: &StagedPhoton) -> Error {
+        Error::invalid(
             "photon position",
             format!(
                 "{:?} is not finite or lies far outside the map's bounds {:?}",
                 p.photon.position, self.bounds
             ),
-        ))
+        )
     }
 
     /// Snap `p` to the grid in place; false if it lies outside the grid's range.

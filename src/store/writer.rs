@@ -303,7 +303,10 @@ impl MapWriter {
         let chunk_bytes = (self.plan.chunk_records * STAGED) as u64;
         let grid = self.scratch.grid();
         for p in photons {
-            let p = grid.snapped(p)?;
+            let mut p = *p;
+            if !grid.snap(&mut p) {
+                return Err(grid.outside(&p));
+            }
             let index = p.photon.layer as usize * self.partition.cells() as usize
                 + self.partition.cell_of(p.pos()) as usize;
             if self.cells[index].push(&p, self.plan.chunk_records) {
