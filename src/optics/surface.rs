@@ -355,6 +355,14 @@ impl SeaSurface {
         if self.slope_variance <= 0.0 {
             return 1.0;
         }
+        // Most rays leave steeply, past nu = SMITH_NU_NEGLIGIBLE where G1
+        // is exactly 1: nu > N <=> mu > N sigma sin <=> z^2 (1 + N^2
+        // sigma^2) > N^2 sigma^2 |d|^2, with no square root or division.
+        // At the boundary both sides give 1.0 (see `smith_lambda`).
+        let n2s2 = SMITH_NU_NEGLIGIBLE * SMITH_NU_NEGLIGIBLE * self.slope_variance;
+        if d.z * d.z * (1.0 + n2s2) > n2s2 * d.length_squared() {
+            return 1.0;
+        }
         1.0 / (1.0 + smith_lambda(d.z.abs() / d.length(), self.slope_variance))
     }
 
