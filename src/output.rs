@@ -189,11 +189,6 @@ impl StreamOut {
         }
     }
 
-    /// Whether writes currently go around the page cache.
-    pub fn is_direct(&self) -> bool {
-        self.direct
-    }
-
     /// Write what is gathered: whole blocks only while direct, everything
     /// otherwise; the rest moves to the front of the buffer.
     fn drain(&mut self) -> std::io::Result<()> {
@@ -207,7 +202,7 @@ impl StreamOut {
         }
         let chunk = &self.mem[self.start..self.start + whole];
         match write_all_at(self.tmp.as_file(), chunk, self.written) {
-            Err(e) if self.direct && e.raw_os_error() == Some(libc_einval()) => {
+            Err(e) if self.direct && e.kind() == std::io::ErrorKind::InvalidInput => {
                 // A filesystem that accepted the flag but not the write:
                 // the same bytes through the page cache.
                 self.direct = false;
@@ -253,17 +248,6 @@ impl Write for StreamOut {
     /// block cannot be written directly).
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
-    }
-}
-
-fn libc_einval() -> i32 {
-    #[cfg(unix)]
-    {
-        libc::EINVAL
-    }
-    #[cfg(not(unix))]
-    {
-        22
     }
 }
 

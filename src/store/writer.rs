@@ -246,6 +246,7 @@ pub struct MapWriter {
     scratch: Option<Scratch>,
     /// The spill thread, once the buffers first filled.
     spiller: Option<Spiller>,
+    /// The scratch file's grid, kept here while a spill thread holds it.
     grid: SnapGrid,
     summary: WriteSummary,
 }
@@ -741,11 +742,7 @@ impl MapWriter {
                 split.kid_bytes[k] += (split.chunk_records * STAGED) as u64;
             }
             if split.kid_bytes[k] > split.limit {
-                kid.spill(
-                    self.scratch
-                        .as_mut()
-                        .expect("spilling stopped before splits"),
-                )?;
+                kid.spill(self.scratch())?;
                 split.kid_bytes[k] = 0;
             }
         }
