@@ -5,6 +5,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+pub mod direct;
+
 /// Every temporary file this process created, for [`remove_temporaries`].
 /// Published ones were renamed away and dropped ones deleted, so the list
 /// only grows; removing a path that is gone does nothing.
@@ -144,138 +146,49 @@ pub fn read_exact_at(file: &std::fs::File, buf: &mut [u8], offset: u64) -> std::
     }
 }
 
-/// Bytes a direct write's buffer, offset and length are multiples of.
-const DIRECT_ALIGN: usize = 4096;
-
 /// How much [`StreamOut`] gathers before a write (1 MiB).
 const STREAM_CHUNK: usize = 1 << 20;
 
 /// A sequential writer of a new temporary file that goes around the page
-/// cache where it can (Linux `O_DIRECT`), for large outputs written once
-/// and not read back by this process: the photon map. Through the page
-/// cache every written page is a freshly allocated page, which on a
-/// virtual machine whose free memory is handed back to the host costs
-/// microseconds a page (about 100–180 MB/s on the 2-core test machine,
-/// against 2 GB/s direct; `benches/README.md`), and a map of tens of
-/// gigabytes would also push everything else out of the cache.
-///
-/// Whole 4 KiB blocks of 1 MiB chunks are written directly; the last
-/// partial block goes through the page cache at [`StreamOut::finish`].
-/// Where direct I/O is refused (other systems, tmpfs, a filesystem
-/// rejecting a write with `EINVAL`) it writes through the page cache
-/// instead: the bytes in the file are the same either way.
+/// cache where it can ([`direct`]), for large outputs written once and not
+/// read back by this process: the photon map. Whole 4 KiB blocks of 1 MiB
+/// chunks are written directly; the last partial block goes through the
+/// page cache at [`StreamOut::finish`]. The bytes in the file are the same
+/// either way.
 pub struct StreamOut {
     tmp: tempfile::NamedTempFile,
-    mem: Vec<u8>,
-    start: usize,
-    filled: usize,
-    written: u64,
-    direct: bool,
+    blocks: direct::Blocks,
 }
 
 impl StreamOut {
     /// Write `tmp` from its start (it must be empty).
     pub fn new(tmp: tempfile::NamedTempFile) -> StreamOut {
-        let mem = vec![0u8; STREAM_CHUNK + DIRECT_ALIGN];
-        let start = mem.as_ptr().align_offset(DIRECT_ALIGN).min(DIRECT_ALIGN);
-        let direct = set_direct(tmp.as_file(), true);
-        StreamOut {
-            tmp,
-            mem,
-            start,
-            filled: 0,
-            written: 0,
-            direct,
-        }
-    }
-
-    /// Write what is gathered: whole blocks only while direct, everything
-    /// otherwise; the rest moves to the front of the buffer.
-    fn drain(&mut self) -> std::io::Result<()> {
-        let whole = if self.direct {
-            self.filled / DIRECT_ALIGN * DIRECT_ALIGN
-        } else {
-            self.filled
-        };
-        if whole == 0 {
-            return Ok(());
-        }
-        let chunk = &self.mem[self.start..self.start + whole];
-        match write_all_at(self.tmp.as_file(), chunk, self.written) {
-            Err(e) if self.direct && e.kind() == std::io::ErrorKind::InvalidInput => {
-                // A filesystem that accepted the flag but not the write:
-                // the same bytes through the page cache.
-                self.direct = false;
-                set_direct(self.tmp.as_file(), false);
-                return self.drain();
-            }
-            r => r?,
-        }
-        self.written += whole as u64;
-        self.mem
-            .copy_within(self.start + whole..self.start + self.filled, self.start);
-        self.filled -= whole;
-        Ok(())
+        let blocks = direct::Blocks::new(tmp.as_file(), STREAM_CHUNK);
+        StreamOut { tmp, blocks }
     }
 
     /// Write everything still gathered and hand back the file, positioned
     /// at its end, with direct I/O off (so a header can be patched in).
     pub fn finish(mut self) -> std::io::Result<tempfile::NamedTempFile> {
-        if self.direct {
-            self.direct = false;
-            set_direct(self.tmp.as_file(), false);
-        }
-        self.drain()?;
+        self.blocks.buffered(self.tmp.as_file());
+        self.blocks.drain(self.tmp.as_file())?;
         use std::io::Seek;
-        self.tmp.seek(std::io::SeekFrom::Start(self.written))?;
+        self.tmp
+            .seek(std::io::SeekFrom::Start(self.blocks.written()))?;
         Ok(self.tmp)
     }
 }
 
 impl Write for StreamOut {
     fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
-        let n = data.len().min(STREAM_CHUNK - self.filled);
-        let at = self.start + self.filled;
-        self.mem[at..at + n].copy_from_slice(&data[..n]);
-        self.filled += n;
-        if self.filled == STREAM_CHUNK {
-            self.drain()?;
-        }
-        Ok(n)
+        self.blocks.push(self.tmp.as_file(), data)?;
+        Ok(data.len())
     }
 
     /// Gathered bytes are written by [`StreamOut::finish`] (a partial
     /// block cannot be written directly).
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
-    }
-}
-
-/// Turn direct I/O on `file` on or off; whether it is now on.
-fn set_direct(file: &std::fs::File, on: bool) -> bool {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::fd::AsRawFd;
-        let fd = file.as_raw_fd();
-        // SAFETY: fcntl on a descriptor this process owns, reading and
-        // setting status flags only.
-        unsafe {
-            let flags = libc::fcntl(fd, libc::F_GETFL);
-            if flags < 0 {
-                return false;
-            }
-            let want = if on {
-                flags | libc::O_DIRECT
-            } else {
-                flags & !libc::O_DIRECT
-            };
-            libc::fcntl(fd, libc::F_SETFL, want) == 0 && on
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (file, on);
-        false
     }
 }
 
@@ -342,10 +255,7 @@ mod tests {
             .map(|i| (i * 31 % 251) as u8)
             .collect();
         let mut out = StreamOut::new(temp_in(dir.path(), "s", ".partial").unwrap());
-        if out.direct {
-            set_direct(out.tmp.as_file(), false);
-            out.direct = false;
-        }
+        out.blocks.buffered(out.tmp.as_file());
         out.write_all(&bytes).unwrap();
         let tmp = out.finish().unwrap();
         assert_eq!(std::fs::read(tmp.path()).unwrap(), bytes);

@@ -35,6 +35,7 @@ use super::codec::{StagedPhoton, ZSTD_LEVEL};
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::morton::{demorton3_wide, morton3_wide};
+use crate::output::direct::{read_blocks, Blocks};
 use crate::photon::{PackedPhoton, LAYERS};
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -354,16 +355,24 @@ pub struct Frame {
 /// Bytes before a scratch frame's body: its link to the previous frame.
 const FRAME_LINK: usize = 16;
 
+/// How much of the scratch file [`Scratch`] gathers in memory before a
+/// write (256 KiB).
+const SCRATCH_GATHER: usize = 1 << 18;
+
 /// The scratch file of spilled frames: each a link to the previous frame
 /// of the same cell (offset u64, length u32, count u32; zeros for none)
-/// and a [`FrameCodec`] body.
+/// and a [`FrameCodec`] body. It is appended to around the page cache
+/// where the system allows (`output::direct`), so frames are gathered and
+/// written in whole blocks, and read back in whole blocks: at 10^9
+/// photons every photon passes through it, and through the page cache each
+/// of its pages would be a freshly allocated page (about a tenth of the
+/// emission's time on two threads at 56 M photons).
 pub struct Scratch {
     file: File,
     /// How errors name the (anonymous) scratch file.
     name: PathBuf,
     codec: FrameCodec,
-    /// Bytes written so far (the file's length).
-    pub len: u64,
+    blocks: Blocks,
     pub frames_written: u64,
     batch: Vec<StagedPhoton>,
     frame: Vec<u8>,
@@ -373,11 +382,12 @@ impl Scratch {
     /// A scratch space in `file`, named `name` in errors, for photons on `grid`.
     pub fn new(file: File, name: PathBuf, grid: SnapGrid) -> Result<Scratch> {
         let codec = FrameCodec::new(grid).map_err(|e| Error::io(&name, "create", e))?;
+        let blocks = Blocks::new(&file, SCRATCH_GATHER);
         Ok(Scratch {
             file,
             name,
             codec,
-            len: 0,
+            blocks,
             frames_written: 0,
             batch: Vec::new(),
             frame: Vec::new(),
@@ -391,6 +401,25 @@ impl Scratch {
 
     fn err(&self, action: &'static str, e: std::io::Error) -> Error {
         Error::io(&self.name, action, e)
+    }
+
+    /// Bytes of the scratch file so far (frames, and the padding that
+    /// makes [`Scratch::readable`]'s writes whole blocks).
+    pub fn bytes(&self) -> u64 {
+        self.blocks.written() + self.blocks.gathered().len() as u64
+    }
+
+    /// Make every frame up to and including `newest` readable from the
+    /// file, by other handles too ([`Scratch::reader`]): frames still
+    /// gathered in memory are written, padded to a whole block.
+    pub fn readable(&mut self, newest: Option<Frame>) -> Result<()> {
+        match newest {
+            Some(f) if f.offset + f.len as u64 > self.blocks.written() => self
+                .blocks
+                .pad_and_drain(&self.file)
+                .map_err(|e| self.err("write", e)),
+            _ => Ok(()),
+        }
     }
 
     /// Write `photons` (snapped to the grid) as frames of at most
@@ -429,14 +458,14 @@ impl Scratch {
         self.frame.extend_from_slice(&prev.count.to_le_bytes());
         let encoded = self.codec.encode(batch, &mut self.frame);
         encoded.map_err(|e| self.err("compress spill", e))?;
-        crate::output::write_all_at(&self.file, &self.frame, self.len)
-            .map_err(|e| self.err("write", e))?;
         let written = Frame {
-            offset: self.len,
+            offset: self.bytes(),
             len: self.frame.len() as u32,
             count: batch.len() as u32,
         };
-        self.len += self.frame.len() as u64;
+        self.blocks
+            .push(&self.file, &self.frame)
+            .map_err(|e| self.err("write", e))?;
         self.frames_written += 1;
         Ok(written)
     }
@@ -444,6 +473,7 @@ impl Scratch {
     /// Read frame `f` back into `out` (cleared first); returns the frame
     /// before it in the same cell.
     pub fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
+        self.readable(Some(f))?;
         read_frame(
             &self.file,
             &self.name,
@@ -470,8 +500,8 @@ impl Scratch {
     }
 
     /// A reader of this scratch file for another thread (its own handle
-    /// and decoder): frames already written can be read while more are
-    /// appended.
+    /// and decoder): frames made [`Scratch::readable`] can be read while
+    /// more are appended.
     pub fn reader(&self) -> Result<ScratchReader> {
         let file = self.file.try_clone().map_err(|e| self.err("open", e))?;
         let codec = FrameCodec::new(self.grid()).map_err(|e| self.err("open", e))?;
@@ -535,9 +565,8 @@ fn read_frame(
             std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
         )
     };
-    frame.clear();
-    frame.resize(f.len as usize, 0);
-    crate::output::read_exact_at(file, frame, f.offset).map_err(|e| Error::io(name, "read", e))?;
+    let frame = read_blocks(file, f.offset, f.len as usize, frame)
+        .map_err(|e| Error::io(name, "read", e))?;
     if frame.len() < FRAME_LINK {
         return Err(corrupt("spill frame too short"));
     }

@@ -509,7 +509,7 @@ impl MapWriter {
         self.summary.file_bytes = file_bytes;
         let scratch = self.scratch.as_ref().expect("spilling stopped");
         self.summary.spilled_frames = scratch.frames_written;
-        self.summary.spilled_bytes = scratch.len;
+        self.summary.spilled_bytes = scratch.bytes();
         Ok(self.summary)
     }
 
@@ -609,6 +609,8 @@ impl MapWriter {
                 for chunk in &chunks {
                     self.buffered -= (chunk.capacity() * STAGED) as u64;
                 }
+                // The encoder reads the frames through its own handle.
+                self.scratch().readable(cell.last_frame)?;
                 let job = Job {
                     index: tiles.sent,
                     frames: cell.last_frame.take(),

@@ -165,7 +165,7 @@ fn a_frame_costs_about_the_entropy_of_its_records() {
     let cells: f64 = (0..3).map(|a| size as f64 / step[a]).product();
     let position_bits = (cells / n as f64).log2() + 1.44;
     let entropy_bytes = (position_bits + 32.0 + 7.0 + 1.6) / 8.0;
-    let per_photon = s.len as f64 / n as f64;
+    let per_photon = s.bytes() as f64 / n as f64;
     assert!(
         per_photon <= entropy_bytes + 1.0,
         "{per_photon:.2} bytes a photon against {entropy_bytes:.2} of entropy"
@@ -179,6 +179,9 @@ fn damaged_frames_are_errors_not_panics() {
     let grid = s.grid();
     let v = photons(500, 8, Vec3::ZERO, 1.0, 2, &grid);
     let f = s.spill(v.iter(), None).unwrap().unwrap();
+    // On disk, and bytes of it rewritten below through the page cache.
+    s.readable(Some(f)).unwrap();
+    s.blocks.buffered(&s.file);
     let mut buf = Vec::new();
     // Width, pad, corner, CRC, a plane's length, plane bytes, the last byte.
     let spots = [16u64, 17, 20, 41, 43, 47, 60, f.len as u64 - 2];
