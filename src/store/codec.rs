@@ -80,12 +80,14 @@ impl StagedPhoton {
     }
 }
 
-/// A tile sort key: Morton code, direction and power, band and group. It
-/// holds the whole record, so records are written from the sorted keys
-/// without going back to the photons (a random gather over a tile larger
-/// than the cache); photons with equal keys have equal records, so their
-/// order does not matter.
-type EncodeKey = (u64, u64, u16);
+/// A tile sort key: the 48-bit Morton code, then direction and power (64
+/// bits), then band and group (16 bits), in one integer, so a key compares
+/// in one branch-free step (a tuple of the three took half again as long
+/// to sort). It holds the whole record, so records are written from the
+/// sorted keys without going back to the photons (a random gather over a
+/// tile larger than the cache); photons with equal keys have equal
+/// records, so their order does not matter.
+type EncodeKey = u128;
 
 /// Bytes of working memory the encoder needs per photon (staged record, sort
 /// key, raw record, compressed output bound and slack), used for budgeting
@@ -244,11 +246,9 @@ impl TileEncoder {
         let q = BoxQuantizer::new(&quant);
         self.keys.clear();
         self.keys.extend(photons.iter().map(|p| {
-            (
-                morton3(q.encode(p.photon.position)),
-                p.payload_key(),
-                p.photon.band_group,
-            )
+            (morton3(q.encode(p.photon.position)) as u128) << 80
+                | (p.payload_key() as u128) << 16
+                | p.photon.band_group as u128
         }));
         self.keys.sort_unstable();
 
@@ -256,7 +256,8 @@ impl TileEncoder {
         self.raw.resize(n * RECORD_BYTES, 0);
         let mut bounds = Aabb::EMPTY;
         let mut prev = 0u64;
-        for (i, &(m, payload, band_group)) in self.keys.iter().enumerate() {
+        for (i, &key) in self.keys.iter().enumerate() {
+            let (m, payload, band_group) = ((key >> 80) as u64, (key >> 16) as u64, key as u16);
             bounds.grow(q.decode(demorton3(m)));
             let mut rec = [0u8; RECORD_BYTES];
             rec[0..6].copy_from_slice(&(m - prev).to_le_bytes()[..6]);

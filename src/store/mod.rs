@@ -25,3 +25,17 @@ pub use partition::Partition;
 pub use query::{Neighbour, PhotonMap, PhotonQuery, Search};
 pub use reader::MapFile;
 pub use writer::{MapWriter, WriteSummary, WriterPlan, EXTRA_ENCODER_BYTES};
+
+/// Ask for the cache line holding `p`, without waiting for it. `p` need not
+/// point at anything valid (the spare capacity of a buffer, say).
+#[inline(always)]
+pub(crate) fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint; it reads nothing and cannot fault.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(p.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}

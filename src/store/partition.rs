@@ -18,7 +18,25 @@ pub struct Partition {
     /// For a split node, the index of its right child; for a leaf, its cell number.
     link: Vec<u32>,
     cells: u32,
+    /// The nodes as [`Partition::cells_of`] walks them.
+    steps: Vec<Step>,
+    /// Splits on the longest path from the root to a leaf.
+    depth: usize,
 }
+
+/// A node for descents in lockstep: go to the next node where
+/// `p[axis] < value`, else to `right`. A leaf has the value -inf, which
+/// nothing is below, and points right at itself, so a descent that reached
+/// it stays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Step {
+    value: f32,
+    axis: u32,
+    right: u32,
+}
+
+/// Points [`Partition::cells_of`] descends with at once.
+const LANES: usize = 16;
 
 impl Partition {
     /// Split the pilot `points` into (at most) `cells` cells of nearly equal counts.
@@ -66,7 +84,41 @@ impl Partition {
             }
         }
         let end = walk(&nodes, &mut link, &mut cells, 0, 0)?;
-        (end == nodes.len()).then_some(Partition { nodes, link, cells })
+        if end != nodes.len() {
+            return None;
+        }
+        let mut depth = 0;
+        let mut at_depth = vec![0usize; nodes.len()];
+        let steps = nodes
+            .iter()
+            .enumerate()
+            .map(|(i, node)| match *node {
+                PartitionNode::Split { axis, value } => {
+                    at_depth[i + 1] = at_depth[i] + 1;
+                    at_depth[link[i] as usize] = at_depth[i] + 1;
+                    Step {
+                        value,
+                        axis: axis as u32,
+                        right: link[i],
+                    }
+                }
+                PartitionNode::Leaf => {
+                    depth = depth.max(at_depth[i]);
+                    Step {
+                        value: f32::NEG_INFINITY,
+                        axis: 0,
+                        right: i as u32,
+                    }
+                }
+            })
+            .collect();
+        Some(Partition {
+            nodes,
+            link,
+            cells,
+            steps,
+            depth,
+        })
     }
 
     /// The preorder node list (for the map header).
@@ -77,6 +129,38 @@ impl Partition {
     /// Number of cells.
     pub fn cells(&self) -> u32 {
         self.cells
+    }
+
+    /// The cells holding `points`, into `out` (as long): what
+    /// [`Partition::cell_of`] gives, found for [`LANES`] points at a time
+    /// in lockstep, one level per step, without branches. A single descent
+    /// is a chain of dependent loads and unpredictable branches, a dozen or
+    /// more deep in a partition of 10^3 to 10^5 cells (80-110 ns a point at
+    /// 18 500 cells on the test machine); the descents of different points
+    /// are independent, so in lockstep their loads overlap.
+    pub fn cells_of(&self, points: &[Vec3], out: &mut [u32]) {
+        assert_eq!(points.len(), out.len());
+        for (points, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let mut at = [0u32; LANES];
+            let at = &mut at[..points.len()];
+            let mut coords = [[0f32; 3]; LANES];
+            for (c, p) in coords.iter_mut().zip(points) {
+                *c = p.to_array();
+            }
+            for _ in 0..self.depth {
+                for (i, c) in at.iter_mut().zip(&coords) {
+                    let step = self.steps[*i as usize];
+                    // Not an `if`, which compiles to a branch that
+                    // mispredicts half the time (so does a mask: LLVM sees
+                    // the select in it). A NaN coordinate goes right.
+                    let left = c[(step.axis as usize).min(2)] < step.value;
+                    *i = std::hint::select_unpredictable(left, *i + 1, step.right);
+                }
+            }
+            for (cell, &i) in out.iter_mut().zip(at.iter()) {
+                *cell = self.link[i as usize];
+            }
+        }
     }
 
     /// The cell holding `p`.

@@ -39,6 +39,7 @@
 use crate::bounds::Aabb;
 use crate::photon::PackedPhoton;
 use crate::store::codec::BoxQuantizer;
+use crate::store::prefetch;
 use glam::Vec3;
 
 /// Most photons in a leaf of a tile's tree.
@@ -263,19 +264,6 @@ fn sift_down<T: Copy>(h: &mut [T], v: T, above: impl Fn(T, T) -> bool) {
 #[inline(always)]
 fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
     sift_down(h, v, |a, b| a.0 > b.0);
-}
-
-/// Ask for the cache line holding `p`, without waiting for it.
-#[inline(always)]
-fn prefetch<T>(p: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is only a hint; it reads nothing and cannot fault.
-    unsafe {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch::<_MM_HINT_T0>((p as *const T).cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }
 
 /// The traversal state of one side not yet visited.

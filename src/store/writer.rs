@@ -47,6 +47,9 @@ use spiller::{Collected, SpillJob, Spiller};
 use tiles::{Encoded, Job, TileQueue};
 
 const MIB: u64 = 1 << 20;
+
+/// Photons routed to their cells together (see [`Partition::cells_of`]).
+const ROUTE_BLOCK: usize = 64;
 const STAGED: usize = std::mem::size_of::<StagedPhoton>();
 
 /// Memory the writer keeps outside its budgeted shares: zstd contexts
@@ -322,23 +325,51 @@ impl MapWriter {
         }
         let chunk_bytes = (self.plan.chunk_records * STAGED) as u64;
         let grid = self.grid;
-        for p in photons {
-            let mut p = *p;
-            if !grid.snap(&mut p) {
-                return Err(grid.outside(&p));
+        let cells = self.partition.cells() as usize;
+        let mut snapped: [StagedPhoton; ROUTE_BLOCK] = bytemuck::Zeroable::zeroed();
+        let mut positions = [glam::Vec3::ZERO; ROUTE_BLOCK];
+        let mut cell = [0u32; ROUTE_BLOCK];
+        for block in photons.chunks(ROUTE_BLOCK) {
+            let n = block.len();
+            for ((p, s), pos) in block.iter().zip(&mut snapped).zip(&mut positions) {
+                *s = *p;
+                if !grid.snap(s) {
+                    return Err(grid.outside(s));
+                }
+                *pos = s.pos();
             }
-            let index = p.photon.layer as usize * self.partition.cells() as usize
-                + self.partition.cell_of(p.pos()) as usize;
-            if self.cells[index].push(&p, self.plan.chunk_records) {
-                self.buffered += chunk_bytes;
+            // The cells of the whole block at once (in lockstep), then the
+            // three lines each push reads or writes in turn (the cell, its
+            // newest chunk's header, the chunk's next slot), each asked for
+            // a block ahead: each is a cache miss, which would otherwise be
+            // waited out one after another for every photon.
+            self.partition.cells_of(&positions[..n], &mut cell[..n]);
+            for (p, c) in snapped[..n].iter().zip(&mut cell[..n]) {
+                *c += p.photon.layer as u32 * cells as u32;
+                super::prefetch(&self.cells[*c as usize]);
             }
-            self.summary.photons += 1;
-            // Past the buffer share, look at the spill thread every 64
-            // photons (or at once when the headroom is used up too).
-            if self.buffered > self.plan.buffer_bytes
-                && (self.summary.photons.is_multiple_of(64) || self.buffered > self.routing_limit())
-            {
-                self.make_room()?;
+            for &c in &cell[..n] {
+                let chunks = &self.cells[c as usize].chunks;
+                super::prefetch(chunks.as_ptr().wrapping_add(chunks.len().saturating_sub(1)));
+            }
+            for &c in &cell[..n] {
+                if let Some(chunk) = self.cells[c as usize].chunks.last() {
+                    super::prefetch(chunk.as_ptr().wrapping_add(chunk.len()));
+                }
+            }
+            for (p, &index) in snapped[..n].iter().zip(&cell[..n]) {
+                if self.cells[index as usize].push(p, self.plan.chunk_records) {
+                    self.buffered += chunk_bytes;
+                }
+                self.summary.photons += 1;
+                // Past the buffer share, look at the spill thread every 64
+                // photons (or at once when the headroom is used up too).
+                if self.buffered > self.plan.buffer_bytes
+                    && (self.summary.photons.is_multiple_of(64)
+                        || self.buffered > self.routing_limit())
+                {
+                    self.make_room()?;
+                }
             }
         }
         self.summary.peak_buffered_bytes = self.summary.peak_buffered_bytes.max(self.buffered);
