@@ -90,10 +90,10 @@ impl StagedPhoton {
 type EncodeKey = u128;
 
 /// Bytes of working memory the encoder needs per photon (staged record, sort
-/// key, raw record, compressed output bound and slack), used for budgeting
-/// merges.
+/// key and the radix sort's copy of it, raw record, compressed output bound
+/// and slack), used for budgeting merges.
 pub const ENCODE_BYTES_PER_PHOTON: usize = std::mem::size_of::<StagedPhoton>()
-    + std::mem::size_of::<EncodeKey>()
+    + 2 * std::mem::size_of::<EncodeKey>()
     + RECORD_BYTES
     + RECORD_BYTES
     + 16;
@@ -227,6 +227,8 @@ const PLANE_TABLE: usize = 2 + 4 * RECORD_BYTES;
 #[derive(Default)]
 pub struct TileEncoder {
     keys: Vec<EncodeKey>,
+    /// The radix sort's second buffer.
+    spare: Vec<EncodeKey>,
     raw: Vec<u8>,
     packed: Vec<u8>,
     zstd: Option<zstd::bulk::Compressor<'static>>,
@@ -250,7 +252,14 @@ impl TileEncoder {
                 | (p.payload_key() as u128) << 16
                 | p.photon.band_group as u128
         }));
-        self.keys.sort_unstable();
+        // By Morton code (radix), then runs of equal codes by the rest of
+        // the key: the order of `sort_unstable` on the whole key.
+        super::radix::sort_by_low_bits(&mut self.keys, &mut self.spare, 48, |k| k >> 80);
+        for run in self.keys.chunk_by_mut(|a, b| a >> 80 == b >> 80) {
+            if run.len() > 1 {
+                run.sort_unstable();
+            }
+        }
 
         self.raw.clear();
         self.raw.resize(n * RECORD_BYTES, 0);

@@ -11,6 +11,7 @@ pub mod format;
 pub mod memory;
 pub mod partition;
 pub mod query;
+pub mod radix;
 pub mod reader;
 pub mod shard;
 pub mod spill;

@@ -167,6 +167,8 @@ pub struct FrameCodec {
     /// The batch's grid coordinates, then its sort keys.
     cells: Vec<[i64; 3]>,
     keys: Vec<(u128, u32)>,
+    /// The radix sort's second buffer.
+    spare_keys: Vec<(u128, u32)>,
     planes: Vec<u8>,
     packed: Vec<u8>,
 }
@@ -183,6 +185,7 @@ impl FrameCodec {
             decompressor: zstd::bulk::Decompressor::new()?,
             cells: Vec::new(),
             keys: Vec::new(),
+            spare_keys: Vec::new(),
             planes: Vec::new(),
             packed: Vec::new(),
         })
@@ -220,7 +223,9 @@ impl FrameCodec {
                 ];
                 (morton3_wide(u), k as u32)
             }));
-        self.keys.sort_unstable();
+        // Stable by code from index order: the order of (code, index).
+        let bits = 128 - self.keys.iter().fold(0u128, |a, k| a | k.0).leading_zeros();
+        super::radix::sort_by_low_bits(&mut self.keys, &mut self.spare_keys, bits, |k| k.0);
         let mut widest = 0u128;
         let mut prev_code = 0u128;
         for &(code, _) in &self.keys {
@@ -499,6 +504,18 @@ impl Scratch {
         Ok(())
     }
 
+    /// A fetcher of this scratch file's frames for another thread (its
+    /// own handle): frames made [`Scratch::readable`] can be read while
+    /// more are appended.
+    pub fn fetcher(&self) -> Result<ScratchFetcher> {
+        let file = self.file.try_clone().map_err(|e| self.err("open", e))?;
+        Ok(ScratchFetcher {
+            file,
+            name: self.name.clone(),
+            frame: Vec::new(),
+        })
+    }
+
     /// A reader of this scratch file for another thread (its own handle
     /// and decoder): frames made [`Scratch::readable`] can be read while
     /// more are appended.
@@ -524,6 +541,41 @@ pub struct ScratchReader {
     buf: Vec<StagedPhoton>,
 }
 
+/// Reads cells' frames from a [`Scratch`] on another thread without
+/// decoding them: the part of [`ScratchReader::append_frames`] that waits
+/// on the disk, so that several cells can be read at once while others are
+/// decoded.
+pub struct ScratchFetcher {
+    file: File,
+    name: PathBuf,
+    frame: Vec<u8>,
+}
+
+impl ScratchFetcher {
+    /// Read every frame of a cell, from its newest frame `next` back,
+    /// into `out` (cleared first).
+    pub fn fetch(&mut self, mut next: Option<Frame>, out: &mut Fetched) -> Result<()> {
+        out.bytes.clear();
+        out.frames.clear();
+        while let Some(f) = next {
+            let (body, prev) = read_raw(&self.file, &self.name, &mut self.frame, f)?;
+            out.bytes.extend_from_slice(body);
+            out.frames.push((body.len() as u32, f.count));
+            next = prev;
+        }
+        Ok(())
+    }
+}
+
+/// A cell's spilled frames as read from the scratch file, not yet decoded
+/// ([`ScratchFetcher::fetch`]): their bodies end to end, and each one's
+/// length and photon count.
+#[derive(Debug, Default)]
+pub struct Fetched {
+    bytes: Vec<u8>,
+    frames: Vec<(u32, u32)>,
+}
+
 impl ScratchReader {
     /// Append the records of every frame of a cell, from its newest frame
     /// `next` back, to `out`.
@@ -545,6 +597,54 @@ impl ScratchReader {
         }
         Ok(())
     }
+
+    /// Append the records of the frames `fetched` holds to `out`: the
+    /// same records, in the same order, as [`ScratchReader::append_frames`]
+    /// from the same newest frame.
+    pub fn decode_fetched(&mut self, fetched: &Fetched, out: &mut Vec<StagedPhoton>) -> Result<()> {
+        let mut at = 0;
+        for &(len, count) in &fetched.frames {
+            let body = &fetched.bytes[at..at + len as usize];
+            at += len as usize;
+            self.codec
+                .decode(body, count as usize, &mut self.buf)
+                .map_err(|e| corrupt(&self.name, &format!("spill {e}")))?;
+            out.extend_from_slice(&self.buf);
+        }
+        Ok(())
+    }
+}
+
+/// A damaged scratch frame, as an error naming the scratch file.
+fn corrupt(name: &Path, what: &str) -> Error {
+    Error::io(
+        name,
+        "read",
+        std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
+    )
+}
+
+/// Read frame `f` of the scratch file `file` (named `name` in errors)
+/// through the buffer `frame`: its body, and the frame before it in the
+/// same cell.
+fn read_raw<'b>(
+    file: &File,
+    name: &Path,
+    frame: &'b mut Vec<u8>,
+    f: Frame,
+) -> Result<(&'b [u8], Option<Frame>)> {
+    let frame = read_blocks(file, f.offset, f.len as usize, frame)
+        .map_err(|e| Error::io(name, "read", e))?;
+    if frame.len() < FRAME_LINK {
+        return Err(corrupt(name, "spill frame too short"));
+    }
+    let link = &frame[..FRAME_LINK];
+    let prev = Frame {
+        offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
+        len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
+        count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
+    };
+    Ok((&frame[FRAME_LINK..], (prev.count > 0).then_some(prev)))
 }
 
 /// Read frame `f` of the scratch file `file` (named `name` in errors) into
@@ -558,28 +658,11 @@ fn read_frame(
     f: Frame,
     out: &mut Vec<StagedPhoton>,
 ) -> Result<Option<Frame>> {
-    let corrupt = |what: &str| {
-        Error::io(
-            name,
-            "read",
-            std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
-        )
-    };
-    let frame = read_blocks(file, f.offset, f.len as usize, frame)
-        .map_err(|e| Error::io(name, "read", e))?;
-    if frame.len() < FRAME_LINK {
-        return Err(corrupt("spill frame too short"));
-    }
-    let link = &frame[..FRAME_LINK];
-    let prev = Frame {
-        offset: u64::from_le_bytes(link[0..8].try_into().unwrap()),
-        len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
-        count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
-    };
+    let (body, prev) = read_raw(file, name, frame, f)?;
     codec
-        .decode(&frame[FRAME_LINK..], f.count as usize, out)
-        .map_err(|e| corrupt(&format!("spill {e}")))?;
-    Ok((prev.count > 0).then_some(prev))
+        .decode(body, f.count as usize, out)
+        .map_err(|e| corrupt(name, &format!("spill {e}")))?;
+    Ok(prev)
 }
 
 /// CRC-32 of a body but for its CRC field.

@@ -30,7 +30,7 @@
 use super::codec::{EncodedTile, StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON};
 use super::format::{ByteWriter, Footer, Header, Section, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
-use super::spill::{Frame, Scratch, SnapGrid};
+use super::spill::{Fetched, Frame, Scratch, SnapGrid};
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
 use crate::photon::LAYERS;
@@ -44,7 +44,7 @@ use std::path::{Path, PathBuf};
 mod spiller;
 mod tiles;
 use spiller::{Collected, SpillJob, Spiller};
-use tiles::{Encoded, Job, TileQueue};
+use tiles::{Encoded, Frames, Job, TileQueue};
 
 const MIB: u64 = 1 << 20;
 
@@ -62,6 +62,15 @@ pub const WRITER_FIXED_BYTES: u64 = 7 * MIB;
 /// buffers not counted per photon), charged to the encode share when tiles
 /// are encoded in parallel.
 pub const EXTRA_ENCODER_BYTES: u64 = 2 * MIB;
+
+/// Bytes a spilled photon takes in the scratch file, for budgeting the
+/// frames read ahead of encoding: 12-13 measured (`benches/README.md`), up
+/// to 19 in frames of a few dozen photons.
+pub const FETCH_BYTES_PER_PHOTON: u64 = 16;
+
+/// Threads that read cells' spilled frames ahead of the encoders
+/// ([`WriterPlan::fetch_bytes`]).
+pub const MAX_FETCHERS: usize = 8;
 
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
@@ -84,6 +93,10 @@ pub struct WriterPlan {
     pub max_tile_photons: u32,
     /// Bytes of per-cell buffers before spilling starts.
     pub buffer_bytes: u64,
+    /// Bytes taken from the buffer share for cells' spilled frames read
+    /// ahead of their encoding, where the encode share leaves too little
+    /// room for them ([`WriterPlan::fetch_bytes`]).
+    pub fetch_reserve: u64,
     /// Records per buffer chunk.
     pub chunk_records: usize,
     /// Threads that may encode tiles at once at the end (0 = one per
@@ -110,7 +123,12 @@ impl WriterPlan {
         let merge = rest / 4;
         let max_tile = (merge / ENCODE_BYTES_PER_PHOTON as u64).min(u32::MAX as u64) as u32;
         let target = DEFAULT_TILE_PHOTONS.min(max_tile / 2);
-        let buffer_bytes = rest - merge;
+        // Frames read ahead of encoding fit in the encode share beside one
+        // tile at budgets of a few hundred MiB; below that a sixteenth of
+        // the rest is set aside for them.
+        let tile_bytes = (2 * target).min(max_tile) as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        let fetch_reserve = (rest / 16).saturating_sub(merge.saturating_sub(tile_bytes));
+        let buffer_bytes = rest - merge - fetch_reserve;
         let cells = expected_photons.div_ceil(target as u64).max(1);
         // At least 8 chunks per cell fit in the buffers, so spills are
         // sizeable, and no cell holds much unused capacity: with 10^5 cells
@@ -123,6 +141,7 @@ impl WriterPlan {
             split_threshold: (2 * target).min(max_tile),
             max_tile_photons: max_tile,
             buffer_bytes,
+            fetch_reserve,
             chunk_records,
             threads: 1,
         })
@@ -149,6 +168,20 @@ impl WriterPlan {
             .take_while(|&w| w as u64 * tile + (w as u64 - 1) * EXTRA_ENCODER_BYTES <= share)
             .last();
         fit.unwrap_or(1)
+    }
+
+    /// Bytes the last phase may hold of cells' spilled frames read ahead of
+    /// their encoding, at [`FETCH_BYTES_PER_PHOTON`]: what the encode share
+    /// leaves beside [`WriterPlan::encode_width`] tiles, or the reserve if
+    /// that is more. Up to [`MAX_FETCHERS`] cells are read at once, each a
+    /// chain of reads that wait on the disk (the scratch file is read
+    /// around the page cache); one is always allowed.
+    pub fn fetch_bytes(&self) -> u64 {
+        let width = self.encode_width() as u64;
+        let share = self.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
+        let tiles = width * self.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64
+            + (width - 1) * EXTRA_ENCODER_BYTES;
+        share.saturating_sub(tiles).max(self.fetch_reserve)
     }
 
     /// Aim for `photons` per tile (at least 1, at most what the encode share allows).
@@ -551,51 +584,90 @@ impl MapWriter {
     /// tiles are held at once (read, or being encoded).
     fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
         let width = self.plan.encode_width();
+        let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Job>(MAX_FETCHERS);
         let (work_tx, work_rx) = crossbeam_channel::bounded::<Job>(width);
         let (done_tx, done_rx) = crossbeam_channel::unbounded::<Encoded>();
         let readers = (0..width)
             .map(|_| self.scratch().reader())
             .collect::<Result<Vec<_>>>()?;
+        let fetchers = (0..MAX_FETCHERS)
+            .map(|_| self.scratch().fetcher())
+            .collect::<Result<Vec<_>>>()?;
+        let target = self.plan.target_tile_photons as usize;
         std::thread::scope(|scope| {
-            for mut reader in readers {
-                let (rx, tx) = (work_rx.clone(), done_tx.clone());
-                let path = self.path.clone();
+            // Fetchers read cells' frames, each cell a chain of reads that
+            // wait on the disk (the scratch file is read around the page
+            // cache), several cells at once, and pass them on undecoded.
+            for mut reader in fetchers {
+                let (rx, work, done) = (fetch_rx.clone(), work_tx.clone(), done_tx.clone());
                 scope.spawn(move || {
-                    let mut encoder = TileEncoder::default();
-                    for job in rx {
-                        let Job {
-                            index,
-                            frames,
-                            chunks,
-                            mut staged,
-                        } = job;
-                        let tile = reader.append_frames(frames, &mut staged).and_then(|()| {
-                            for chunk in chunks {
-                                staged.extend_from_slice(&chunk);
+                    for mut job in rx {
+                        if let Frames::Chain(newest) = job.frames {
+                            let mut fetched = Fetched::default();
+                            if let Err(e) = reader.fetch(Some(newest), &mut fetched) {
+                                if done.send((job.index, Err(e))).is_err() {
+                                    break;
+                                }
+                                continue;
                             }
-                            encoder
-                                .encode(&staged)
-                                .map_err(|e| Error::tile(&path, index, e.to_string()))
-                        });
-                        if tx.send((index, tile, staged)).is_err() {
+                            job.frames = Frames::Fetched(fetched);
+                        }
+                        if work.send(job).is_err() {
                             break;
                         }
                     }
                 });
             }
-            drop((work_rx, done_tx));
+            for mut reader in readers {
+                let (rx, tx) = (work_rx.clone(), done_tx.clone());
+                let path = self.path.clone();
+                scope.spawn(move || {
+                    let mut encoder = TileEncoder::default();
+                    let mut staged: Vec<StagedPhoton> = Vec::new();
+                    for job in rx {
+                        staged.clear();
+                        staged.reserve_exact(job.count);
+                        let read = match &job.frames {
+                            Frames::None => Ok(()),
+                            Frames::Chain(newest) => {
+                                reader.append_frames(Some(*newest), &mut staged)
+                            }
+                            Frames::Fetched(fetched) => reader.decode_fetched(fetched, &mut staged),
+                        };
+                        drop(job.frames);
+                        let tile = read.and_then(|()| {
+                            for chunk in job.chunks {
+                                staged.extend_from_slice(&chunk);
+                            }
+                            encoder
+                                .encode(&staged)
+                                .map_err(|e| Error::tile(&path, job.index, e.to_string()))
+                        });
+                        // Keep a buffer of an ordinary tile's size, not a
+                        // rare giant's.
+                        if staged.capacity() > 4 * target {
+                            staged = Vec::new();
+                        }
+                        if tx.send((job.index, tile)).is_err() {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop((fetch_rx, work_rx, done_tx));
             let mut tiles = TileQueue {
-                width,
+                width: width + MAX_FETCHERS,
                 done: done_rx,
                 sent: 0,
                 received: 0,
                 waiting: std::collections::BTreeMap::new(),
                 entries: Vec::new(),
-                spare: Vec::new(),
+                fetch_bytes: 0,
+                fetching: std::collections::BTreeMap::new(),
             };
-            let read = self.read_cells(&mut tiles, &work_tx, progress);
-            // Closing the queue ends the encoders once they are done.
-            drop(work_tx);
+            let read = self.read_cells(&mut tiles, &fetch_tx, &work_tx, progress);
+            // Closing the queues ends the threads once they are done.
+            drop((fetch_tx, work_tx));
             read?;
             while tiles.received < tiles.sent {
                 tiles.receive(self, progress)?;
@@ -605,16 +677,18 @@ impl MapWriter {
     }
 
     /// The dispatching side of [`Self::encode_cells`]: cells in order,
-    /// overfull ones split first, each handed to an encoder thread with
-    /// its spilled frames and buffered chunks (the encoder reads and
-    /// decodes the frames itself, so both cores do that too).
+    /// overfull ones split first, each handed with its buffered chunks to
+    /// a fetcher thread (`fetch`) when it has spilled frames to read, or
+    /// straight to an encoder thread (`work`).
     fn read_cells(
         &mut self,
         tiles: &mut TileQueue,
+        fetch: &crossbeam_channel::Sender<Job>,
         work: &crossbeam_channel::Sender<Job>,
         progress: &dyn Progress,
     ) -> Result<()> {
         let mut frame_buf: Vec<StagedPhoton> = Vec::new();
+        let fetch_share = self.plan.fetch_bytes();
         let cells = std::mem::take(&mut self.cells);
         for cell in cells {
             let mut stack = vec![cell];
@@ -629,26 +703,36 @@ impl MapWriter {
                     stack.push(left);
                     continue;
                 }
-                // Room for one more tile first.
-                while tiles.sent - tiles.received >= tiles.width as u32 {
+                // Room for one more cell in flight first, and for its
+                // frames in the fetch share (or nothing else is read).
+                let chunks = std::mem::take(&mut cell.chunks);
+                let buffered: usize = chunks.iter().map(Vec::len).sum();
+                let spilled = (cell.count - buffered as u64) * FETCH_BYTES_PER_PHOTON;
+                while tiles.sent - tiles.received >= tiles.width as u32
+                    || (tiles.fetch_bytes > 0 && tiles.fetch_bytes + spilled > fetch_share)
+                {
                     tiles.receive(self, progress)?;
                 }
-                let mut staged = tiles.spare.pop().unwrap_or_default();
-                staged.clear();
-                staged.reserve_exact(cell.count as usize);
-                let chunks = std::mem::take(&mut cell.chunks);
                 for chunk in &chunks {
                     self.buffered -= (chunk.capacity() * STAGED) as u64;
                 }
-                // The encoder reads the frames through its own handle.
+                if spilled > 0 {
+                    tiles.fetch_bytes += spilled;
+                    tiles.fetching.insert(tiles.sent, spilled);
+                }
+                // The fetcher reads the frames through its own handle.
                 self.scratch().readable(cell.last_frame)?;
+                let (frames, queue) = match cell.last_frame.take() {
+                    Some(newest) => (Frames::Chain(newest), fetch),
+                    None => (Frames::None, work),
+                };
                 let job = Job {
                     index: tiles.sent,
-                    frames: cell.last_frame.take(),
+                    count: cell.count as usize,
+                    frames,
                     chunks,
-                    staged,
                 };
-                work.send(job).map_err(|_| tiles.stopped(&self.path))?;
+                queue.send(job).map_err(|_| tiles.stopped(&self.path))?;
                 tiles.sent += 1;
             }
         }

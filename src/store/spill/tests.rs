@@ -238,3 +238,47 @@ fn a_frame_of_mixed_layers_round_trips() {
         .is_err());
     assert!(codec.decode(&body[..10], v.len(), &mut back).is_err());
 }
+
+/// Fetching a cell's frames on one handle and decoding them on another
+/// gives the records `append_frames` gives, in the same order, for frames
+/// written around the page cache and made readable mid-way; a damaged
+/// fetched frame is an error naming the scratch file.
+#[test]
+fn fetched_frames_decode_to_the_records_read_directly() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let mut newest = None;
+    for (k, n) in [5usize, 900, FRAME_PHOTONS + 3, 1, 4000]
+        .into_iter()
+        .enumerate()
+    {
+        let v = photons(n, 10 + k as u64, Vec3::new(-3.0, 5.0, -7.0), 2.0, 0, &grid);
+        newest = s.spill(v.iter(), newest).unwrap();
+        if k == 2 {
+            // Part of the file written, padded, then more gathered.
+            s.readable(newest).unwrap();
+        }
+    }
+    s.readable(newest).unwrap();
+    let mut want = Vec::new();
+    s.reader()
+        .unwrap()
+        .append_frames(newest, &mut want)
+        .unwrap();
+    assert_eq!(want.len(), 5 + 900 + FRAME_PHOTONS + 3 + 1 + 4000);
+    let mut fetched = Fetched::default();
+    s.fetcher().unwrap().fetch(newest, &mut fetched).unwrap();
+    let mut reader = s.reader().unwrap();
+    let mut got = Vec::new();
+    reader.decode_fetched(&fetched, &mut got).unwrap();
+    assert_eq!(got, want);
+
+    let last = fetched.bytes.len() - 1;
+    fetched.bytes[last] ^= 0x5a;
+    let e = reader
+        .decode_fetched(&fetched, &mut got)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("test scratch"), "{e}");
+}

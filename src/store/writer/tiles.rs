@@ -6,26 +6,35 @@ use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::store::codec::{EncodedTile, StagedPhoton};
 use crate::store::format::TileEntry;
-use crate::store::spill::Frame;
+use crate::store::spill::{Fetched, Frame};
 use std::path::Path;
 
-/// A tile from an encoder thread: its index, the encoding, and the photon
-/// buffer back for reuse.
-pub(super) type Encoded = (u32, Result<EncodedTile>, Vec<StagedPhoton>);
+/// A tile from an encoder thread: its index and the encoding.
+pub(super) type Encoded = (u32, Result<EncodedTile>);
 
-/// A cell for an encoder thread: its tile index, its newest spilled frame,
-/// its buffered chunks, and a buffer (reserved for the cell's photons) to
-/// gather them in.
+/// A cell's spilled frames on their way to an encoder.
+pub(super) enum Frames {
+    /// Never spilled.
+    None,
+    /// Still in the scratch file, from this newest frame back.
+    Chain(Frame),
+    /// Read by a fetcher thread, not yet decoded.
+    Fetched(Fetched),
+}
+
+/// A cell for the last phase: its tile index, photon count, spilled frames
+/// and buffered chunks.
 pub(super) struct Job {
     pub(super) index: u32,
-    pub(super) frames: Option<Frame>,
+    pub(super) count: usize,
+    pub(super) frames: Frames,
     pub(super) chunks: Vec<Vec<StagedPhoton>>,
-    pub(super) staged: Vec<StagedPhoton>,
 }
 
 /// The tiles handed to the encoder threads, and their results put back in
 /// order.
 pub(super) struct TileQueue {
+    /// Cells in flight at most (being read or encoded).
     pub(super) width: usize,
     pub(super) done: crossbeam_channel::Receiver<Encoded>,
     /// Tiles sent to the encoders, and results received.
@@ -34,8 +43,10 @@ pub(super) struct TileQueue {
     /// Results that arrived before an earlier tile's.
     pub(super) waiting: std::collections::BTreeMap<u32, Result<EncodedTile>>,
     pub(super) entries: Vec<TileEntry>,
-    /// Photon buffers to reuse.
-    pub(super) spare: Vec<Vec<StagedPhoton>>,
+    /// Bytes of spilled frames charged to the fetch share for the cells
+    /// in flight, in all and by tile index.
+    pub(super) fetch_bytes: u64,
+    pub(super) fetching: std::collections::BTreeMap<u32, u64>,
 }
 
 impl TileQueue {
@@ -45,11 +56,9 @@ impl TileQueue {
         writer: &mut MapWriter,
         progress: &dyn Progress,
     ) -> Result<()> {
-        let (index, tile, staged) = self.done.recv().map_err(|_| self.stopped(&writer.path))?;
+        let (index, tile) = self.done.recv().map_err(|_| self.stopped(&writer.path))?;
         self.received += 1;
-        if staged.capacity() <= 4 * writer.plan.target_tile_photons as usize {
-            self.spare.push(staged);
-        }
+        self.fetch_bytes -= self.fetching.remove(&index).unwrap_or(0);
         self.waiting.insert(index, tile);
         while let Some(tile) = self.waiting.remove(&(self.entries.len() as u32)) {
             let tile = tile?;

@@ -1,0 +1,111 @@
+//! Least-significant-digit radix sorting by the low bits of an integer key,
+//! for the writer's two sorts: a tile's records by Morton code, a spill
+//! frame's photons by the Morton code of their grid offsets.
+//!
+//! Both sorted with the standard library's pattern-defeating quicksort
+//! before, about 7 % of a spilling emission's samples: keys of 16 or 32
+//! bytes compared as pairs of words, 16 levels deep for a tile. A radix
+//! sort reads and writes each key once per 8-bit digit of the code, 6
+//! passes for a tile's 48-bit codes, and skips a digit every key shares.
+//!
+//! Not for: sorting by a whole record (a tile's ties on the code are put in
+//! order afterwards by a comparison sort of each run, see `codec`).
+
+/// Bits sorted per pass.
+const DIGIT_BITS: u32 = 8;
+const BUCKETS: usize = 1 << DIGIT_BITS;
+
+/// Sort `items` stably by the low `bits` bits of `key` (at most 128),
+/// through `spare` (any contents; left holding scratch). Items whose keys
+/// agree in those bits keep their order.
+pub fn sort_by_low_bits<T: Copy>(
+    items: &mut Vec<T>,
+    spare: &mut Vec<T>,
+    bits: u32,
+    key: impl Fn(&T) -> u128,
+) {
+    let n = items.len();
+    if n < 2 {
+        return;
+    }
+    spare.clear();
+    spare.resize(n, items[0]);
+    let mut shift = 0;
+    while shift < bits.min(128) {
+        let mask = (1usize << (bits - shift).min(DIGIT_BITS)) - 1;
+        let digit = |x: &T| (key(x) >> shift) as usize & mask;
+        let mut start = [0usize; BUCKETS];
+        for x in items.iter() {
+            start[digit(x)] += 1;
+        }
+        // A digit every key shares leaves the order as it is.
+        if !start.contains(&n) {
+            let mut sum = 0;
+            for s in start.iter_mut() {
+                let count = *s;
+                *s = sum;
+                sum += count;
+            }
+            for x in items.iter() {
+                let d = digit(x);
+                spare[start[d]] = *x;
+                start[d] += 1;
+            }
+            std::mem::swap(items, spare);
+        }
+        shift += DIGIT_BITS;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// Against the standard library's stable sort by the same bits, for
+    /// keys spread over every width, crowded on few values, all equal,
+    /// and with digits every key shares (skipped passes).
+    #[test]
+    fn sorts_like_a_stable_comparison_sort() {
+        let mut rng = Pcg32::new(5, 2);
+        let mut word = || (rng.next_u32() as u64) << 32 | rng.next_u32() as u64;
+        let mut spare = Vec::new();
+        for (n, bits) in [
+            (0usize, 48u32),
+            (1, 48),
+            (2, 8),
+            (1000, 48),
+            (5000, 75),
+            (8192, 126),
+            (3000, 128),
+            (65_536, 48),
+            (777, 3),
+        ] {
+            for shape in 0..4 {
+                let items: Vec<(u128, u32)> = (0..n)
+                    .map(|i| {
+                        let wide = (word() as u128) << 64 | word() as u128;
+                        let k = match shape {
+                            0 => wide,
+                            1 => wide % 7,
+                            2 => 42,
+                            // Only bits 16..24 and above 40 vary.
+                            _ => wide & !0xff_ffff_00ff_ffff | 0x1200_0034,
+                        };
+                        (k, i as u32)
+                    })
+                    .collect();
+                let mask = if bits >= 128 {
+                    u128::MAX
+                } else {
+                    (1u128 << bits) - 1
+                };
+                let mut want = items.clone();
+                want.sort_by_key(|x| x.0 & mask);
+                let mut got = items.clone();
+                sort_by_low_bits(&mut got, &mut spare, bits, |x| x.0);
+                assert_eq!(got, want, "{n} keys of {bits} bits, shape {shape}");
+            }
+        }
+    }
+}
