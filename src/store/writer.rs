@@ -12,7 +12,9 @@
 //! rather than 1.6 busy). Each frame starts with a reference to the previous
 //! frame of its cell, so memory holds one reference per cell however much
 //! was spilled. At the end each cell is read back (frames, then what is
-//! still buffered), encoded by the tile codec and appended to the map; a
+//! still buffered; the frames read by fetcher threads, several cells at
+//! once, since each cell's frames are a chain of reads that wait on the
+//! disk), encoded by the tile codec and appended to the map; a
 //! cell holding more than the split threshold is first split in two at the
 //! median of an order-independent sample, streaming, so no tile ever needs
 //! more memory than its share.
@@ -54,9 +56,11 @@ const STAGED: usize = std::mem::size_of::<StagedPhoton>();
 
 /// Memory the writer keeps outside its budgeted shares: zstd contexts
 /// (level-1 compressor and a decompressor, about 1.5 MiB together), the
-/// output I/O buffer, the spill frame's sort keys and planes (about 1 MiB),
-/// the producer channel and spill metadata.
-pub const WRITER_FIXED_BYTES: u64 = 7 * MIB;
+/// map's 1 MiB and the scratch file's 256 KiB write buffers, the spill
+/// frame's sort keys and planes (about 1.3 MiB), the fetcher threads' read
+/// buffers (a frame each, up to 2 MiB in all), the producer channel and
+/// spill metadata.
+pub const WRITER_FIXED_BYTES: u64 = 9 * MIB;
 
 /// Memory of each tile encoder beyond the first (its zstd context and
 /// buffers not counted per photon), charged to the encode share when tiles
@@ -73,7 +77,7 @@ pub const FETCH_BYTES_PER_PHOTON: u64 = 16;
 pub const MAX_FETCHERS: usize = 8;
 
 /// Smallest budget the writer accepts.
-pub const MIN_WRITER_BUDGET: u64 = 12 * MIB;
+pub const MIN_WRITER_BUDGET: u64 = 14 * MIB;
 
 /// Photons per tile the writer aims for when the budget allows: large
 /// enough that per-tile overhead is small, small enough that the cache can
@@ -107,8 +111,10 @@ pub struct WriterPlan {
 
 impl WriterPlan {
     /// Divide `budget` bytes: a fixed reserve, a quarter of the rest for
-    /// encoding one tile, the remainder for cell buffers. While photons
-    /// arrive the encode share is headroom for routing during a spill.
+    /// encoding one tile, the remainder for cell buffers (less a fetch
+    /// reserve at small budgets, [`WriterPlan::fetch_bytes`]). While
+    /// photons arrive the encode share is headroom for routing during a
+    /// spill.
     pub fn new(budget: u64, expected_photons: u64) -> Result<Self> {
         if budget < MIN_WRITER_BUDGET {
             return Err(Error::Budget {
@@ -579,9 +585,11 @@ impl MapWriter {
 
     /// Read every cell back in order (splitting the overfull) and encode
     /// its tile on one of [`WriterPlan::encode_width`] encoder threads,
-    /// appending the tiles to the map in cell order. Reading the next cell
-    /// overlaps the encoding of the ones before it, and at most the width's
-    /// tiles are held at once (read, or being encoded).
+    /// appending the tiles to the map in cell order. A cell with spilled
+    /// frames goes first to one of [`MAX_FETCHERS`] fetcher threads, which
+    /// reads them (undecoded, within [`WriterPlan::fetch_bytes`]); reading
+    /// the next cells overlaps the encoding of the ones before them, and
+    /// at most the width's tiles are being encoded at once.
     fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
         let width = self.plan.encode_width();
         let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Job>(MAX_FETCHERS);

@@ -39,7 +39,7 @@ fn same_seed_same_bytes_for_any_thread_count() {
 fn spilling_does_not_change_the_map() {
     let dir = tempdir();
     let src = source(600_000, 16, 7, Distribution::Uniform);
-    let (a, sa) = synth_map(dir.path(), "small.map", &src, Some(5_000), 2, 12 * MIB);
+    let (a, sa) = synth_map(dir.path(), "small.map", &src, Some(5_000), 2, 14 * MIB);
     let (b, sb) = synth_map(dir.path(), "large.map", &src, Some(5_000), 1, 1024 * MIB);
     assert!(sa.spilled_frames > 0, "{sa:?}");
     assert_eq!(sb.spilled_frames, 0, "{sb:?}");
@@ -80,7 +80,7 @@ fn overfull_tiles_are_split_deterministically() {
         let summary = w.finish(b"{}", &Silent).unwrap();
         (path, summary)
     };
-    let (a, sa) = write("a.map", 12 * MIB, 1, &staged);
+    let (a, sa) = write("a.map", 14 * MIB, 1, &staged);
     staged.reverse();
     let (b, sb) = write("b.map", 512 * MIB, 2, &staged);
     // Three non-empty cells (volume down and up, surface layer); each split
@@ -106,7 +106,7 @@ fn overfull_tiles_are_split_deterministically() {
 fn parallel_encoding_stays_within_the_encode_share() {
     use littoral::store::{WriterPlan, ENCODE_BYTES_PER_PHOTON, EXTRA_ENCODER_BYTES};
     for (budget, threads) in [
-        (12 * MIB, 8),
+        (14 * MIB, 8),
         (64 * MIB, 2),
         (256 * MIB, 2),
         (256 * MIB, 16),
