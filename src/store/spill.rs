@@ -506,7 +506,8 @@ impl Scratch {
 
     /// A fetcher of this scratch file's frames for another thread (its
     /// own handle): frames made [`Scratch::readable`] can be read while
-    /// more are appended.
+    /// more are appended. Its [`Fetched`] frames are decoded by a
+    /// [`Scratch::decoder`].
     pub fn fetcher(&self) -> Result<ScratchFetcher> {
         let file = self.file.try_clone().map_err(|e| self.err("open", e))?;
         Ok(ScratchFetcher {
@@ -516,35 +517,28 @@ impl Scratch {
         })
     }
 
-    /// A reader of this scratch file for another thread (its own handle
-    /// and decoder): frames made [`Scratch::readable`] can be read while
-    /// more are appended.
-    pub fn reader(&self) -> Result<ScratchReader> {
-        let file = self.file.try_clone().map_err(|e| self.err("open", e))?;
+    /// A decoder of this scratch file's fetched frames for another thread.
+    pub fn decoder(&self) -> Result<ScratchDecoder> {
         let codec = FrameCodec::new(self.grid()).map_err(|e| self.err("open", e))?;
-        Ok(ScratchReader {
-            file,
+        Ok(ScratchDecoder {
             name: self.name.clone(),
             codec,
-            frame: Vec::new(),
             buf: Vec::new(),
         })
     }
 }
 
-/// Reads the frames of a [`Scratch`] on another thread.
-pub struct ScratchReader {
-    file: File,
+/// Decodes the frames a [`ScratchFetcher`] read, on another thread.
+pub struct ScratchDecoder {
     name: PathBuf,
     codec: FrameCodec,
-    frame: Vec<u8>,
     buf: Vec<StagedPhoton>,
 }
 
 /// Reads cells' frames from a [`Scratch`] on another thread without
-/// decoding them: the part of [`ScratchReader::append_frames`] that waits
-/// on the disk, so that several cells can be read at once while others are
-/// decoded.
+/// decoding them: the part of reading a cell back that waits on the disk
+/// (a chain of reads, each frame holding the link to the one before), so
+/// that several cells can be read at once while others are decoded.
 pub struct ScratchFetcher {
     file: File,
     name: PathBuf,
@@ -576,30 +570,9 @@ pub struct Fetched {
     frames: Vec<(u32, u32)>,
 }
 
-impl ScratchReader {
-    /// Append the records of every frame of a cell, from its newest frame
-    /// `next` back, to `out`.
-    pub fn append_frames(
-        &mut self,
-        mut next: Option<Frame>,
-        out: &mut Vec<StagedPhoton>,
-    ) -> Result<()> {
-        while let Some(f) = next {
-            next = read_frame(
-                &self.file,
-                &self.name,
-                &mut self.codec,
-                &mut self.frame,
-                f,
-                &mut self.buf,
-            )?;
-            out.extend_from_slice(&self.buf);
-        }
-        Ok(())
-    }
-
+impl ScratchDecoder {
     /// Append the records of the frames `fetched` holds to `out`: the
-    /// same records, in the same order, as [`ScratchReader::append_frames`]
+    /// same records, in the same order, as [`Scratch::for_each_frame`]
     /// from the same newest frame.
     pub fn decode_fetched(&mut self, fetched: &Fetched, out: &mut Vec<StagedPhoton>) -> Result<()> {
         let mut at = 0;

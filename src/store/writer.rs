@@ -29,7 +29,7 @@
 //!
 //! Not for: reading maps (see `reader`), or choosing which photons to store.
 
-use super::codec::{EncodedTile, StagedPhoton, TileEncoder, ENCODE_BYTES_PER_PHOTON};
+use super::codec::{EncodedTile, StagedPhoton, TileEncoder};
 use super::format::{ByteWriter, Footer, Header, Section, TileEntry, FORMAT_VERSION};
 use super::partition::Partition;
 use super::spill::{Fetched, Frame, Scratch, SnapGrid};
@@ -43,167 +43,21 @@ use crate::spectral::BandGrid;
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+mod plan;
 mod spiller;
 mod tiles;
+pub use plan::{
+    WriterPlan, DEFAULT_TILE_PHOTONS, EXTRA_ENCODER_BYTES, FETCH_BYTES_PER_PHOTON, MAX_FETCHERS,
+    MIN_WRITER_BUDGET, WRITER_FIXED_BYTES,
+};
 use spiller::{Collected, SpillJob, Spiller};
-use tiles::{Encoded, Frames, Job, TileQueue};
+use tiles::{Encoded, Fetch, Job, TileQueue};
 
 const MIB: u64 = 1 << 20;
 
 /// Photons routed to their cells together (see [`Partition::cells_of`]).
 const ROUTE_BLOCK: usize = 64;
 const STAGED: usize = std::mem::size_of::<StagedPhoton>();
-
-/// Memory the writer keeps outside its budgeted shares: zstd contexts
-/// (level-1 compressor and a decompressor, about 1.5 MiB together), the
-/// map's 1 MiB and the scratch file's 256 KiB write buffers, the spill
-/// frame's sort keys and planes (about 1.3 MiB), the fetcher threads' read
-/// buffers (a frame each, up to 2 MiB in all), the producer channel and
-/// spill metadata.
-pub const WRITER_FIXED_BYTES: u64 = 9 * MIB;
-
-/// Memory of each tile encoder beyond the first (its zstd context and
-/// buffers not counted per photon), charged to the encode share when tiles
-/// are encoded in parallel.
-pub const EXTRA_ENCODER_BYTES: u64 = 2 * MIB;
-
-/// Bytes a spilled photon takes in the scratch file, for budgeting the
-/// frames read ahead of encoding: 12-13 measured (`benches/README.md`), up
-/// to 19 in frames of a few dozen photons.
-pub const FETCH_BYTES_PER_PHOTON: u64 = 16;
-
-/// Threads that read cells' spilled frames ahead of the encoders
-/// ([`WriterPlan::fetch_bytes`]).
-pub const MAX_FETCHERS: usize = 8;
-
-/// Smallest budget the writer accepts.
-pub const MIN_WRITER_BUDGET: u64 = 14 * MIB;
-
-/// Photons per tile the writer aims for when the budget allows: large
-/// enough that per-tile overhead is small, small enough that the cache can
-/// page tiles at a fine grain (about 2 MiB decoded with its search tree).
-pub const DEFAULT_TILE_PHOTONS: u32 = 65_536;
-
-/// How a memory budget is divided while writing a map.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WriterPlan {
-    /// The budget (bytes) this plan divides.
-    pub budget: u64,
-    /// Photons per tile the partition aims for.
-    pub target_tile_photons: u32,
-    /// A cell with more photons than this is split before encoding.
-    pub split_threshold: u32,
-    /// The most photons the encode share can hold in one tile.
-    pub max_tile_photons: u32,
-    /// Bytes of per-cell buffers before spilling starts.
-    pub buffer_bytes: u64,
-    /// Bytes taken from the buffer share for cells' spilled frames read
-    /// ahead of their encoding, where the encode share leaves too little
-    /// room for them ([`WriterPlan::fetch_bytes`]).
-    pub fetch_reserve: u64,
-    /// Records per buffer chunk.
-    pub chunk_records: usize,
-    /// Threads that may encode tiles at once at the end (0 = one per
-    /// core); how many do is bounded by the encode share too
-    /// ([`WriterPlan::encode_width`]).
-    pub threads: usize,
-}
-
-impl WriterPlan {
-    /// Divide `budget` bytes: a fixed reserve, a quarter of the rest for
-    /// encoding one tile, the remainder for cell buffers (less a fetch
-    /// reserve at small budgets, [`WriterPlan::fetch_bytes`]). While
-    /// photons arrive the encode share is headroom for routing during a
-    /// spill.
-    pub fn new(budget: u64, expected_photons: u64) -> Result<Self> {
-        if budget < MIN_WRITER_BUDGET {
-            return Err(Error::Budget {
-                budget,
-                what: format!(
-                    "writing a map needs at least {} MiB",
-                    MIN_WRITER_BUDGET / MIB
-                ),
-            });
-        }
-        let rest = budget - WRITER_FIXED_BYTES;
-        let merge = rest / 4;
-        let max_tile = (merge / ENCODE_BYTES_PER_PHOTON as u64).min(u32::MAX as u64) as u32;
-        let target = DEFAULT_TILE_PHOTONS.min(max_tile / 2);
-        // Frames read ahead of encoding fit in the encode share beside one
-        // tile at budgets of a few hundred MiB; below that a sixteenth of
-        // the rest is set aside for them.
-        let tile_bytes = (2 * target).min(max_tile) as u64 * ENCODE_BYTES_PER_PHOTON as u64;
-        let fetch_reserve = (rest / 16).saturating_sub(merge.saturating_sub(tile_bytes));
-        let buffer_bytes = rest - merge - fetch_reserve;
-        let cells = expected_photons.div_ceil(target as u64).max(1);
-        // At least 8 chunks per cell fit in the buffers, so spills are
-        // sizeable, and no cell holds much unused capacity: with 10^5 cells
-        // (10^9 photons) chunks of 256 records filled the buffers with
-        // mostly empty chunks, and spills wrote frames of a few dozen photons.
-        let chunk_records = ((buffer_bytes / cells / 8) as usize / STAGED).clamp(32, 4096);
-        Ok(WriterPlan {
-            budget,
-            target_tile_photons: target,
-            split_threshold: (2 * target).min(max_tile),
-            max_tile_photons: max_tile,
-            buffer_bytes,
-            fetch_reserve,
-            chunk_records,
-            threads: 1,
-        })
-    }
-
-    /// Encode tiles on up to `threads` threads (0 = one per core).
-    pub fn with_threads(mut self, threads: usize) -> Self {
-        self.threads = threads;
-        self
-    }
-
-    /// Tiles encoded at once: at most the threads, and as many tiles of the
-    /// split threshold (plus an encoder each beyond the first) as the
-    /// encode share holds. The encode share is what one tile of
-    /// `max_tile_photons` may take.
-    pub fn encode_width(&self) -> usize {
-        let threads = match self.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n,
-        };
-        let share = self.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
-        let tile = self.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64;
-        let fit = (1..=threads)
-            .take_while(|&w| w as u64 * tile + (w as u64 - 1) * EXTRA_ENCODER_BYTES <= share)
-            .last();
-        fit.unwrap_or(1)
-    }
-
-    /// Bytes the last phase may hold of cells' spilled frames read ahead of
-    /// their encoding, at [`FETCH_BYTES_PER_PHOTON`]: what the encode share
-    /// leaves beside [`WriterPlan::encode_width`] tiles, or the reserve if
-    /// that is more. Up to [`MAX_FETCHERS`] cells are read at once, each a
-    /// chain of reads that wait on the disk (the scratch file is read
-    /// around the page cache); one is always allowed.
-    pub fn fetch_bytes(&self) -> u64 {
-        let width = self.encode_width() as u64;
-        let share = self.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
-        let tiles = width * self.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64
-            + (width - 1) * EXTRA_ENCODER_BYTES;
-        share.saturating_sub(tiles).max(self.fetch_reserve)
-    }
-
-    /// Aim for `photons` per tile (at least 1, at most what the encode share allows).
-    pub fn with_tile_photons(mut self, photons: u32) -> Self {
-        self.target_tile_photons = photons.clamp(1, self.max_tile_photons / 2);
-        self.split_threshold = (2 * self.target_tile_photons).min(self.max_tile_photons);
-        self
-    }
-
-    /// Number of partition cells for `expected_photons`.
-    pub fn cells_for(&self, expected_photons: u64) -> usize {
-        expected_photons
-            .div_ceil(self.target_tile_photons as u64)
-            .max(1) as usize
-    }
-}
 
 /// What a finished map holds and what writing it took.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -592,11 +446,11 @@ impl MapWriter {
     /// at most the width's tiles are being encoded at once.
     fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
         let width = self.plan.encode_width();
-        let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Job>(MAX_FETCHERS);
+        let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Fetch>(MAX_FETCHERS);
         let (work_tx, work_rx) = crossbeam_channel::bounded::<Job>(width);
         let (done_tx, done_rx) = crossbeam_channel::unbounded::<Encoded>();
-        let readers = (0..width)
-            .map(|_| self.scratch().reader())
+        let decoders = (0..width)
+            .map(|_| self.scratch().decoder())
             .collect::<Result<Vec<_>>>()?;
         let fetchers = (0..MAX_FETCHERS)
             .map(|_| self.scratch().fetcher())
@@ -606,43 +460,37 @@ impl MapWriter {
             // Fetchers read cells' frames, each cell a chain of reads that
             // wait on the disk (the scratch file is read around the page
             // cache), several cells at once, and pass them on undecoded.
-            for mut reader in fetchers {
+            for mut fetcher in fetchers {
                 let (rx, work, done) = (fetch_rx.clone(), work_tx.clone(), done_tx.clone());
                 scope.spawn(move || {
-                    for mut job in rx {
-                        if let Frames::Chain(newest) = job.frames {
-                            let mut fetched = Fetched::default();
-                            if let Err(e) = reader.fetch(Some(newest), &mut fetched) {
-                                if done.send((job.index, Err(e))).is_err() {
-                                    break;
-                                }
-                                continue;
+                    for (mut job, newest) in rx {
+                        let mut fetched = Fetched::default();
+                        let sent = match fetcher.fetch(Some(newest), &mut fetched) {
+                            Ok(()) => {
+                                job.frames = Some(fetched);
+                                work.send(job).is_ok()
                             }
-                            job.frames = Frames::Fetched(fetched);
-                        }
-                        if work.send(job).is_err() {
+                            Err(e) => done.send((job.index, Err(e))).is_ok(),
+                        };
+                        if !sent {
                             break;
                         }
                     }
                 });
             }
-            for mut reader in readers {
+            for mut decoder in decoders {
                 let (rx, tx) = (work_rx.clone(), done_tx.clone());
                 let path = self.path.clone();
                 scope.spawn(move || {
                     let mut encoder = TileEncoder::default();
                     let mut staged: Vec<StagedPhoton> = Vec::new();
-                    for job in rx {
+                    for mut job in rx {
                         staged.clear();
                         staged.reserve_exact(job.count);
-                        let read = match &job.frames {
-                            Frames::None => Ok(()),
-                            Frames::Chain(newest) => {
-                                reader.append_frames(Some(*newest), &mut staged)
-                            }
-                            Frames::Fetched(fetched) => reader.decode_fetched(fetched, &mut staged),
+                        let read = match job.frames.take() {
+                            Some(fetched) => decoder.decode_fetched(&fetched, &mut staged),
+                            None => Ok(()),
                         };
-                        drop(job.frames);
                         let tile = read.and_then(|()| {
                             for chunk in job.chunks {
                                 staged.extend_from_slice(&chunk);
@@ -691,7 +539,7 @@ impl MapWriter {
     fn read_cells(
         &mut self,
         tiles: &mut TileQueue,
-        fetch: &crossbeam_channel::Sender<Job>,
+        fetch: &crossbeam_channel::Sender<Fetch>,
         work: &crossbeam_channel::Sender<Job>,
         progress: &dyn Progress,
     ) -> Result<()> {
@@ -730,17 +578,19 @@ impl MapWriter {
                 }
                 // The fetcher reads the frames through its own handle.
                 self.scratch().readable(cell.last_frame)?;
-                let (frames, queue) = match cell.last_frame.take() {
-                    Some(newest) => (Frames::Chain(newest), fetch),
-                    None => (Frames::None, work),
-                };
                 let job = Job {
                     index: tiles.sent,
                     count: cell.count as usize,
-                    frames,
+                    frames: None,
                     chunks,
                 };
-                queue.send(job).map_err(|_| tiles.stopped(&self.path))?;
+                let sent = match cell.last_frame.take() {
+                    Some(newest) => fetch.send((job, newest)).is_ok(),
+                    None => work.send(job).is_ok(),
+                };
+                if !sent {
+                    return Err(tiles.stopped(&self.path));
+                }
                 tiles.sent += 1;
             }
         }

@@ -240,7 +240,7 @@ fn a_frame_of_mixed_layers_round_trips() {
 }
 
 /// Fetching a cell's frames on one handle and decoding them on another
-/// gives the records `append_frames` gives, in the same order, for frames
+/// gives the records `for_each_frame` gives, in the same order, for frames
 /// written around the page cache and made readable mid-way; a damaged
 /// fetched frame is an error naming the scratch file.
 #[test]
@@ -261,15 +261,13 @@ fn fetched_frames_decode_to_the_records_read_directly() {
         }
     }
     s.readable(newest).unwrap();
-    let mut want = Vec::new();
-    s.reader()
-        .unwrap()
-        .append_frames(newest, &mut want)
+    let (mut want, mut buf) = (Vec::new(), Vec::new());
+    s.for_each_frame(newest, &mut buf, |records| want.extend_from_slice(records))
         .unwrap();
     assert_eq!(want.len(), 5 + 900 + FRAME_PHOTONS + 3 + 1 + 4000);
     let mut fetched = Fetched::default();
     s.fetcher().unwrap().fetch(newest, &mut fetched).unwrap();
-    let mut reader = s.reader().unwrap();
+    let mut reader = s.decoder().unwrap();
     let mut got = Vec::new();
     reader.decode_fetched(&fetched, &mut got).unwrap();
     assert_eq!(got, want);

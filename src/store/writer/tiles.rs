@@ -12,27 +12,22 @@ use std::path::Path;
 /// A tile from an encoder thread: its index and the encoding.
 pub(super) type Encoded = (u32, Result<EncodedTile>);
 
-/// A cell's spilled frames on their way to an encoder.
-pub(super) enum Frames {
-    /// Never spilled.
-    None,
-    /// Still in the scratch file, from this newest frame back.
-    Chain(Frame),
-    /// Read by a fetcher thread, not yet decoded.
-    Fetched(Fetched),
-}
-
-/// A cell for the last phase: its tile index, photon count, spilled frames
-/// and buffered chunks.
+/// A cell for an encoder thread: its tile index, photon count, spilled
+/// frames (read by a fetcher thread, not yet decoded; `None` if it never
+/// spilled) and buffered chunks.
 pub(super) struct Job {
     pub(super) index: u32,
     pub(super) count: usize,
-    pub(super) frames: Frames,
+    pub(super) frames: Option<Fetched>,
     pub(super) chunks: Vec<Vec<StagedPhoton>>,
 }
 
-/// The tiles handed to the encoder threads, and their results put back in
-/// order.
+/// A cell for a fetcher thread: its job, and the newest of its spilled
+/// frames, which the fetcher reads back from.
+pub(super) type Fetch = (Job, Frame);
+
+/// The cells handed to the fetcher and encoder threads, and their tiles
+/// put back in order.
 pub(super) struct TileQueue {
     /// Cells in flight at most (being read or encoded).
     pub(super) width: usize,
