@@ -57,11 +57,6 @@ impl Blocks {
         &self.mem[self.start..self.start + self.filled]
     }
 
-    /// Whether writes go around the page cache.
-    pub fn direct(&self) -> bool {
-        self.direct
-    }
-
     /// Append `data`, writing to `file` whenever the buffer fills.
     pub fn push(&mut self, file: &File, mut data: &[u8]) -> io::Result<()> {
         while !data.is_empty() {

@@ -81,12 +81,12 @@ impl StagedPhoton {
 }
 
 /// A tile sort key: the 48-bit Morton code, then direction and power (64
-/// bits), then band and group (16 bits), in one integer, so a key compares
-/// in one branch-free step (a tuple of the three took half again as long
-/// to sort). It holds the whole record, so records are written from the
-/// sorted keys without going back to the photons (a random gather over a
-/// tile larger than the cache); photons with equal keys have equal
-/// records, so their order does not matter.
+/// bits), then band and group (16 bits), in one integer of 16 bytes (a
+/// tuple of the three took 24), radix-sorted by its top 48 bits. It holds
+/// the whole record, so records are written from the sorted keys without
+/// going back to the photons (a random gather over a tile larger than the
+/// cache); photons with equal keys have equal records, so their order does
+/// not matter.
 type EncodeKey = u128;
 
 /// Bytes of working memory the encoder needs per photon (staged record, sort

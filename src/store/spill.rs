@@ -415,7 +415,7 @@ impl Scratch {
     }
 
     /// Make every frame up to and including `newest` readable from the
-    /// file, by other handles too ([`Scratch::reader`]): frames still
+    /// file, by other handles too ([`Scratch::fetcher`]): frames still
     /// gathered in memory are written, padded to a whole block.
     pub fn readable(&mut self, newest: Option<Frame>) -> Result<()> {
         match newest {
@@ -568,6 +568,17 @@ impl ScratchFetcher {
 pub struct Fetched {
     bytes: Vec<u8>,
     frames: Vec<(u32, u32)>,
+}
+
+impl Fetched {
+    /// Room for `bytes` of frames, taken at once rather than by doubling
+    /// (which could hold twice what the frames need).
+    pub fn with_capacity(bytes: usize) -> Fetched {
+        Fetched {
+            bytes: Vec::with_capacity(bytes),
+            frames: Vec::new(),
+        }
+    }
 }
 
 impl ScratchDecoder {

@@ -67,7 +67,8 @@ pub struct WriteSummary {
     pub file_bytes: u64,
     /// zstd frames written to the scratch file (0 when everything fit).
     pub spilled_frames: u64,
-    /// Compressed bytes written to the scratch file.
+    /// Bytes appended to the scratch file: compressed frames, and the
+    /// padding that makes a frame readable from a whole block.
     pub spilled_bytes: u64,
     /// Cells split at the end because they overflowed.
     pub splits: u32,
@@ -455,7 +456,6 @@ impl MapWriter {
         let fetchers = (0..MAX_FETCHERS)
             .map(|_| self.scratch().fetcher())
             .collect::<Result<Vec<_>>>()?;
-        let target = self.plan.target_tile_photons as usize;
         std::thread::scope(|scope| {
             // Fetchers read cells' frames, each cell a chain of reads that
             // wait on the disk (the scratch file is read around the page
@@ -463,8 +463,8 @@ impl MapWriter {
             for mut fetcher in fetchers {
                 let (rx, work, done) = (fetch_rx.clone(), work_tx.clone(), done_tx.clone());
                 scope.spawn(move || {
-                    for (mut job, newest) in rx {
-                        let mut fetched = Fetched::default();
+                    for (mut job, newest, estimate) in rx {
+                        let mut fetched = Fetched::with_capacity(estimate);
                         let sent = match fetcher.fetch(Some(newest), &mut fetched) {
                             Ok(()) => {
                                 job.frames = Some(fetched);
@@ -499,11 +499,6 @@ impl MapWriter {
                                 .encode(&staged)
                                 .map_err(|e| Error::tile(&path, job.index, e.to_string()))
                         });
-                        // Keep a buffer of an ordinary tile's size, not a
-                        // rare giant's.
-                        if staged.capacity() > 4 * target {
-                            staged = Vec::new();
-                        }
                         if tx.send((job.index, tile)).is_err() {
                             break;
                         }
@@ -564,7 +559,9 @@ impl MapWriter {
                 let chunks = std::mem::take(&mut cell.chunks);
                 let buffered: usize = chunks.iter().map(Vec::len).sum();
                 let spilled = (cell.count - buffered as u64) * FETCH_BYTES_PER_PHOTON;
-                while tiles.sent - tiles.received >= tiles.width as u32
+                // A tile counts until it is appended: one finished early
+                // waits in order behind the cells still being read.
+                while tiles.sent - tiles.entries.len() as u32 >= tiles.width as u32
                     || (tiles.fetch_bytes > 0 && tiles.fetch_bytes + spilled > fetch_share)
                 {
                     tiles.receive(self, progress)?;
@@ -585,7 +582,7 @@ impl MapWriter {
                     chunks,
                 };
                 let sent = match cell.last_frame.take() {
-                    Some(newest) => fetch.send((job, newest)).is_ok(),
+                    Some(newest) => fetch.send((job, newest, spilled as usize)).is_ok(),
                     None => work.send(job).is_ok(),
                 };
                 if !sent {

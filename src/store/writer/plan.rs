@@ -20,9 +20,10 @@ pub const WRITER_FIXED_BYTES: u64 = 9 * MIB;
 pub const EXTRA_ENCODER_BYTES: u64 = 2 * MIB;
 
 /// Bytes a spilled photon takes in the scratch file, for budgeting the
-/// frames read ahead of encoding: 12-13 measured (`benches/README.md`), up
-/// to 19 in frames of a few dozen photons.
-pub const FETCH_BYTES_PER_PHOTON: u64 = 16;
+/// frames read ahead of encoding: 12-13 measured (`benches/README.md`),
+/// 19.4 in frames of 32 photons (few are smaller: a spill takes the
+/// fullest cells).
+pub const FETCH_BYTES_PER_PHOTON: u64 = 20;
 
 /// Threads that read cells' spilled frames ahead of the encoders
 /// ([`WriterPlan::fetch_bytes`]).

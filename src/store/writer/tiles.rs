@@ -22,9 +22,10 @@ pub(super) struct Job {
     pub(super) chunks: Vec<Vec<StagedPhoton>>,
 }
 
-/// A cell for a fetcher thread: its job, and the newest of its spilled
-/// frames, which the fetcher reads back from.
-pub(super) type Fetch = (Job, Frame);
+/// A cell for a fetcher thread: its job, the newest of its spilled frames,
+/// which the fetcher reads back from, and the bytes they are expected to
+/// take (`FETCH_BYTES_PER_PHOTON` each).
+pub(super) type Fetch = (Job, Frame, usize);
 
 /// The cells handed to the fetcher and encoder threads, and their tiles
 /// put back in order.
