@@ -479,14 +479,9 @@ impl Scratch {
     /// before it in the same cell.
     pub fn read(&mut self, f: Frame, out: &mut Vec<StagedPhoton>) -> Result<Option<Frame>> {
         self.readable(Some(f))?;
-        read_frame(
-            &self.file,
-            &self.name,
-            &mut self.codec,
-            &mut self.frame,
-            f,
-            out,
-        )
+        let (body, prev) = read_raw(&self.file, &self.name, &mut self.frame, f)?;
+        decode_body(&mut self.codec, &self.name, body, f.count, out)?;
+        Ok(prev)
     }
 
     /// Call `visit` with the records of every spilled frame of a cell,
@@ -590,9 +585,7 @@ impl ScratchDecoder {
         for &(len, count) in &fetched.frames {
             let body = &fetched.bytes[at..at + len as usize];
             at += len as usize;
-            self.codec
-                .decode(body, count as usize, &mut self.buf)
-                .map_err(|e| corrupt(&self.name, &format!("spill {e}")))?;
+            decode_body(&mut self.codec, &self.name, body, count, &mut self.buf)?;
             out.extend_from_slice(&self.buf);
         }
         Ok(())
@@ -631,22 +624,18 @@ fn read_raw<'b>(
     Ok((&frame[FRAME_LINK..], (prev.count > 0).then_some(prev)))
 }
 
-/// Read frame `f` of the scratch file `file` (named `name` in errors) into
-/// `out` (cleared first) through the buffer `frame`; returns the frame
-/// before it in the same cell.
-fn read_frame(
-    file: &File,
-    name: &Path,
+/// Decode the body of a scratch frame of `count` photons into `out`
+/// (cleared first); damage is an error naming the scratch file `name`.
+fn decode_body(
     codec: &mut FrameCodec,
-    frame: &mut Vec<u8>,
-    f: Frame,
+    name: &Path,
+    body: &[u8],
+    count: u32,
     out: &mut Vec<StagedPhoton>,
-) -> Result<Option<Frame>> {
-    let (body, prev) = read_raw(file, name, frame, f)?;
+) -> Result<()> {
     codec
-        .decode(body, f.count as usize, out)
-        .map_err(|e| corrupt(name, &format!("spill {e}")))?;
-    Ok(prev)
+        .decode(body, count as usize, out)
+        .map_err(|e| corrupt(name, &format!("spill {e}")))
 }
 
 /// CRC-32 of a body but for its CRC field.
