@@ -43,6 +43,21 @@ pub struct Ceiling {
     /// x and y (those beyond the grid count as `-inf`): one load answers
     /// a segment that crosses at most two columns per axis, most of them.
     top2: Vec<f32>,
+    /// The per-axis constants of [`Ceiling::columns`], in the order of its
+    /// lanes: x and y of the segment's low end, then of its high end.
+    lanes: Lanes,
+}
+
+/// Four-lane constants, lanes `[x, y, x, y]`.
+#[derive(Clone, Debug)]
+struct Lanes {
+    /// The margin, subtracted from the low end and added to the high end.
+    pad: [f32; 4],
+    /// The box's high side for the low end, its low side for the high end.
+    far: [f32; 4],
+    min: [f32; 4],
+    inv_cell: [f32; 4],
+    last: [f32; 4],
 }
 
 impl Ceiling {
@@ -70,6 +85,13 @@ impl Ceiling {
             pad: margin,
             top: vec![f32::NEG_INFINITY; dims[0] * dims[1]],
             top2: Vec::new(),
+            lanes: Lanes {
+                pad: [-margin, -margin, margin, margin],
+                far: [bounds.max.x, bounds.max.y, bounds.min.x, bounds.min.y],
+                min: [bounds.min.x, bounds.min.y, bounds.min.x, bounds.min.y],
+                inv_cell: [inv_cell[0], inv_cell[1], inv_cell[0], inv_cell[1]],
+                last: [0, 1, 0, 1].map(|a| (dims[a] - 1) as f32),
+            },
         };
         let cell_size = [0, 1].map(|a| size[a] as f64 / dims[a] as f64);
         for t in tris {
@@ -139,20 +161,10 @@ impl Ceiling {
         if !low.is_finite() || !b.x.is_finite() || !b.y.is_finite() {
             return false;
         }
-        // The segment's ends are rounded; widen its box by the margin.
-        let p = self.pad;
-        let lo = [a.x.min(b.x) - p, a.y.min(b.y) - p];
-        let hi = [a.x.max(b.x) + p, a.y.max(b.y) + p];
-        if (hi[0] < self.min[0])
-            | (lo[0] > self.max[0])
-            | (hi[1] < self.min[1])
-            | (lo[1] > self.max[1])
-        {
+        let Some([i0, j0, i1, j1]) = self.columns(a, b) else {
             // Wholly beside the triangles' box.
             return true;
-        }
-        let (i0, i1) = (self.column(0, lo[0]), self.column(0, hi[0]));
-        let (j0, j1) = (self.column(1, lo[1]), self.column(1, hi[1]));
+        };
         let w = self.dims[0];
         if i1 <= i0 + 1 && j1 <= j0 + 1 && low > self.top2[j0 * w + i0] {
             return true;
@@ -165,5 +177,150 @@ impl Ceiling {
                 .iter()
                 .all(|&top| low > top)
         })
+    }
+
+    /// The first and last columns `[i0, j0, i1, j1]` under the (x, y) box
+    /// of the segment from `a` to `b`, widened by the margin (its ends are
+    /// rounded); None when that box lies wholly beside the triangles' box.
+    /// `b`'s x and y are finite (`a`'s need not be).
+    #[cfg(not(target_arch = "x86_64"))]
+    #[inline]
+    fn columns(&self, a: Vec3, b: Vec3) -> Option<[usize; 4]> {
+        self.columns_scalar(a, b)
+    }
+
+    /// [`Self::columns`] one axis at a time.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    fn columns_scalar(&self, a: Vec3, b: Vec3) -> Option<[usize; 4]> {
+        let p = self.pad;
+        let lo = [a.x.min(b.x) - p, a.y.min(b.y) - p];
+        let hi = [a.x.max(b.x) + p, a.y.max(b.y) + p];
+        if (hi[0] < self.min[0])
+            | (lo[0] > self.max[0])
+            | (hi[1] < self.min[1])
+            | (lo[1] > self.max[1])
+        {
+            return None;
+        }
+        Some([
+            self.column(0, lo[0]),
+            self.column(1, lo[1]),
+            self.column(0, hi[0]),
+            self.column(1, hi[1]),
+        ])
+    }
+
+    /// [`Self::columns`] with both ends of both axes in the lanes of one
+    /// SSE register: the same operations lane by lane, so the same columns
+    /// (tested against [`Self::columns_scalar`]). SSE's min and max return
+    /// their second operand when either is NaN, here `b`'s finite one, as
+    /// `f32::min` and `max` return the number; both truncate the clamped
+    /// value.
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    fn columns(&self, a: Vec3, b: Vec3) -> Option<[usize; 4]> {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86-64 baseline; loads are unaligned.
+        unsafe {
+            let va = _mm_setr_ps(a.x, a.y, a.x, a.y);
+            let vb = _mm_setr_ps(b.x, b.y, b.x, b.y);
+            // [lo x, lo y, hi x, hi y], widened by the margin.
+            let v = _mm_movelh_ps(_mm_min_ps(va, vb), _mm_max_ps(va, vb));
+            let v = _mm_add_ps(v, _mm_loadu_ps(self.lanes.pad.as_ptr()));
+            // A low end past the box's high side, or a high end short of
+            // its low side.
+            let far = _mm_loadu_ps(self.lanes.far.as_ptr());
+            let beside = (_mm_movemask_ps(_mm_cmpgt_ps(v, far)) & 0b0011)
+                | (_mm_movemask_ps(_mm_cmplt_ps(v, far)) & 0b1100);
+            if beside != 0 {
+                return None;
+            }
+            let u = _mm_mul_ps(
+                _mm_sub_ps(v, _mm_loadu_ps(self.lanes.min.as_ptr())),
+                _mm_loadu_ps(self.lanes.inv_cell.as_ptr()),
+            );
+            let u = _mm_min_ps(
+                _mm_max_ps(u, _mm_setzero_ps()),
+                _mm_loadu_ps(self.lanes.last.as_ptr()),
+            );
+            let mut out = [0i32; 4];
+            _mm_storeu_si128(out.as_mut_ptr().cast(), _mm_cvttps_epi32(u));
+            Some(out.map(|c| c as usize))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// The four-lane columns are the scalar ones, for segments inside,
+    /// across and beside the box, on its sides, far outside the grid, and
+    /// from points with infinite or NaN coordinates (to the finite ends
+    /// `clear` passes on).
+    #[test]
+    fn lane_columns_match_the_scalar_columns() {
+        let tris = [
+            [
+                Vec3::new(-3.0, 2.0, -5.0),
+                Vec3::new(57.0, 2.0, -1.0),
+                Vec3::new(-3.0, 41.5, -9.0),
+            ],
+            [
+                Vec3::new(57.0, 41.5, -2.0),
+                Vec3::new(57.0, 2.0, -1.0),
+                Vec3::new(-3.0, 41.5, -9.0),
+            ],
+        ];
+        let bounds = Aabb {
+            min: Vec3::new(-3.0, 2.0, -9.0),
+            max: Vec3::new(57.0, 41.5, -1.0),
+        };
+        let c = Ceiling::new(&tris, &bounds, 1e-3).unwrap();
+        let mut rng = Pcg32::new(31, 0);
+        let mut coord = |lo: f32, hi: f32| lo + (hi - lo) * rng.uniform_f32();
+        let mut points: Vec<Vec3> = (0..200_000)
+            .map(|_| Vec3::new(coord(-10.0, 65.0), coord(-5.0, 50.0), coord(-10.0, 0.0)))
+            .collect();
+        let specials = [
+            -3.0,
+            57.0,
+            2.0,
+            41.5,
+            -3.001,
+            57.001,
+            0.0,
+            -0.0,
+            1e30,
+            -1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MAX,
+            f32::MIN,
+        ];
+        for &x in &specials {
+            for &y in &specials {
+                points.push(Vec3::new(x, y, -2.0));
+            }
+        }
+        let (mut beside, mut inside) = (0, 0);
+        for pair in points.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            if !(b.x.is_finite() && b.y.is_finite()) {
+                continue;
+            }
+            let lanes = c.columns(a, b);
+            assert_eq!(lanes, c.columns_scalar(a, b), "{a} -> {b}");
+            match lanes {
+                None => beside += 1,
+                Some(_) => inside += 1,
+            }
+        }
+        assert!(
+            beside > 1000 && inside > 100_000,
+            "{beside} beside, {inside} inside"
+        );
     }
 }
