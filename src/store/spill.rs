@@ -15,7 +15,12 @@
 //! layer. The records are byte-shuffled and each plane of like bytes is
 //! compressed on its own: a zstd frame per plane gives each its own
 //! entropy table (one table for all planes cost 10 % more), and planes of
-//! noise, such as the low bytes of the deltas, are stored raw.
+//! noise, such as the low bytes of the deltas, are stored raw. Frames of
+//! fewer than 1024 photons (at 10^9 photons under 256 MiB nearly all, a
+//! few hundred photons each) compress all their planes as one zstd frame:
+//! there a plane's own frame header and tables cost about what a shared
+//! table loses, and a zstd call per plane, twenty a frame, kept the spill
+//! thread half of one core busy.
 //!
 //! Why: full-precision positions in arrival order do not compress (their
 //! low mantissa bits are noise), and at 10^9 photons under 256 MiB every
@@ -53,6 +58,13 @@ const GRID_LIMIT: i64 = 1 << 41;
 /// A plane's length field when it is stored uncompressed.
 const RAW_PLANE: u16 = u16::MAX;
 const _: () = assert!(FRAME_PHOTONS < RAW_PLANE as usize);
+
+/// Frames of fewer photons than this store their planes as one zstd frame
+/// (mode 1) rather than one each (mode 0).
+const JOINED_BELOW: usize = 1024;
+
+/// The length field of joined planes stored uncompressed.
+const RAW_JOINED: u32 = u32::MAX;
 
 /// Bytes of a record besides its Morton delta.
 const PAYLOAD_BYTES: usize = 11;
@@ -153,13 +165,15 @@ impl SnapGrid {
 /// Encodes and decodes frame bodies: at most [`FRAME_PHOTONS`] staged
 /// photons, snapped to the grid, as sorted grid deltas and byte planes.
 ///
-/// A body is: delta width u8, a zero byte, the corner (3 × i64 grid
-/// units), the CRC-32 of the rest of the body, then for each of the
-/// `width + 11` byte planes of the records (Morton delta, octahedral
-/// direction 2 × u16, band and group u16, power f32 bits, layer u8) its
-/// length as u16 (`RAW_PLANE` for raw bytes) and its bytes. The photon
-/// count is kept by the container (the scratch file's links, a shard's
-/// frame header).
+/// A body is: delta width u8, the plane mode u8, the corner (3 × i64
+/// grid units), the CRC-32 of the rest of the body, then the `width + 11`
+/// byte planes of the records (Morton delta, octahedral direction 2 ×
+/// u16, band and group u16, power f32 bits, layer u8). In mode 0 each
+/// plane is its length as u16 (`RAW_PLANE` for raw bytes) and its bytes;
+/// in mode 1 (frames of fewer than `JOINED_BELOW` photons) all planes
+/// are one zstd frame, its length as u32 (`RAW_JOINED` for raw bytes)
+/// first. The photon count is kept by the container (the scratch file's
+/// links, a shard's frame header).
 pub struct FrameCodec {
     grid: SnapGrid,
     compressor: zstd::bulk::Compressor<'static>,
@@ -199,6 +213,17 @@ impl FrameCodec {
     /// Append the body of `batch` (1 to [`FRAME_PHOTONS`] photons, snapped
     /// to the grid) to `out`.
     pub fn encode(&mut self, batch: &[StagedPhoton], out: &mut Vec<u8>) -> std::io::Result<()> {
+        self.encode_as(batch, batch.len() < JOINED_BELOW, out)
+    }
+
+    /// [`Self::encode`] with the planes stored together (`joined`) or one
+    /// zstd frame each.
+    fn encode_as(
+        &mut self,
+        batch: &[StagedPhoton],
+        joined: bool,
+        out: &mut Vec<u8>,
+    ) -> std::io::Result<()> {
         let n = batch.len();
         assert!((1..=FRAME_PHOTONS).contains(&n), "frame of {n} photons");
         let grid = self.grid;
@@ -257,23 +282,38 @@ impl FrameCodec {
 
         let start = out.len();
         out.push(width as u8);
-        out.push(0);
+        out.push(joined as u8);
         for c in corner {
             out.extend_from_slice(&c.to_le_bytes());
         }
         out.extend_from_slice(&[0; 4]);
         self.packed.clear();
-        self.packed.reserve(zstd::zstd_safe::compress_bound(n));
-        for plane in self.planes.chunks_exact(n) {
+        if joined {
+            let all = self.planes.len();
+            self.packed.reserve(zstd::zstd_safe::compress_bound(all));
             let packed = self
                 .compressor
-                .compress_to_buffer(plane, &mut self.packed)?;
-            if packed < n {
-                out.extend_from_slice(&(packed as u16).to_le_bytes());
+                .compress_to_buffer(&self.planes[..], &mut self.packed)?;
+            if packed < all {
+                out.extend_from_slice(&(packed as u32).to_le_bytes());
                 out.extend_from_slice(&self.packed);
             } else {
-                out.extend_from_slice(&RAW_PLANE.to_le_bytes());
-                out.extend_from_slice(plane);
+                out.extend_from_slice(&RAW_JOINED.to_le_bytes());
+                out.extend_from_slice(&self.planes);
+            }
+        } else {
+            self.packed.reserve(zstd::zstd_safe::compress_bound(n));
+            for plane in self.planes.chunks_exact(n) {
+                let packed = self
+                    .compressor
+                    .compress_to_buffer(plane, &mut self.packed)?;
+                if packed < n {
+                    out.extend_from_slice(&(packed as u16).to_le_bytes());
+                    out.extend_from_slice(&self.packed);
+                } else {
+                    out.extend_from_slice(&RAW_PLANE.to_le_bytes());
+                    out.extend_from_slice(plane);
+                }
             }
         }
         let crc = body_crc(&out[start..]);
@@ -299,17 +339,17 @@ impl FrameCodec {
         if crc != body_crc(body) {
             return Err("frame checksum mismatch".into());
         }
-        if !(1..=16).contains(&width) || body[1] != 0 {
+        if !(1..=16).contains(&width) {
             return Err(format!("frame delta width {width}"));
         }
         self.planes.clear();
         self.planes.resize(n * (width + PAYLOAD_BYTES), 0);
-        unpack_planes(
-            &mut self.decompressor,
-            &body[BODY_HEAD..],
-            &mut self.planes,
-            n,
-        )?;
+        let stored = &body[BODY_HEAD..];
+        match body[1] {
+            0 => unpack_planes(&mut self.decompressor, stored, &mut self.planes, n)?,
+            1 => unpack_joined(&mut self.decompressor, stored, &mut self.planes)?,
+            mode => return Err(format!("frame of plane mode {mode}")),
+        }
         out.clear();
         out.reserve(n);
         let planes = &self.planes;
@@ -675,6 +715,35 @@ fn unpack_planes(
     }
     if at != stored.len() {
         return Err("frame length".to_string());
+    }
+    Ok(())
+}
+
+/// Fill `planes` from a body whose planes are stored together.
+fn unpack_joined(
+    decompressor: &mut zstd::bulk::Decompressor<'static>,
+    stored: &[u8],
+    planes: &mut [u8],
+) -> std::result::Result<(), String> {
+    let short = || "frame length".to_string();
+    let len = stored.get(..4).ok_or_else(short)?;
+    let len = u32::from_le_bytes([len[0], len[1], len[2], len[3]]);
+    let bytes = &stored[4..];
+    if len == RAW_JOINED {
+        if bytes.len() != planes.len() {
+            return Err(short());
+        }
+        planes.copy_from_slice(bytes);
+        return Ok(());
+    }
+    if bytes.len() != len as usize {
+        return Err(short());
+    }
+    let got = decompressor
+        .decompress_to_buffer(bytes, planes)
+        .map_err(|e| format!("frame planes: {e}"))?;
+    if got != planes.len() {
+        return Err(short());
     }
     Ok(())
 }
