@@ -25,7 +25,10 @@ pub use memory::InMemoryMap;
 pub use partition::Partition;
 pub use query::{Neighbour, PhotonMap, PhotonQuery, Search};
 pub use reader::MapFile;
-pub use writer::{MapWriter, WriteSummary, WriterPlan, EXTRA_ENCODER_BYTES};
+pub use writer::{
+    MapWriter, WriteSummary, WriterPlan, EXTRA_ENCODER_BYTES, FETCH_BUFFER_BYTES, MAX_FETCHERS,
+    MIN_FETCHERS,
+};
 
 /// Ask for the cache line holding `p`, without waiting for it. `p` need not
 /// point at anything valid (the spare capacity of a buffer, say).

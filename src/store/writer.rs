@@ -47,8 +47,8 @@ mod plan;
 mod spiller;
 mod tiles;
 pub use plan::{
-    WriterPlan, DEFAULT_TILE_PHOTONS, EXTRA_ENCODER_BYTES, FETCH_BYTES_PER_PHOTON, MAX_FETCHERS,
-    MIN_WRITER_BUDGET, WRITER_FIXED_BYTES,
+    WriterPlan, DEFAULT_TILE_PHOTONS, EXTRA_ENCODER_BYTES, FETCH_BUFFER_BYTES,
+    FETCH_BYTES_PER_PHOTON, MAX_FETCHERS, MIN_FETCHERS, MIN_WRITER_BUDGET, WRITER_FIXED_BYTES,
 };
 use spiller::{Collected, SpillJob, Spiller};
 use tiles::{Encoded, Fetch, Job, TileQueue};
@@ -441,19 +441,20 @@ impl MapWriter {
     /// Read every cell back in order (splitting the overfull) and encode
     /// its tile on one of [`WriterPlan::encode_width`] encoder threads,
     /// appending the tiles to the map in cell order. A cell with spilled
-    /// frames goes first to one of [`MAX_FETCHERS`] fetcher threads, which
+    /// frames goes first to one of [`WriterPlan::fetchers`] threads, which
     /// reads them (undecoded, within [`WriterPlan::fetch_bytes`]); reading
     /// the next cells overlaps the encoding of the ones before them, and
     /// at most the width's tiles are being encoded at once.
     fn encode_cells(&mut self, progress: &dyn Progress) -> Result<Vec<TileEntry>> {
         let width = self.plan.encode_width();
-        let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Fetch>(MAX_FETCHERS);
+        let fetch_threads = self.plan.fetchers();
+        let (fetch_tx, fetch_rx) = crossbeam_channel::bounded::<Fetch>(fetch_threads);
         let (work_tx, work_rx) = crossbeam_channel::bounded::<Job>(width);
         let (done_tx, done_rx) = crossbeam_channel::unbounded::<Encoded>();
         let decoders = (0..width)
             .map(|_| self.scratch().decoder())
             .collect::<Result<Vec<_>>>()?;
-        let fetchers = (0..MAX_FETCHERS)
+        let fetchers = (0..fetch_threads)
             .map(|_| self.scratch().fetcher())
             .collect::<Result<Vec<_>>>()?;
         std::thread::scope(|scope| {
@@ -507,7 +508,7 @@ impl MapWriter {
             }
             drop((fetch_rx, work_rx, done_tx));
             let mut tiles = TileQueue {
-                width: width + MAX_FETCHERS,
+                width: width + fetch_threads,
                 done: done_rx,
                 sent: 0,
                 received: 0,

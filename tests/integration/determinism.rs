@@ -126,3 +126,39 @@ fn parallel_encoding_stays_within_the_encode_share() {
     assert_eq!(plan.with_threads(2).encode_width(), 2);
     assert_eq!(plan.with_threads(1).encode_width(), 1);
 }
+
+/// The fetcher threads beyond those the fixed reserve holds take their
+/// read buffers from a quarter of the fetch share at most, so the frames
+/// read ahead keep the rest: none extra at the smallest budgets, all of
+/// them at 256 MiB, where at 10^9 photons eight left the encoders waiting.
+#[test]
+fn fetcher_buffers_come_out_of_the_fetch_share() {
+    use littoral::store::{WriterPlan, FETCH_BUFFER_BYTES, MAX_FETCHERS, MIN_FETCHERS};
+    for budget in [14 * MIB, 24 * MIB, 64 * MIB, 256 * MIB, 1024 * MIB] {
+        for threads in [1, 2, 8] {
+            let plan = WriterPlan::new(budget, 1_000_000_000)
+                .unwrap()
+                .with_threads(threads);
+            let n = plan.fetchers();
+            assert!((MIN_FETCHERS..=MAX_FETCHERS).contains(&n), "{n} fetchers");
+            let buffers = (n - MIN_FETCHERS) as u64 * FETCH_BUFFER_BYTES;
+            assert!(
+                3 * buffers <= plan.fetch_bytes(),
+                "{budget} B, {threads} threads: {n} fetchers, {} B for frames",
+                plan.fetch_bytes()
+            );
+            // One more fetcher's buffer would pass the quarter.
+            let share = plan.fetch_bytes() + buffers;
+            assert!(n == MAX_FETCHERS || 4 * (buffers + FETCH_BUFFER_BYTES) > share);
+        }
+    }
+    let fetchers = |budget| {
+        WriterPlan::new(budget, 1_000_000_000)
+            .unwrap()
+            .with_threads(2)
+            .fetchers()
+    };
+    assert_eq!(fetchers(14 * MIB), MIN_FETCHERS);
+    assert_eq!(fetchers(24 * MIB), MIN_FETCHERS);
+    assert_eq!(fetchers(256 * MIB), MAX_FETCHERS);
+}

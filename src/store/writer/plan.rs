@@ -5,13 +5,14 @@
 use super::{MIB, STAGED};
 use crate::error::{Error, Result};
 use crate::store::codec::ENCODE_BYTES_PER_PHOTON;
+use crate::store::spill::FRAME_PHOTONS;
 
 /// Memory the writer keeps outside its budgeted shares: zstd contexts
 /// (level-1 compressor and a decompressor, about 1.5 MiB together), the
 /// map's 1 MiB and the scratch file's 256 KiB write buffers, the spill
-/// frame's sort keys and planes (about 1.3 MiB), the fetcher threads' read
-/// buffers (a frame each, up to 2 MiB in all), the producer channel and
-/// spill metadata.
+/// frame's sort keys and planes (about 1.3 MiB), the read buffers of
+/// [`MIN_FETCHERS`] fetcher threads (a frame each, up to 2 MiB in all),
+/// the producer channel and spill metadata.
 pub const WRITER_FIXED_BYTES: u64 = 9 * MIB;
 
 /// Memory of each tile encoder beyond the first (its zstd context and
@@ -25,9 +26,19 @@ pub const EXTRA_ENCODER_BYTES: u64 = 2 * MIB;
 /// fullest cells).
 pub const FETCH_BYTES_PER_PHOTON: u64 = 20;
 
-/// Threads that read cells' spilled frames ahead of the encoders
-/// ([`WriterPlan::fetch_bytes`]).
-pub const MAX_FETCHERS: usize = 8;
+/// Fetcher threads (reading cells' spilled frames ahead of the encoders)
+/// whose read buffers the fixed reserve holds ([`WriterPlan::fetchers`]).
+pub const MIN_FETCHERS: usize = 8;
+
+/// Fetcher threads at most: at 10^9 photons, eight kept the two encoders
+/// a third busy, waiting on chains of reads.
+pub const MAX_FETCHERS: usize = 32;
+
+/// A fetcher's read buffer at most: the largest scratch frame (its link,
+/// body head and planes of [`FRAME_PHOTONS`] photons) in whole blocks.
+pub const FETCH_BUFFER_BYTES: u64 = 256 << 10;
+const _: () =
+    assert!((FRAME_PHOTONS * 27 + 16 + 30 + 2 * 27 + 2 * 4096) as u64 <= FETCH_BUFFER_BYTES);
 
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 14 * MIB;
@@ -130,12 +141,29 @@ impl WriterPlan {
     }
 
     /// Bytes the last phase may hold of cells' spilled frames read ahead of
-    /// their encoding, at [`FETCH_BYTES_PER_PHOTON`]: what the encode share
-    /// leaves beside [`WriterPlan::encode_width`] tiles, or the reserve if
-    /// that is more. Up to [`MAX_FETCHERS`] cells are read at once, each a
-    /// chain of reads that wait on the disk (the scratch file is read
-    /// around the page cache); one is always allowed.
+    /// their encoding, at [`FETCH_BYTES_PER_PHOTON`], and of their tiles
+    /// waiting to be appended, at their size: the fetch share ([`Self::fetch_share`])
+    /// less the read buffers of the fetchers beyond [`MIN_FETCHERS`]. One
+    /// cell is always allowed.
     pub fn fetch_bytes(&self) -> u64 {
+        let extra = (self.fetchers() - MIN_FETCHERS) as u64;
+        self.fetch_share() - extra * FETCH_BUFFER_BYTES
+    }
+
+    /// Threads that read cells' spilled frames at the end, each cell a
+    /// chain of reads that wait on the disk (the scratch file is read
+    /// around the page cache), so the more at once the better: the
+    /// [`MIN_FETCHERS`] the fixed reserve holds, and up to
+    /// [`MAX_FETCHERS`] with read buffers taken from a quarter of the fetch
+    /// share.
+    pub fn fetchers(&self) -> usize {
+        let extra = (self.fetch_share() / 4 / FETCH_BUFFER_BYTES) as usize;
+        MIN_FETCHERS + extra.min(MAX_FETCHERS - MIN_FETCHERS)
+    }
+
+    /// What the encode share leaves beside [`WriterPlan::encode_width`]
+    /// tiles, or the reserve if that is more: for fetching.
+    fn fetch_share(&self) -> u64 {
         let width = self.encode_width() as u64;
         let share = self.max_tile_photons as u64 * ENCODE_BYTES_PER_PHOTON as u64;
         let tiles = width * self.split_threshold as u64 * ENCODE_BYTES_PER_PHOTON as u64

@@ -39,8 +39,9 @@ pub(super) struct TileQueue {
     /// Results that arrived before an earlier tile's.
     pub(super) waiting: std::collections::BTreeMap<u32, Result<EncodedTile>>,
     pub(super) entries: Vec<TileEntry>,
-    /// Bytes of spilled frames charged to the fetch share for the cells
-    /// in flight, in all and by tile index.
+    /// Bytes charged to the fetch share for spilled cells in flight, in
+    /// all and by tile index: their frames until encoded, then their tiles
+    /// until appended.
     pub(super) fetch_bytes: u64,
     pub(super) fetching: std::collections::BTreeMap<u32, u64>,
 }
@@ -54,9 +55,20 @@ impl TileQueue {
     ) -> Result<()> {
         let (index, tile) = self.done.recv().map_err(|_| self.stopped(&writer.path))?;
         self.received += 1;
-        self.fetch_bytes -= self.fetching.remove(&index).unwrap_or(0);
+        // A spilled cell's frames are decoded now; its tile may wait for
+        // the ones before it, charged at its own size until appended.
+        if let Some(frames) = self.fetching.remove(&index) {
+            self.fetch_bytes -= frames;
+            if let Ok(t) = &tile {
+                let blob = t.blob.len() as u64;
+                self.fetch_bytes += blob;
+                self.fetching.insert(index, blob);
+            }
+        }
         self.waiting.insert(index, tile);
         while let Some(tile) = self.waiting.remove(&(self.entries.len() as u32)) {
+            let index = self.entries.len() as u32;
+            self.fetch_bytes -= self.fetching.remove(&index).unwrap_or(0);
             let tile = tile?;
             writer.append(&tile, &mut self.entries)?;
             progress.advance(tile.count as u64);
