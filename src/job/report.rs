@@ -28,6 +28,11 @@ pub struct MapSummary {
     /// they compress; 0 for a reused map).
     #[serde(default)]
     pub spilled_frames: u64,
+    /// Cells split at the end because they held more photons than a tile
+    /// may (each is read back twice before its tiles are encoded; 0 for a
+    /// reused map).
+    #[serde(default)]
+    pub split_cells: u32,
     /// SHA-256 of the emission inputs (see `provenance`).
     pub provenance: String,
 }
@@ -43,6 +48,7 @@ impl MapSummary {
             bytes_per_photon: summary.file_bytes as f64 / summary.photons.max(1) as f64,
             spilled_bytes: summary.spilled_bytes,
             spilled_frames: summary.spilled_frames,
+            split_cells: summary.splits,
             provenance,
         }
     }
@@ -58,6 +64,7 @@ impl MapSummary {
             bytes_per_photon: map.file_bytes() as f64 / h.photons.max(1) as f64,
             spilled_bytes: 0,
             spilled_frames: 0,
+            split_cells: 0,
             provenance: h.provenance.digest_hex(),
         }
     }

@@ -58,6 +58,7 @@ const UNITS: &[(&str, &str)] = &[
     ("map.bytes_per_photon", "bytes per photon"),
     ("map.spilled_bytes", "bytes"),
     ("map.spilled_frames", "frames"),
+    ("map.split_cells", "cells"),
     ("radiometers[].depth_m", "m"),
     ("radiometers[].position_m", "m"),
     ("radiometers[].L", SPECTRAL_RADIANCE),

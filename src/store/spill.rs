@@ -69,6 +69,12 @@ const RAW_JOINED: u32 = u32::MAX;
 /// Bytes of a record besides its Morton delta.
 const PAYLOAD_BYTES: usize = 11;
 
+/// The most a scratch frame takes: its link, body head, the length field
+/// of each plane and the planes of [`FRAME_PHOTONS`] photons at the widest
+/// delta.
+pub const MAX_FRAME_BYTES: usize =
+    FRAME_LINK + BODY_HEAD + (16 + PAYLOAD_BYTES) * (2 + FRAME_PHOTONS);
+
 /// Per axis, the fixed-point grid photon positions are snapped to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SnapGrid {
@@ -524,6 +530,20 @@ impl Scratch {
         Ok(prev)
     }
 
+    /// Read every frame of a cell, from its newest frame back, into `out`
+    /// undecoded: one chain of reads for a cell read more than once
+    /// (decoded by [`Scratch::decode`]).
+    pub fn fetch(&mut self, newest: Option<Frame>, out: &mut Fetched) -> Result<()> {
+        self.readable(newest)?;
+        fetch_chain(&self.file, &self.name, &mut self.frame, newest, out)
+    }
+
+    /// Decode one of [`Fetched::bodies`] (`count` photons) into `out`
+    /// (cleared first).
+    pub fn decode(&mut self, body: &[u8], count: u32, out: &mut Vec<StagedPhoton>) -> Result<()> {
+        decode_body(&mut self.codec, &self.name, body, count, out)
+    }
+
     /// Call `visit` with the records of every spilled frame of a cell,
     /// newest first, through the reusable buffer `buf`.
     pub fn for_each_frame(
@@ -583,17 +603,30 @@ pub struct ScratchFetcher {
 impl ScratchFetcher {
     /// Read every frame of a cell, from its newest frame `next` back,
     /// into `out` (cleared first).
-    pub fn fetch(&mut self, mut next: Option<Frame>, out: &mut Fetched) -> Result<()> {
-        out.bytes.clear();
-        out.frames.clear();
-        while let Some(f) = next {
-            let (body, prev) = read_raw(&self.file, &self.name, &mut self.frame, f)?;
-            out.bytes.extend_from_slice(body);
-            out.frames.push((body.len() as u32, f.count));
-            next = prev;
-        }
-        Ok(())
+    pub fn fetch(&mut self, next: Option<Frame>, out: &mut Fetched) -> Result<()> {
+        fetch_chain(&self.file, &self.name, &mut self.frame, next, out)
     }
+}
+
+/// Read every frame of a cell from `file` (named `name` in errors), from
+/// its newest frame `next` back, through the buffer `frame`, into `out`
+/// (cleared first), undecoded.
+fn fetch_chain(
+    file: &File,
+    name: &Path,
+    frame: &mut Vec<u8>,
+    mut next: Option<Frame>,
+    out: &mut Fetched,
+) -> Result<()> {
+    out.bytes.clear();
+    out.frames.clear();
+    while let Some(f) = next {
+        let (body, prev) = read_raw(file, name, frame, f)?;
+        out.bytes.extend_from_slice(body);
+        out.frames.push((body.len() as u32, f.count));
+        next = prev;
+    }
+    Ok(())
 }
 
 /// A cell's spilled frames as read from the scratch file, not yet decoded
@@ -614,6 +647,16 @@ impl Fetched {
             frames: Vec::new(),
         }
     }
+
+    /// Each frame's body and photon count, newest first.
+    pub fn bodies(&self) -> impl Iterator<Item = (&[u8], u32)> {
+        let mut at = 0;
+        self.frames.iter().map(move |&(len, count)| {
+            let body = &self.bytes[at..at + len as usize];
+            at += len as usize;
+            (body, count)
+        })
+    }
 }
 
 impl ScratchDecoder {
@@ -621,10 +664,7 @@ impl ScratchDecoder {
     /// same records, in the same order, as [`Scratch::for_each_frame`]
     /// from the same newest frame.
     pub fn decode_fetched(&mut self, fetched: &Fetched, out: &mut Vec<StagedPhoton>) -> Result<()> {
-        let mut at = 0;
-        for &(len, count) in &fetched.frames {
-            let body = &fetched.bytes[at..at + len as usize];
-            at += len as usize;
+        for (body, count) in fetched.bodies() {
             decode_body(&mut self.codec, &self.name, body, count, &mut self.buf)?;
             out.extend_from_slice(&self.buf);
         }

@@ -549,7 +549,23 @@ impl MapWriter {
                     continue;
                 }
                 if cell.count > self.plan.split_threshold as u64 {
-                    let (left, right) = self.split(cell, &mut frame_buf)?;
+                    // The split reads the cell twice: from one chain of
+                    // reads held in the fetch share, when it fits there
+                    // beside the cells in flight (waiting for them if need
+                    // be), else from the scratch file each time.
+                    let buffered: usize = cell.chunks.iter().map(Vec::len).sum();
+                    let need = (cell.count - buffered as u64) * FETCH_BYTES_PER_PHOTON;
+                    let fetched = if need > 0 && need <= fetch_share {
+                        while tiles.fetch_bytes > 0 && tiles.fetch_bytes + need > fetch_share {
+                            tiles.receive(self, progress)?;
+                        }
+                        let mut fetched = Fetched::with_capacity(need as usize);
+                        self.scratch().fetch(cell.last_frame, &mut fetched)?;
+                        Some(fetched)
+                    } else {
+                        None
+                    };
+                    let (left, right) = self.split(cell, fetched.as_ref(), &mut frame_buf)?;
                     self.summary.splits += 1;
                     stack.push(right);
                     stack.push(left);
@@ -605,10 +621,13 @@ impl MapWriter {
         Ok(())
     }
 
-    /// Split an overfull cell in two, streaming, without holding it in memory.
+    /// Split an overfull cell in two, streaming, without holding it in
+    /// memory decoded: its spilled frames are read from `fetched` when
+    /// given (all of them, undecoded), else from the scratch file.
     fn split(
         &mut self,
         mut cell: CellBuf,
+        fetched: Option<&Fetched>,
         frame_buf: &mut Vec<StagedPhoton>,
     ) -> Result<(CellBuf, CellBuf)> {
         // Pass 1: an order-independent sample (chosen by a hash of the
@@ -624,10 +643,19 @@ impl MapWriter {
                 sample.push(key);
             }
         };
-        self.scratch()
-            .for_each_frame(cell.last_frame, frame_buf, |records| {
-                records.iter().for_each(&mut take)
-            })?;
+        match fetched {
+            Some(fetched) => {
+                for (body, count) in fetched.bodies() {
+                    self.scratch().decode(body, count, frame_buf)?;
+                    frame_buf.iter().for_each(&mut take);
+                }
+            }
+            None => self
+                .scratch()
+                .for_each_frame(cell.last_frame, frame_buf, |records| {
+                    records.iter().for_each(&mut take)
+                })?,
+        }
         cell.chunks.iter().flatten().for_each(&mut take);
 
         // The plane: the sample median on the longest axis that separates it.
@@ -688,8 +716,18 @@ impl MapWriter {
         // Children spill to the end of the scratch file while the parent's
         // (immutable) frames are read back.
         let mut next = cell.last_frame.take();
-        while let Some(f) = next {
-            next = self.scratch().read(f, frame_buf)?;
+        let mut bodies = fetched.map(Fetched::bodies);
+        loop {
+            match bodies.as_mut() {
+                Some(bodies) => match bodies.next() {
+                    Some((body, count)) => self.scratch().decode(body, count, frame_buf)?,
+                    None => break,
+                },
+                None => match next {
+                    Some(f) => next = self.scratch().read(f, frame_buf)?,
+                    None => break,
+                },
+            }
             let batch = std::mem::take(frame_buf);
             self.route(&batch, &mut split)?;
             *frame_buf = batch;

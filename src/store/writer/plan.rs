@@ -5,7 +5,7 @@
 use super::{MIB, STAGED};
 use crate::error::{Error, Result};
 use crate::store::codec::ENCODE_BYTES_PER_PHOTON;
-use crate::store::spill::FRAME_PHOTONS;
+use crate::store::spill::MAX_FRAME_BYTES;
 
 /// Memory the writer keeps outside its budgeted shares: zstd contexts
 /// (level-1 compressor and a decompressor, about 1.5 MiB together), the
@@ -34,11 +34,10 @@ pub const MIN_FETCHERS: usize = 8;
 /// a third busy, waiting on chains of reads.
 pub const MAX_FETCHERS: usize = 32;
 
-/// A fetcher's read buffer at most: the largest scratch frame (its link,
-/// body head and planes of [`FRAME_PHOTONS`] photons) in whole blocks.
+/// A fetcher's read buffer at most: the largest scratch frame, read in
+/// whole 4 KiB blocks (a block more at each end).
 pub const FETCH_BUFFER_BYTES: u64 = 256 << 10;
-const _: () =
-    assert!((FRAME_PHOTONS * 27 + 16 + 30 + 2 * 27 + 2 * 4096) as u64 <= FETCH_BUFFER_BYTES);
+const _: () = assert!((MAX_FRAME_BYTES + 2 * 4096) as u64 <= FETCH_BUFFER_BYTES);
 
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 14 * MIB;
@@ -142,9 +141,9 @@ impl WriterPlan {
 
     /// Bytes the last phase may hold of cells' spilled frames read ahead of
     /// their encoding, at [`FETCH_BYTES_PER_PHOTON`], and of their tiles
-    /// waiting to be appended, at their size: the fetch share ([`Self::fetch_share`])
-    /// less the read buffers of the fetchers beyond [`MIN_FETCHERS`]. One
-    /// cell is always allowed.
+    /// waiting to be appended, at their size: the fetch share (see
+    /// `fetch_share`) less the read buffers of the fetchers beyond
+    /// [`MIN_FETCHERS`]. One cell is always allowed.
     pub fn fetch_bytes(&self) -> u64 {
         let extra = (self.fetchers() - MIN_FETCHERS) as u64;
         self.fetch_share() - extra * FETCH_BUFFER_BYTES
