@@ -20,6 +20,40 @@ fn assert_same_bytes(a: &Path, b: &Path) {
     );
 }
 
+/// `photons` of `src` written in batches through a single-cell partition
+/// at `budget` with tiles of 3 000 photons, encoding on up to `threads`
+/// threads: the map's path and the writer's summary.
+fn write_single_cell(
+    dir: &Path,
+    name: &str,
+    src: &littoral::synth::SynthSource,
+    photons: &[littoral::store::StagedPhoton],
+    budget: u64,
+    threads: usize,
+) -> (std::path::PathBuf, littoral::store::WriteSummary) {
+    use littoral::progress::Silent;
+    use littoral::store::{MapWriter, Partition, PhotonSource, WriterPlan};
+    let plan = WriterPlan::new(budget, photons.len() as u64)
+        .unwrap()
+        .with_tile_photons(3_000)
+        .with_threads(threads);
+    let path = dir.join(name);
+    let mut w = MapWriter::create(
+        &path,
+        plan,
+        Partition::single(),
+        src.bands(),
+        src.bounds(),
+        src.provenance(),
+    )
+    .unwrap();
+    for batch in photons.chunks(5_000) {
+        w.push(batch).unwrap();
+    }
+    let summary = w.finish(b"{}", &Silent).unwrap();
+    (path, summary)
+}
+
 #[test]
 fn same_seed_same_bytes_for_any_thread_count() {
     let dir = tempdir();
@@ -52,37 +86,22 @@ fn spilling_does_not_change_the_map() {
 #[test]
 fn overfull_tiles_are_split_deterministically() {
     use littoral::progress::Silent;
-    use littoral::store::{MapFile, MapWriter, Partition, PhotonSource, StagedPhoton, WriterPlan};
+    use littoral::store::{MapFile, PhotonSource, StagedPhoton, WriterPlan};
     let dir = tempdir();
     let src = source(120_000, 16, 11, Distribution::Water);
     let mut staged: Vec<StagedPhoton> = Vec::new();
     src.generate(0..120_000, &mut staged);
-    let write = |name: &str, budget: u64, threads: usize, photons: &[StagedPhoton]| {
+    // The small budget encodes one tile at a time, the large two.
+    for (budget, threads) in [(14 * MIB, 1), (512 * MIB, 2)] {
         let plan = WriterPlan::new(budget, 120_000)
             .unwrap()
             .with_tile_photons(3_000)
             .with_threads(threads);
-        // The small budget encodes one tile at a time, the large two.
         assert_eq!(plan.encode_width(), threads);
-        let path = dir.path().join(name);
-        let mut w = MapWriter::create(
-            &path,
-            plan,
-            Partition::single(),
-            src.bands(),
-            src.bounds(),
-            src.provenance(),
-        )
-        .unwrap();
-        for batch in photons.chunks(5_000) {
-            w.push(batch).unwrap();
-        }
-        let summary = w.finish(b"{}", &Silent).unwrap();
-        (path, summary)
-    };
-    let (a, sa) = write("a.map", 14 * MIB, 1, &staged);
+    }
+    let (a, sa) = write_single_cell(dir.path(), "a.map", &src, &staged, 14 * MIB, 1);
     staged.reverse();
-    let (b, sb) = write("b.map", 512 * MIB, 2, &staged);
+    let (b, sb) = write_single_cell(dir.path(), "b.map", &src, &staged, 512 * MIB, 2);
     // Three non-empty cells (volume down and up, surface layer); each split
     // adds a tile.
     assert_eq!(sa.splits + 3, sa.tiles, "{sa:?}");
@@ -107,31 +126,13 @@ fn overfull_tiles_are_split_deterministically() {
 /// ones fit); at 1 GiB nothing spills. The maps match byte for byte.
 #[test]
 fn splitting_spilled_cells_from_memory_or_scratch_gives_the_same_map() {
-    use littoral::progress::Silent;
-    use littoral::store::{MapWriter, Partition, PhotonSource, StagedPhoton, WriterPlan};
+    use littoral::store::{PhotonSource, StagedPhoton};
     let dir = tempdir();
     let n = 600_000;
     let src = source(n, 16, 17, Distribution::Water);
     let mut staged: Vec<StagedPhoton> = Vec::new();
     src.generate(0..n, &mut staged);
-    let write = |name: &str, budget: u64| {
-        let plan = WriterPlan::new(budget, n).unwrap().with_tile_photons(3_000);
-        let path = dir.path().join(name);
-        let mut w = MapWriter::create(
-            &path,
-            plan,
-            Partition::single(),
-            src.bands(),
-            src.bounds(),
-            src.provenance(),
-        )
-        .unwrap();
-        for batch in staged.chunks(10_000) {
-            w.push(batch).unwrap();
-        }
-        let summary = w.finish(b"{}", &Silent).unwrap();
-        (path, summary)
-    };
+    let write = |name: &str, budget| write_single_cell(dir.path(), name, &src, &staged, budget, 1);
     let (whole, s_whole) = write("whole.map", 1024 * MIB);
     assert_eq!(s_whole.spilled_frames, 0, "{s_whole:?}");
     assert!(s_whole.splits >= 100, "{s_whole:?}");
