@@ -104,6 +104,13 @@ impl CellBuf {
         }
     }
 
+    /// What this cell's spilled photons are charged in the fetch share
+    /// when read back, at [`FETCH_BYTES_PER_PHOTON`].
+    fn fetch_bytes(&self) -> u64 {
+        let buffered: usize = self.chunks.iter().map(Vec::len).sum();
+        (self.count - buffered as u64) * FETCH_BYTES_PER_PHOTON
+    }
+
     fn new() -> Self {
         CellBuf {
             chunks: Vec::new(),
@@ -553,8 +560,7 @@ impl MapWriter {
                     // reads held in the fetch share, when it fits there
                     // beside the cells in flight (waiting for them if need
                     // be), else from the scratch file each time.
-                    let buffered: usize = cell.chunks.iter().map(Vec::len).sum();
-                    let need = (cell.count - buffered as u64) * FETCH_BYTES_PER_PHOTON;
+                    let need = cell.fetch_bytes();
                     let fetched = if need > 0 && need <= fetch_share {
                         while tiles.fetch_bytes > 0 && tiles.fetch_bytes + need > fetch_share {
                             tiles.receive(self, progress)?;
@@ -573,9 +579,8 @@ impl MapWriter {
                 }
                 // Room for one more cell in flight first, and for its
                 // frames in the fetch share (or nothing else is read).
+                let spilled = cell.fetch_bytes();
                 let chunks = std::mem::take(&mut cell.chunks);
-                let buffered: usize = chunks.iter().map(Vec::len).sum();
-                let spilled = (cell.count - buffered as u64) * FETCH_BYTES_PER_PHOTON;
                 // A tile counts until it is appended: one finished early
                 // waits in order behind the cells still being read.
                 while tiles.sent - tiles.entries.len() as u32 >= tiles.width as u32
