@@ -24,8 +24,15 @@ use std::path::Path;
 pub const BATCH_INDICES: u64 = 4096;
 /// Batches that may wait in the channel.
 const CHANNEL_BATCHES: usize = 4;
-/// Source indices sampled to build the partition.
+/// Fewest source indices sampled to build the partition.
 const PILOT_INDICES: u64 = 32_768;
+/// Pilot positions wanted per partition cell. A cell holds the photons of
+/// the space around its share of pilot positions, so its count scatters
+/// about the target tile by about one over the square root of that share:
+/// at three (the 10^9-photon built-in scene with [`PILOT_INDICES`] alone),
+/// 997 of its 18 500 cells a layer outgrew two tiles and were split at the
+/// end; at 16 the chance a cell holds twice its expectation is below 1 %.
+pub const PILOT_PER_CELL: u64 = 16;
 
 /// Anything that produces photons for a map from numbered source indices.
 ///
@@ -83,9 +90,11 @@ impl BuildOptions {
 /// The pilot sample of a source: the positions of the photons stored by
 /// evenly strided source indices, and how many indices it traced. It fixes
 /// the partition and the expected number of stored photons; a probe of the
-/// first indices sizes it so the pilot's positions take at most an eighth
-/// of the budget. A pure function of the source and the budget, so every
-/// shard of a sharded emission computes the same one.
+/// first indices sizes it: at least [`PILOT_INDICES`], enough for
+/// [`PILOT_PER_CELL`] positions in each cell of the writer's partition,
+/// and at most an eighth of the budget in positions. A pure function of
+/// the source, the budget and the tile size, so every shard of a sharded
+/// emission computes the same one.
 pub struct Pilot {
     pub positions: Vec<Vec3>,
     /// Source indices traced for it.
@@ -100,8 +109,18 @@ impl Pilot {
         source.sample(0..probe, &mut staged);
         let per_index = (staged.len() as f64 / probe.max(1) as f64).max(1.0 / 64.0);
         let cap = (options.mem_budget / 8 / std::mem::size_of::<Vec3>() as u64) as f64;
+        // The writer's cells for the probe's estimate of the stored photons
+        // (none when the budget is too small to write: the writer says so).
+        let expected = (per_index * n as f64) as u64;
+        let cells = WriterPlan::new(options.mem_budget, expected)
+            .map(|plan| match options.tile_photons {
+                Some(t) => plan.with_tile_photons(t),
+                None => plan,
+            })
+            .map_or(0, |plan| plan.cells_for(expected) as u64);
+        let wanted = ((cells * PILOT_PER_CELL) as f64 / per_index).ceil() as u64;
         let pilot_n = n
-            .min(PILOT_INDICES)
+            .min(PILOT_INDICES.max(wanted))
             .min((cap / per_index) as u64)
             .max(probe.min(n));
         // Trace the pilot in parallel: for an emitter it is real transport work.

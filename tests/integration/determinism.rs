@@ -118,6 +118,71 @@ fn overfull_tiles_are_split_deterministically() {
     map.verify(&Silent).unwrap();
 }
 
+/// All of a uniform synthetic source's photons in one layer, travelling
+/// down: a layer's cells then hold the whole of their share of the map, as
+/// the built-in scene's downward volume layer nearly does.
+struct OneLayer(littoral::synth::SynthSource);
+
+impl littoral::store::PhotonSource for OneLayer {
+    fn indices(&self) -> u64 {
+        self.0.indices()
+    }
+    fn generate(&self, range: std::ops::Range<u64>, out: &mut Vec<littoral::store::StagedPhoton>) {
+        for i in range {
+            let mut photon = self.0.photon_and_layer(i).0;
+            photon.direction.z = -photon.direction.z.abs();
+            out.push(littoral::store::StagedPhoton::new(
+                &photon,
+                littoral::photon::LAYER_VOLUME,
+            ));
+        }
+    }
+    fn bands(&self) -> littoral::spectral::BandGrid {
+        self.0.bands()
+    }
+    fn bounds(&self) -> littoral::bounds::Aabb {
+        self.0.bounds()
+    }
+}
+
+/// The pilot sample scales with the partition: with a fixed 32 768 pilot
+/// photons, 2 M photons in cells of 256 would have about four pilot
+/// positions a cell, a cell's photon count would scatter by half its
+/// target, and about 5 % of the cells (P(Poisson(8.4) <= 4)) would outgrow
+/// the split threshold of twice the target and be split at the end (289
+/// of 7 813 when tried). With [`PILOT_PER_CELL`] positions a cell the
+/// expectation is 0.1 % (P(Poisson(32) <= 15)), about 9 cells (3 when
+/// tried): at most 1 % is asserted.
+#[test]
+fn the_pilot_gives_each_cell_enough_positions_that_few_overflow() {
+    use littoral::store::build::{Pilot, PILOT_PER_CELL};
+    use littoral::store::BuildOptions;
+    let dir = tempdir();
+    let photons = 2_000_000;
+    let src = OneLayer(source(photons, 8, 5, Distribution::Uniform));
+    let options = BuildOptions {
+        threads: 2,
+        mem_budget: 256 * MIB,
+        tile_photons: Some(256),
+    };
+    let cells = photons.div_ceil(256);
+    let pilot = Pilot::trace(&src, &options).unwrap();
+    assert!(
+        pilot.positions.len() as u64 >= cells * PILOT_PER_CELL,
+        "{} pilot positions for {cells} cells",
+        pilot.positions.len()
+    );
+    let path = dir.path().join("fine.map");
+    let summary =
+        littoral::store::build_map(&path, &src, &options, &littoral::progress::Silent).unwrap();
+    assert_eq!(summary.photons, photons);
+    assert!(
+        (summary.splits as u64) * 100 <= cells,
+        "{} of {cells} cells split",
+        summary.splits
+    );
+}
+
 /// An overfull cell that spilled is split from one read of its frames held
 /// in the fetch share when they fit there, else by reading them from the
 /// scratch file for each pass. One cell of 600 k photons with 3 000-photon

@@ -64,8 +64,11 @@ pub struct WriterPlan {
     /// ahead of their encoding, where the encode share leaves too little
     /// room for them ([`WriterPlan::fetch_bytes`]).
     pub fetch_reserve: u64,
-    /// Records per buffer chunk.
+    /// Records per buffer chunk ([`chunk_records`]).
     pub chunk_records: usize,
+    /// The photons the plan expects (the partition's cells are these over
+    /// the target tile).
+    pub expected_photons: u64,
     /// Threads that may encode tiles at once at the end (0 = one per
     /// core); how many do is bounded by the encode share too
     /// ([`WriterPlan::encode_width`]).
@@ -99,11 +102,7 @@ impl WriterPlan {
         let fetch_reserve = (rest / 16).saturating_sub(merge.saturating_sub(tile_bytes));
         let buffer_bytes = rest - merge - fetch_reserve;
         let cells = expected_photons.div_ceil(target as u64).max(1);
-        // At least 8 chunks per cell fit in the buffers, so spills are
-        // sizeable, and no cell holds much unused capacity: with 10^5 cells
-        // (10^9 photons) chunks of 256 records filled the buffers with
-        // mostly empty chunks, and spills wrote frames of a few dozen photons.
-        let chunk_records = ((buffer_bytes / cells / 8) as usize / STAGED).clamp(32, 4096);
+        let chunk_records = chunk_records(buffer_bytes, cells);
         Ok(WriterPlan {
             budget,
             target_tile_photons: target,
@@ -112,6 +111,7 @@ impl WriterPlan {
             buffer_bytes,
             fetch_reserve,
             chunk_records,
+            expected_photons,
             threads: 1,
         })
     }
@@ -174,6 +174,10 @@ impl WriterPlan {
     pub fn with_tile_photons(mut self, photons: u32) -> Self {
         self.target_tile_photons = photons.clamp(1, self.max_tile_photons / 2);
         self.split_threshold = (2 * self.target_tile_photons).min(self.max_tile_photons);
+        self.chunk_records = chunk_records(
+            self.buffer_bytes,
+            self.cells_for(self.expected_photons) as u64,
+        );
         self
     }
 
@@ -182,5 +186,37 @@ impl WriterPlan {
         expected_photons
             .div_ceil(self.target_tile_photons as u64)
             .max(1) as usize
+    }
+}
+
+/// Records per buffer chunk for `cells` cells sharing `buffer_bytes`: at
+/// least 8 chunks per cell fit in the buffers, so spills are sizeable, and
+/// no cell holds much unused capacity: with 10^5 cells (10^9 photons)
+/// chunks of 256 records filled the buffers with mostly empty chunks, and
+/// spills wrote frames of a few dozen photons.
+fn chunk_records(buffer_bytes: u64, cells: u64) -> usize {
+    ((buffer_bytes / cells.max(1) / 8) as usize / STAGED).clamp(32, 4096)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plan aimed at tiles smaller than the default sizes its chunks for
+    /// the cells it will have: 8 chunks of every cell fit in the buffers.
+    /// (Chunks sized for the default tile's 31 cells, 4096 records each,
+    /// took 768 MB for 7 813 cells of 256 photons against a buffer share of
+    /// about 170 MB, and the writer spilled frames of one or two photons.)
+    #[test]
+    fn chunks_are_sized_for_the_cells_of_the_tile_size() {
+        let photons = 2_000_000;
+        let plan = WriterPlan::new(256 * MIB, photons).unwrap();
+        assert_eq!(plan.chunk_records, 4096);
+        let fine = plan.with_tile_photons(256);
+        let cells = fine.cells_for(photons) as u64;
+        assert_eq!(cells, 7813);
+        assert!(fine.chunk_records > 32);
+        assert!(8 * cells * (fine.chunk_records * STAGED) as u64 <= fine.buffer_bytes);
+        assert!(8 * cells * ((fine.chunk_records + 1) * STAGED) as u64 > fine.buffer_bytes);
     }
 }
