@@ -285,6 +285,10 @@ impl MajorantGrid {
             let exit = exit.max(t);
             let seg = exit.min(t_max) - t;
             if tau < m * seg {
+                // The collision test reads the cell's bounds next, after the
+                // geometry's own work: ask for their line now (it was a
+                // cache miss in 1.5 % of emission's samples).
+                crate::store::prefetch(self.bounds.as_ptr().wrapping_add(band * self.cells + cell));
                 return Some((t + tau / m, cell));
             }
             if exit >= t_max {
