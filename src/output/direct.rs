@@ -133,6 +133,9 @@ pub fn read_blocks<'b>(
     let skip = (offset - first) as usize;
     let span = (skip + len).next_multiple_of(DIRECT_ALIGN);
     if buf.len() < span + DIRECT_ALIGN {
+        // Exactly what is asked for: callers charge their buffers at a
+        // bound, and doubling would pass it.
+        buf.reserve_exact(span + DIRECT_ALIGN - buf.len());
         buf.resize(span + DIRECT_ALIGN, 0);
     }
     let at = buf.as_ptr().align_offset(DIRECT_ALIGN).min(DIRECT_ALIGN);

@@ -130,7 +130,7 @@ impl Pilot {
             (0..pilot_n)
                 .into_par_iter()
                 .map_init(Vec::new, |buf, j| {
-                    let i = j * n / pilot_n.max(1);
+                    let i = (j as u128 * n as u128 / pilot_n.max(1) as u128) as u64;
                     buf.clear();
                     source.sample(i..i + 1, buf);
                     buf.iter().map(|p| p.pos()).collect::<Vec<Vec3>>()

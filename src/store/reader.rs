@@ -64,7 +64,7 @@ impl MapFile {
         if bytes.len() as u64 != len {
             return Err(Error::format(path, "file changed size while opening"));
         }
-        if bytes[..8] == super::shard::SHARD_MAGIC[..] {
+        if super::shard::is_shard_magic(&bytes[..8]) {
             return Err(Error::format(
                 path,
                 "this is one shard of a sharded emission, not a map: merge the shards with `littoral map merge`",

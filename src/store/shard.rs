@@ -36,10 +36,18 @@ use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-/// First bytes of a shard file.
-/// (`LTSHARD1` files held zstd over 32-byte records with an id; they are
-/// refused with a message saying so.)
-pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD2";
+/// First bytes of a shard file. `LTSHARD3` frames may hold their byte
+/// planes in one zstd frame (plane mode 1); `LTSHARD2` files, whose frames
+/// never do, are read as well. (`LTSHARD1` files held zstd over 32-byte
+/// records with an id; they are refused with a message saying so.)
+pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD3";
+/// The magic of shards whose frames store each plane apart.
+const SHARD_MAGIC_V2: &[u8; 8] = b"LTSHARD2";
+
+/// Whether `magic` opens a shard file this build reads.
+pub fn is_shard_magic(magic: &[u8]) -> bool {
+    magic == SHARD_MAGIC || magic == SHARD_MAGIC_V2
+}
 /// Last bytes of a complete shard file.
 const SHARD_END: &[u8; 8] = b"LTSHEND1";
 const TRAILER: u64 = 8 + 4 + 8;
@@ -276,7 +284,7 @@ impl ShardFile {
                 "a shard of an older littoral (32-byte records with ids): emit it again",
             ));
         }
-        if !read_magic || &magic != SHARD_MAGIC {
+        if !read_magic || !is_shard_magic(&magic) {
             return Err(bad("not a littoral shard file (or truncated)"));
         }
         let mut trailer = [0u8; TRAILER as usize];

@@ -701,6 +701,20 @@ fn read_raw<'b>(
         len: u32::from_le_bytes(link[8..12].try_into().unwrap()),
         count: u32::from_le_bytes(link[12..16].try_into().unwrap()),
     };
+    // The link is outside the body's CRC: a damaged one must not send a
+    // read far afield (a huge buffer), into a loop (a link to this frame
+    // or a later one) or quietly end the chain early.
+    let no_link = prev.offset == 0 && prev.len == 0 && prev.count == 0;
+    let sound = prev.count as usize <= FRAME_PHOTONS
+        && prev.len as usize <= MAX_FRAME_BYTES
+        && prev
+            .offset
+            .checked_add(prev.len as u64)
+            .is_some_and(|end| end <= f.offset)
+        && (prev.count > 0) == (prev.len > 0);
+    if !no_link && !sound {
+        return Err(corrupt(name, "spill frame link out of range"));
+    }
     Ok((&frame[FRAME_LINK..], (prev.count > 0).then_some(prev)))
 }
 

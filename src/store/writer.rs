@@ -503,6 +503,17 @@ impl MapWriter {
                             for chunk in job.chunks {
                                 staged.extend_from_slice(&chunk);
                             }
+                            if staged.len() != job.count {
+                                return Err(Error::tile(
+                                    &path,
+                                    job.index,
+                                    format!(
+                                        "read {} photons of a cell holding {} from the scratch file",
+                                        staged.len(),
+                                        job.count
+                                    ),
+                                ));
+                            }
                             encoder
                                 .encode(&staged)
                                 .map_err(|e| Error::tile(&path, job.index, e.to_string()))
@@ -744,6 +755,19 @@ impl MapWriter {
         let (kids, kid_bytes) = (split.kids, split.kid_bytes);
         let [left, right] = kids;
         self.buffered += kid_bytes[0] + kid_bytes[1];
+        if left.count + right.count != cell.count {
+            return Err(Error::io(
+                &self.path,
+                "split a cell",
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!(
+                        "{} photons came back from the scratch file as {} and {}",
+                        cell.count, left.count, right.count
+                    ),
+                ),
+            ));
+        }
         debug_assert!(left.count > 0 && right.count > 0);
         Ok((left, right))
     }

@@ -209,6 +209,50 @@ fn damaged_frames_are_errors_not_panics() {
     assert_eq!(buf.len(), 500);
 }
 
+/// A frame's link to the one before it lies outside the body's CRC: a
+/// damaged link (to the frame itself or past it, longer than any frame,
+/// more photons than a frame holds, or half zero) is an error naming the
+/// scratch file, not a loop, a huge read or a chain that quietly ends.
+#[test]
+fn damaged_links_are_errors() {
+    let bounds = scene_bounds();
+    let mut s = scratch(&bounds);
+    let grid = s.grid();
+    let first = s
+        .spill(photons(300, 3, Vec3::ZERO, 1.0, 0, &grid).iter(), None)
+        .unwrap();
+    let f = s
+        .spill(photons(300, 4, Vec3::ZERO, 1.0, 0, &grid).iter(), first)
+        .unwrap()
+        .unwrap();
+    s.readable(Some(f)).unwrap();
+    s.blocks.buffered(&s.file);
+    let mut buf = Vec::new();
+    let back = s.read(f, &mut buf).unwrap().unwrap();
+    assert_eq!((back.offset, back.count), (first.unwrap().offset, 300));
+    let mut link = [0u8; FRAME_LINK];
+    crate::output::read_exact_at(&s.file, &mut link, f.offset).unwrap();
+    let links: [(u64, u32, u32); 6] = [
+        (f.offset, f.len, 300),
+        (f.offset + 4096, 100, 300),
+        (0, u32::MAX, 300),
+        (0, back.len, FRAME_PHOTONS as u32 + 1),
+        (0, back.len, 0),
+        (0, 0, 300),
+    ];
+    for (offset, len, count) in links {
+        let mut bad = [0u8; FRAME_LINK];
+        bad[..8].copy_from_slice(&offset.to_le_bytes());
+        bad[8..12].copy_from_slice(&len.to_le_bytes());
+        bad[12..].copy_from_slice(&count.to_le_bytes());
+        crate::output::write_all_at(&s.file, &bad, f.offset).unwrap();
+        let e = s.read(f, &mut buf).unwrap_err().to_string();
+        assert!(e.contains("test scratch") && e.contains("link"), "{e}");
+    }
+    crate::output::write_all_at(&s.file, &link, f.offset).unwrap();
+    assert_eq!(s.read(f, &mut buf).unwrap().map(|p| p.count), Some(300));
+}
+
 /// Shard frames mix layers; the layer is a record field.
 #[test]
 fn a_frame_of_mixed_layers_round_trips() {

@@ -39,6 +39,14 @@ pub const MAX_FETCHERS: usize = 32;
 pub const FETCH_BUFFER_BYTES: u64 = 256 << 10;
 const _: () = assert!((MAX_FRAME_BYTES + 2 * 4096) as u64 <= FETCH_BUFFER_BYTES);
 
+/// Bytes each partition cell costs outside the buffers, whatever it
+/// holds, taken from the buffer share: per layer a cell buffer (about 80
+/// bytes: its chunk list, newest spilled frame, count and box), the spill
+/// thread's newest frame (24) and the spill's ranking of cells (16); the
+/// partition's node, link and lookup step and the header's copy of them
+/// (about 90); rounded up.
+pub const CELL_BYTES: u64 = 512;
+
 /// Smallest budget the writer accepts.
 pub const MIN_WRITER_BUDGET: u64 = 14 * MIB;
 
@@ -67,8 +75,13 @@ pub struct WriterPlan {
     /// Records per buffer chunk ([`chunk_records`]).
     pub chunk_records: usize,
     /// The photons the plan expects (the partition's cells are these over
-    /// the target tile).
+    /// the target tile, [`WriterPlan::cells_for`]).
     pub expected_photons: u64,
+    /// The most cells the partition may have: their bookkeeping
+    /// ([`CELL_BYTES`] each) takes at most half of the buffers. A finer
+    /// partition than that has fewer, larger cells, and tiles past the
+    /// split threshold are split at the end.
+    pub max_cells: u64,
     /// Threads that may encode tiles at once at the end (0 = one per
     /// core); how many do is bounded by the encode share too
     /// ([`WriterPlan::encode_width`]).
@@ -78,7 +91,8 @@ pub struct WriterPlan {
 impl WriterPlan {
     /// Divide `budget` bytes: a fixed reserve, a quarter of the rest for
     /// encoding one tile, the remainder for cell buffers (less a fetch
-    /// reserve at small budgets, [`WriterPlan::fetch_bytes`]). While
+    /// reserve at small budgets, [`WriterPlan::fetch_bytes`], and the
+    /// cells' bookkeeping, [`CELL_BYTES`] each). While
     /// photons arrive the encode share is headroom for routing during a
     /// spill.
     pub fn new(budget: u64, expected_photons: u64) -> Result<Self> {
@@ -100,8 +114,10 @@ impl WriterPlan {
         // the rest is set aside for them.
         let tile_bytes = (2 * target).min(max_tile) as u64 * ENCODE_BYTES_PER_PHOTON as u64;
         let fetch_reserve = (rest / 16).saturating_sub(merge.saturating_sub(tile_bytes));
-        let buffer_bytes = rest - merge - fetch_reserve;
-        let cells = expected_photons.div_ceil(target as u64).max(1);
+        let buffers = rest - merge - fetch_reserve;
+        let max_cells = (buffers / 2 / CELL_BYTES).max(1);
+        let cells = expected_photons.div_ceil(target as u64).clamp(1, max_cells);
+        let buffer_bytes = buffers - cells * CELL_BYTES;
         let chunk_records = chunk_records(buffer_bytes, cells);
         Ok(WriterPlan {
             budget,
@@ -112,6 +128,7 @@ impl WriterPlan {
             fetch_reserve,
             chunk_records,
             expected_photons,
+            max_cells,
             threads: 1,
         })
     }
@@ -172,20 +189,21 @@ impl WriterPlan {
 
     /// Aim for `photons` per tile (at least 1, at most what the encode share allows).
     pub fn with_tile_photons(mut self, photons: u32) -> Self {
+        let buffers = self.buffer_bytes + self.cells_for(self.expected_photons) as u64 * CELL_BYTES;
         self.target_tile_photons = photons.clamp(1, self.max_tile_photons / 2);
         self.split_threshold = (2 * self.target_tile_photons).min(self.max_tile_photons);
-        self.chunk_records = chunk_records(
-            self.buffer_bytes,
-            self.cells_for(self.expected_photons) as u64,
-        );
+        let cells = self.cells_for(self.expected_photons) as u64;
+        self.buffer_bytes = buffers - cells * CELL_BYTES;
+        self.chunk_records = chunk_records(self.buffer_bytes, cells);
         self
     }
 
-    /// Number of partition cells for `expected_photons`.
+    /// Number of partition cells for `expected_photons`: one per target
+    /// tile, at most [`WriterPlan::max_cells`].
     pub fn cells_for(&self, expected_photons: u64) -> usize {
         expected_photons
             .div_ceil(self.target_tile_photons as u64)
-            .max(1) as usize
+            .clamp(1, self.max_cells) as usize
     }
 }
 
@@ -218,5 +236,43 @@ mod tests {
         assert!(fine.chunk_records > 32);
         assert!(8 * cells * (fine.chunk_records * STAGED) as u64 <= fine.buffer_bytes);
         assert!(8 * cells * ((fine.chunk_records + 1) * STAGED) as u64 > fine.buffer_bytes);
+        // The cells' bookkeeping came out of the buffers, the same either way.
+        let whole = |p: &WriterPlan| p.buffer_bytes + p.cells_for(photons) as u64 * CELL_BYTES;
+        assert_eq!(whole(&plan), whole(&fine));
+        assert_eq!(plan.buffer_bytes + 31 * CELL_BYTES, whole(&plan));
+    }
+
+    /// Cells' bookkeeping takes at most half the buffers: at the smallest
+    /// budget, 10^9 photons in tiles of 256 would be 3.9 M cells (2 GB of
+    /// bookkeeping against a 14 MiB budget); the partition is coarser
+    /// instead, and the budget's shares still add up to it.
+    #[test]
+    fn cells_are_as_many_as_the_buffers_can_keep() {
+        let photons = 1_000_000_000;
+        for plan in [
+            WriterPlan::new(MIN_WRITER_BUDGET, photons).unwrap(),
+            WriterPlan::new(MIN_WRITER_BUDGET, photons)
+                .unwrap()
+                .with_tile_photons(256),
+            WriterPlan::new(256 * MIB, photons)
+                .unwrap()
+                .with_tile_photons(1),
+        ] {
+            let cells = plan.cells_for(photons) as u64;
+            assert_eq!(cells, plan.max_cells, "{plan:?}");
+            assert!(cells * CELL_BYTES <= plan.buffer_bytes, "{plan:?}");
+            let merge = (plan.budget - WRITER_FIXED_BYTES) / 4;
+            assert_eq!(
+                WRITER_FIXED_BYTES
+                    + merge
+                    + plan.fetch_reserve
+                    + plan.buffer_bytes
+                    + cells * CELL_BYTES,
+                plan.budget
+            );
+        }
+        // At the default tile and 256 MiB, 10^9 photons keep one cell a tile.
+        let plan = WriterPlan::new(256 * MIB, photons).unwrap();
+        assert_eq!(plan.cells_for(photons) as u64, photons.div_ceil(65_536));
     }
 }
