@@ -59,6 +59,15 @@ const MIB: u64 = 1 << 20;
 const ROUTE_BLOCK: usize = 64;
 const STAGED: usize = std::mem::size_of::<StagedPhoton>();
 
+/// Cells in flight at the end, per fetcher and encoder thread. Tiles are
+/// appended in cell order, so the oldest cell in flight holds back the
+/// rest; a cell whose chain of spilled frames is long (hundreds of reads
+/// at 10^9 photons) would otherwise stop the dispatch of further cells
+/// while the fetchers idle. What cells in flight hold is bounded apart:
+/// their fetched frames and finished tiles by the fetch share, their
+/// buffered chunks by the buffer share they came from.
+const CELLS_IN_FLIGHT_PER_THREAD: usize = 4;
+
 /// What a finished map holds and what writing it took.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct WriteSummary {
@@ -526,7 +535,7 @@ impl MapWriter {
             }
             drop((fetch_rx, work_rx, done_tx));
             let mut tiles = TileQueue {
-                width: width + fetch_threads,
+                width: CELLS_IN_FLIGHT_PER_THREAD * (width + fetch_threads),
                 done: done_rx,
                 sent: 0,
                 received: 0,
