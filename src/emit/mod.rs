@@ -347,10 +347,15 @@ pub fn emit_shard(
         photons: 0,
         stream_bytes: 0,
         stream_crc32: 0,
-        payload: serde_json::to_value(&payload)
-            .map_err(|e| crate::Error::invalid("shard payload", e.to_string()))?,
+        payload: shard_payload(&payload)?,
     };
     writer.finish(header)
+}
+
+/// The JSON text of a shard's payload.
+fn shard_payload(payload: &ShardEmission) -> Result<Box<serde_json::value::RawValue>> {
+    serde_json::value::to_raw_value(payload)
+        .map_err(|e| crate::Error::invalid("shard payload", e.to_string()))
 }
 
 /// Merge the shard files of one sharded emission into the map at `out`:
@@ -365,16 +370,11 @@ pub fn merge_shards(
     progress: &dyn Progress,
 ) -> Result<Emission> {
     use crate::store::shard::{shard_range, ShardFile};
-    let mut shards = paths
-        .iter()
-        .map(|p| ShardFile::open(p))
-        .collect::<Result<Vec<_>>>()?;
-    let Some(first) = shards.first() else {
+    let Some(first_path) = paths.first() else {
         return Err(crate::Error::invalid("map merge", "no shard files given"));
     };
-    let n = first.header().shards;
-    let head = first.header().clone();
-    let first_path = first.path().to_path_buf();
+    let head = ShardFile::open(first_path)?.header().clone();
+    let n = head.shards;
     let mismatch = |s: &ShardFile, what: &str| {
         crate::Error::data(
             s.path(),
@@ -386,17 +386,23 @@ pub fn merge_shards(
             ),
         )
     };
-    for s in &shards {
+    // Each shard is checked against the first as it is opened, and only
+    // the first's pilot is kept.
+    let mut shards = Vec::with_capacity(paths.len());
+    let mut totals: Option<Totals> = None;
+    let mut inputs = None;
+    for path in paths {
+        let mut s = ShardFile::open(path)?;
         let h = s.header();
         if h.shards != n {
-            return Err(mismatch(s, "the shard count"));
+            return Err(mismatch(&s, "the shard count"));
         }
         if h.provenance_digest != head.provenance_digest || h.total_indices != head.total_indices {
-            return Err(mismatch(s, "the scene (provenance)"));
+            return Err(mismatch(&s, "the scene (provenance)"));
         }
         if h.pilot_indices != head.pilot_indices || h.pilot != head.pilot {
             return Err(mismatch(
-                s,
+                &s,
                 "the pilot sample (was it emitted with another --mem-budget?)",
             ));
         }
@@ -411,6 +417,29 @@ pub fn merge_shards(
                 "its index range does not match its shard number",
             ));
         }
+        let payload: ShardEmission =
+            serde_json::from_str(s.header().payload.get()).map_err(|e| {
+                crate::Error::data(
+                    s.path(),
+                    None,
+                    "shard",
+                    format!("not an emission shard: {e}"),
+                )
+            })?;
+        // The report from the summed fixed-point totals: the same numbers
+        // a single run's totals give, in any order.
+        match &mut totals {
+            None => totals = Some(payload.totals),
+            Some(t) => {
+                if t.bands != payload.totals.bands || t.depths != payload.totals.depths {
+                    return Err(mismatch(&s, "the tallies' shape"));
+                }
+                t.merge(&payload.totals)
+            }
+        }
+        inputs.get_or_insert(payload.report_inputs);
+        s.trim();
+        shards.push(s);
     }
     shards.sort_by_key(|s| s.header().shard);
     if let Some(w) = shards
@@ -447,43 +476,24 @@ pub fn merge_shards(
             format!("{} shard files given, the emission has {n}", shards.len()),
         ));
     }
-    // The report from the summed fixed-point totals: the same numbers a
-    // single run's totals give.
-    let mut totals: Option<Totals> = None;
-    let mut inputs = None;
-    for s in &shards {
-        let p: ShardEmission = serde_json::from_value(s.header().payload.clone()).map_err(|e| {
-            crate::Error::data(
-                s.path(),
-                None,
-                "shard",
-                format!("not an emission shard: {e}"),
-            )
-        })?;
-        match &mut totals {
-            None => totals = Some(p.totals),
-            Some(t) => {
-                if t.bands != p.totals.bands || t.depths != p.totals.depths {
-                    return Err(mismatch(s, "the tallies' shape"));
-                }
-                t.merge(&p.totals)
-            }
-        }
-        inputs.get_or_insert(p.report_inputs);
-    }
     let (totals, inputs) = (totals.expect("one shard"), inputs.expect("one shard"));
     let report = report::EmissionReport::from_inputs(&inputs, &totals);
     let metadata = serde_json::to_vec(&report).expect("the report serialises");
-    let description = head.description(&first_path)?;
-    let mut iters = Vec::with_capacity(shards.len());
-    for s in &shards {
-        iters.push(s.batches()?);
-    }
-    let mut batches = iters.into_iter().flatten().inspect(|b| {
-        if let Ok(b) = b {
-            progress.advance(b.len() as u64);
-        }
-    });
+    let description = head.description(first_path)?;
+    // One shard open at a time.
+    let mut batches = shards
+        .iter()
+        .flat_map(|s| -> Box<dyn Iterator<Item = Result<Vec<StagedPhoton>>>> {
+            match s.batches() {
+                Ok(b) => Box::new(b),
+                Err(e) => Box::new(std::iter::once(Err(e))),
+            }
+        })
+        .inspect(|b| {
+            if let Ok(b) = b {
+                progress.advance(b.len() as u64);
+            }
+        });
     let map = crate::store::build::build_map_from_batches(
         out,
         &description,

@@ -17,3 +17,25 @@ fn guided_pick_equals_the_binary_search() {
         assert_eq!(e.pick(u), search(u), "u {u}");
     }
 }
+
+/// A shard's payload carries the tallies' 128-bit fixed-point sums whole:
+/// sums of squares past 2^63 (a shard of 10^8 photons a band) survive the
+/// shard header's JSON, where `serde_json::Value` refused them.
+#[test]
+fn shard_payloads_carry_sums_past_64_bits() {
+    let scene = Scene::coastal(&Default::default()).unwrap();
+    let e = Emitter::new(&scene).unwrap();
+    let mut totals = Totals::new(scene.bands.len(), scene.tally_depths.len());
+    totals.sum[0] = i128::MAX / 3;
+    totals.sum_sq[1] = (i64::MAX as i128) * 1000 + 7;
+    totals.sum[2] = i128::MIN / 5;
+    let payload = ShardEmission {
+        totals: totals.clone(),
+        report_inputs: report::ReportInputs::new(&scene, &e.photon_power),
+    };
+    assert!(serde_json::to_value(&payload).is_err());
+    let raw = shard_payload(&payload).unwrap();
+    let back: ShardEmission = serde_json::from_str(raw.get()).unwrap();
+    assert_eq!(back.totals, totals);
+    assert_eq!(back.report_inputs, payload.report_inputs);
+}

@@ -65,9 +65,22 @@ pub struct PartManifest {
     pub radiometers: Option<Vec<RadiometerReading>>,
 }
 
-/// The digest parts of one render agree on.
-fn scene_digest(origin: &SceneOrigin) -> Result<String> {
-    let json = serde_json::to_vec(origin).map_err(|e| Error::invalid("scene", e.to_string()))?;
+/// The digest parts of one render agree on, and finished tiles are
+/// stamped with: the scene's text, path and overrides, the bytes of every
+/// file it reads (through the emission's provenance, which hashes them),
+/// and the build. A tile finished before a geometry or table file changed,
+/// or by another version of littoral, is not taken up by `--resume` or
+/// `assemble`.
+fn scene_digest(scene: &Scene) -> Result<String> {
+    let origin = &scene.origin;
+    let mut json =
+        serde_json::to_vec(origin).map_err(|e| Error::invalid("scene", e.to_string()))?;
+    json.extend_from_slice(
+        crate::emit::emission_provenance(scene)?
+            .digest_hex()
+            .as_bytes(),
+    );
+    json.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
     Ok(crate::provenance::sha256_hex(&json))
 }
 
@@ -201,7 +214,7 @@ impl RenderPartJob<'_> {
                 format!("{part}/{parts}: give I/N with 0 <= I < N"),
             ));
         }
-        let digest = scene_digest(&scene.origin)?;
+        let digest = scene_digest(scene)?;
         let job = RenderJob {
             scene,
             out_dir: self.part_dir.clone(),
@@ -354,6 +367,10 @@ pub fn read_manifest(part_dir: &Path) -> Result<PartManifest> {
     })
 }
 
+/// Parts of a render a manifest may claim beyond the directories given
+/// (they are listed as missing); more is a damaged manifest.
+const MAX_MISSING_LISTED: u64 = 1 << 16;
+
 /// Assemble the parts of one render into `out_dir`: the files a whole
 /// render writes, the cubes byte-identical to its.
 pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result<RunReport> {
@@ -366,6 +383,25 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
         return Err(Error::invalid("assemble", "no part directories given"));
     };
     for (dir, m) in &parts {
+        let damaged = if m.part >= m.parts {
+            Some(format!("part {} of {}: past the count", m.part, m.parts))
+        } else if m.parts > part_dirs.len() as u64 + MAX_MISSING_LISTED {
+            Some(format!(
+                "{} parts, against the {} directories given",
+                m.parts,
+                part_dirs.len()
+            ))
+        } else {
+            None
+        };
+        if let Some(what) = damaged {
+            return Err(Error::data(
+                dir.join(MANIFEST),
+                None,
+                "part",
+                format!("a damaged part manifest: {what}"),
+            ));
+        }
         if m.scene_digest != first.scene_digest || m.parts != first.parts {
             return Err(Error::data(
                 dir.join(MANIFEST),
@@ -400,7 +436,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
         ));
     }
     let scene = first.origin.build()?;
-    if scene_digest(&scene.origin)? != first.scene_digest {
+    if scene_digest(&scene)? != first.scene_digest {
         return Err(Error::invalid(
             "assemble",
             "the scene does not build as it did",

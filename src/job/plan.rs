@@ -245,7 +245,13 @@ impl Plan<'_> {
                 .as_ref()
                 .map(|p| format!(" --dependency=afterok:\"${p}\" --kill-on-invalid-dep=yes"))
                 .unwrap_or_default();
-            let wait = if last { " \"${wait_flag[@]}\"" } else { "" };
+            // `${a[@]+"${a[@]}"}`: an empty array under `set -u` is an
+            // unbound variable to bash 4.3 and older.
+            let wait = if last {
+                " ${wait_flag[@]+\"${wait_flag[@]}\"}"
+            } else {
+                ""
+            };
             submit += &format!("{stage}=$(sbatch --parsable{dep}{wait} {stage}.sbatch)\n");
             prev = Some(stage.to_string());
         }

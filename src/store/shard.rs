@@ -55,7 +55,7 @@ const TRAILER: u64 = 8 + 4 + 8;
 const FRAME_HEAD: usize = 8;
 
 /// Everything in a shard but its photons.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ShardHeader {
     /// This shard's number, 0-based, of `shards`.
     pub shard: u64,
@@ -79,8 +79,10 @@ pub struct ShardHeader {
     pub stream_bytes: u64,
     pub stream_crc32: u32,
     /// What the producer needs to finish the merge (an emission: totals
-    /// and report inputs).
-    pub payload: serde_json::Value,
+    /// and report inputs), as its JSON text: written and read without
+    /// `serde_json::Value`, whose numbers stop at 64 bits, so the tallies'
+    /// 128-bit fixed-point sums of a large shard fit.
+    pub payload: Box<serde_json::value::RawValue>,
 }
 
 impl ShardHeader {
@@ -301,7 +303,12 @@ impl ShardFile {
         if json_len > len - 8 - TRAILER {
             return Err(bad("corrupt shard trailer (header length)"));
         }
-        let mut json = vec![0u8; json_len as usize];
+        // The length is outside the CRC: a damaged one the size of the
+        // file must be an error, not an allocation that aborts.
+        let mut json = Vec::new();
+        json.try_reserve_exact(json_len as usize)
+            .map_err(|_| bad("corrupt shard trailer (header length beyond memory)"))?;
+        json.resize(json_len as usize, 0);
         f.seek(SeekFrom::Start(len - TRAILER - json_len))
             .and_then(|_| f.read_exact(&mut json))
             .map_err(|e| Error::io(path, "read", e))?;
@@ -323,6 +330,15 @@ impl ShardFile {
 
     pub fn header(&self) -> &ShardHeader {
         &self.header
+    }
+
+    /// Let go of the header's bulk once it has been checked and read (the
+    /// pilot sample, up to an eighth of the budget, and the payload): a
+    /// merge of many shards keeps one pilot, not one a shard.
+    pub fn trim(&mut self) {
+        self.header.pilot = Vec::new();
+        self.header.payload =
+            serde_json::value::RawValue::from_string("null".to_string()).expect("null is JSON");
     }
 
     pub fn path(&self) -> &Path {

@@ -407,6 +407,60 @@ fn a_resumed_render_is_the_uninterrupted_one() {
     assert!(!parts.exists(), "the parts directory is removed");
 }
 
+/// Finished tiles are stamped with the scene and the bytes of the files it
+/// reads: after the floor's reflectance file changes, a part render with
+/// the same command line renders every tile again instead of keeping the
+/// old ones (each tile's stamp is new).
+#[test]
+fn tiles_are_not_kept_when_a_file_the_scene_reads_changed() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    let floor = dir.path().join("floor.csv");
+    std::fs::write(&floor, "nm,reflectance\n400,0.2\n700,0.3\n").unwrap();
+    std::fs::write(
+        &scene,
+        render_scene().replace("reflectance = \"sand\"", "reflectance = \"floor.csv\""),
+    )
+    .unwrap();
+    let part = dir.path().join("part");
+    let render = || {
+        ok(littoral(&[
+            "render",
+            p(&scene),
+            "--tiles",
+            "0/1",
+            "--map",
+            p(&dir.path().join("m.map")),
+            "--out",
+            p(&part),
+            "--quiet",
+        ]))
+    };
+    let stamps = || -> Vec<Vec<u8>> {
+        let mut tiles: Vec<PathBuf> = std::fs::read_dir(part.join("tiles"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        tiles.sort();
+        tiles
+            .iter()
+            .map(|t| std::fs::read(t).unwrap()[..80].to_vec())
+            .collect()
+    };
+    render();
+    let before = stamps();
+    render();
+    assert_eq!(stamps(), before, "unchanged inputs keep the tiles");
+    std::fs::write(&floor, "nm,reflectance\n400,0.25\n700,0.3\n").unwrap();
+    render();
+    let after = stamps();
+    assert_eq!(after.len(), before.len());
+    assert!(
+        after.iter().zip(&before).all(|(a, b)| a != b),
+        "every tile is rendered again"
+    );
+}
+
 /// `littoral plan` writes the four batch scripts and submit.sh (two for
 /// the path integrator: no map to emit), each valid shell, with the array
 /// size, memory and the task id in the commands, chained by afterok.
