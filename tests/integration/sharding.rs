@@ -343,6 +343,17 @@ fn assembled_parts_are_the_whole_render_byte_for_byte() {
         &run_cube(&["assemble", p(&p0), p(&p2), "--out", p(&out)]),
         "parts missing: 1 of 3",
     );
+    // A manifest whose part number is past its count (damaged, or edited).
+    let manifest = p2.join("part.json");
+    let good = std::fs::read(&manifest).unwrap();
+    let mut m: serde_json::Value = serde_json::from_slice(&good).unwrap();
+    m["part"] = serde_json::json!(7);
+    std::fs::write(&manifest, serde_json::to_vec(&m).unwrap()).unwrap();
+    assert_clean_failure(
+        &run_cube(&["assemble", p(&p0), p(&part), p(&p2), "--out", p(&out)]),
+        "part 7 of 3",
+    );
+    std::fs::write(&manifest, good).unwrap();
     let mut bytes = std::fs::read(&tiles[0]).unwrap();
     let k = bytes.len() / 2;
     bytes[k] ^= 1;
