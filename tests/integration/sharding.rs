@@ -207,6 +207,22 @@ fn bad_shard_sets_are_refused_naming_the_file() {
     assert_eq!(e.status.code(), Some(2));
 }
 
+/// `littoral render SCENE --tiles TILES --map MAP --out OUT`, which must
+/// succeed.
+fn render_part(scene: &Path, tiles: &str, map: &Path, out: &Path) {
+    ok(littoral(&[
+        "render",
+        p(scene),
+        "--tiles",
+        tiles,
+        "--map",
+        p(map),
+        "--out",
+        p(out),
+        "--quiet",
+    ]));
+}
+
 /// The sharding scene with a small image (3 x 2 tiles of 16 px) and a
 /// radiometer.
 fn render_scene() -> String {
@@ -387,17 +403,7 @@ fn a_resumed_render_is_the_uninterrupted_one() {
     // What a killed --resume run leaves: some tiles, no part.json.
     let out = dir.path().join("resumed");
     let parts = out.join(".shards.parts");
-    ok(littoral(&[
-        "render",
-        p(&scene),
-        "--tiles",
-        "0/1",
-        "--map",
-        p(&parts.join("map.map")),
-        "--out",
-        p(&parts),
-        "--quiet",
-    ]));
+    render_part(&scene, "0/1", &parts.join("map.map"), &parts);
     std::fs::remove_file(parts.join("part.json")).unwrap();
     let tiles: Vec<PathBuf> = std::fs::read_dir(parts.join("tiles"))
         .unwrap()
@@ -434,19 +440,7 @@ fn tiles_are_not_kept_when_a_file_the_scene_reads_changed() {
     )
     .unwrap();
     let part = dir.path().join("part");
-    let render = || {
-        ok(littoral(&[
-            "render",
-            p(&scene),
-            "--tiles",
-            "0/1",
-            "--map",
-            p(&dir.path().join("m.map")),
-            "--out",
-            p(&part),
-            "--quiet",
-        ]))
-    };
+    let render = || render_part(&scene, "0/1", &dir.path().join("m.map"), &part);
     let stamps = || -> Vec<Vec<u8>> {
         let mut tiles: Vec<PathBuf> = std::fs::read_dir(part.join("tiles"))
             .unwrap()
