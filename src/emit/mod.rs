@@ -342,6 +342,7 @@ pub fn emit_shard(
         fwhm_nm: scene.bands.fwhm_nm().to_vec(),
         bounds_min: bounds.min.to_array(),
         bounds_max: bounds.max.to_array(),
+        mem_budget: options.mem_budget,
         pilot_indices: pilot.indices,
         pilot: pilot.positions.iter().map(|p| p.to_array()).collect(),
         photons: 0,

@@ -71,6 +71,11 @@ pub struct ShardHeader {
     pub fwhm_nm: Vec<f32>,
     pub bounds_min: [f32; 3],
     pub bounds_max: [f32; 3],
+    /// The `--mem-budget` the shard was emitted with (bytes; 0 in shards
+    /// that did not record it): the pilot depends on it, and a merge with
+    /// the same budget writes the single run's map.
+    #[serde(default)]
+    pub mem_budget: u64,
     /// The pilot: indices traced and the positions they stored.
     pub pilot_indices: u64,
     pub pilot: Vec<[f32; 3]>,

@@ -118,12 +118,17 @@ fn merged_shards_are_the_single_run_map_byte_for_byte() {
             bytes[..8].copy_from_slice(b"LTSHARD2");
             std::fs::write(part, bytes).unwrap();
         }
+        // Without --mem-budget the merge takes the shards' own.
         let again = sub.join("again.map");
+        let again_report = sub.join("again.json");
         let mut args = vec!["map", "merge"];
         args.extend(parts.iter().map(|x| p(x)));
-        args.extend(["--out", p(&again), "--mem-budget", "64MiB", "--quiet"]);
+        args.extend(["--out", p(&again), "--report", p(&again_report), "--quiet"]);
         ok(littoral(&args));
         assert!(std::fs::read(&again).unwrap() == single_bytes);
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&again_report).unwrap()).unwrap();
+        assert_eq!(r["mem_budget_bytes"], 64 << 20);
     }
     // A shard file is the same for any number of threads.
     let a = dir.path().join("t1.shard");

@@ -158,9 +158,10 @@ pub struct MergeArgs {
     /// Write the emission report (JSON) here.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Memory budget (the shards' --mem-budget gives the single-run map's bytes).
-    #[arg(long, default_value = "256MiB")]
-    pub mem_budget: String,
+    /// Memory budget [default: the shards' --mem-budget, which gives the
+    /// single run's map to the byte; 256MiB for shards that did not record it].
+    #[arg(long)]
+    pub mem_budget: Option<String>,
     /// No progress on stderr.
     #[arg(long)]
     pub quiet: bool,

@@ -176,7 +176,10 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
 fn run_map(cmd: MapCommand) -> AnyResult<()> {
     match cmd {
         MapCommand::Merge(a) => {
-            let budget = MemoryBudget::parse("--mem-budget", &a.mem_budget)?;
+            let budget = match &a.mem_budget {
+                Some(text) => Some(MemoryBudget::parse("--mem-budget", text)?),
+                None => None,
+            };
             let report_file = match &a.report {
                 Some(path) => Some(littoral::output::temp_beside(path)?),
                 None => None,
