@@ -401,6 +401,9 @@ pub fn merge_shards(
         if h.provenance_digest != head.provenance_digest || h.total_indices != head.total_indices {
             return Err(mismatch(&s, "the scene (provenance)"));
         }
+        if h.mem_budget != head.mem_budget {
+            return Err(mismatch(&s, "the --mem-budget it was emitted with"));
+        }
         if h.pilot_indices != head.pilot_indices || h.pilot != head.pilot {
             return Err(mismatch(
                 &s,
@@ -438,7 +441,10 @@ pub fn merge_shards(
                 t.merge(&payload.totals)
             }
         }
-        inputs.get_or_insert(payload.report_inputs);
+        // The report's scene inputs are shard 0's, whatever the order given.
+        if s.header().shard == 0 {
+            inputs = Some(payload.report_inputs);
+        }
         s.trim();
         shards.push(s);
     }
@@ -481,6 +487,10 @@ pub fn merge_shards(
     let report = report::EmissionReport::from_inputs(&inputs, &totals);
     let metadata = serde_json::to_vec(&report).expect("the report serialises");
     let description = head.description(first_path)?;
+    // Only the pilot's positions go on to the writer (which drops them once
+    // the partition is made), not the header they came in.
+    let pilot = head.pilot();
+    drop(head);
     // One shard open at a time.
     let mut batches = shards
         .iter()
@@ -498,7 +508,7 @@ pub fn merge_shards(
     let map = crate::store::build::build_map_from_batches(
         out,
         &description,
-        head.pilot(),
+        pilot,
         &mut batches,
         &metadata,
         options,

@@ -67,19 +67,15 @@ pub struct PartManifest {
 
 /// The digest parts of one render agree on, and finished tiles are
 /// stamped with: the scene's text, path and overrides, the bytes of every
-/// file it reads (through the emission's provenance, which hashes them),
-/// and the build. A tile finished before a geometry or table file changed,
-/// or by another version of littoral, is not taken up by `--resume` or
+/// file it reads (through the emission's `provenance`, which hashes them),
+/// and the version of littoral. A tile finished before a geometry or table
+/// file changed, or by another version, is not taken up by `--resume` or
 /// `assemble`.
-fn scene_digest(scene: &Scene) -> Result<String> {
+fn scene_digest(scene: &Scene, provenance: &crate::provenance::Provenance) -> Result<String> {
     let origin = &scene.origin;
     let mut json =
         serde_json::to_vec(origin).map_err(|e| Error::invalid("scene", e.to_string()))?;
-    json.extend_from_slice(
-        crate::emit::emission_provenance(scene)?
-            .digest_hex()
-            .as_bytes(),
-    );
+    json.extend_from_slice(provenance.digest_hex().as_bytes());
     json.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
     Ok(crate::provenance::sha256_hex(&json))
 }
@@ -214,7 +210,8 @@ impl RenderPartJob<'_> {
                 format!("{part}/{parts}: give I/N with 0 <= I < N"),
             ));
         }
-        let digest = scene_digest(scene)?;
+        let provenance = crate::emit::emission_provenance(scene)?;
+        let digest = scene_digest(scene, &provenance)?;
         let job = RenderJob {
             scene,
             out_dir: self.part_dir.clone(),
@@ -247,7 +244,6 @@ impl RenderPartJob<'_> {
                         "a part of a render reads an emitted photon map: give --map FILE (littoral emit, or emit --shard and map merge)",
                     ));
                 };
-                let provenance = crate::emit::emission_provenance(scene)?;
                 if !self.emit_map && super::reusable(map_path, &provenance).is_none() {
                     return Err(Error::invalid(
                         "--map",
@@ -436,7 +432,8 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
         ));
     }
     let scene = first.origin.build()?;
-    if scene_digest(&scene)? != first.scene_digest {
+    let provenance = crate::emit::emission_provenance(&scene)?;
+    if scene_digest(&scene, &provenance)? != first.scene_digest {
         return Err(Error::invalid(
             "assemble",
             "the scene does not build as it did",

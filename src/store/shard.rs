@@ -37,8 +37,8 @@ use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// First bytes of a shard file. `LTSHARD3` frames may hold their byte
-/// planes in one zstd frame (plane mode 1); `LTSHARD2` files, whose frames
-/// never do, are read as well. (`LTSHARD1` files held zstd over 32-byte
+/// planes in one zstd frame (plane mode 1); `LTSHARD2` files are read as
+/// well (the same layout; most hold each plane apart). (`LTSHARD1` files held zstd over 32-byte
 /// records with an id; they are refused with a message saying so.)
 pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD3";
 /// The magic of shards whose frames store each plane apart.
@@ -48,6 +48,9 @@ const SHARD_MAGIC_V2: &[u8; 8] = b"LTSHARD2";
 pub fn is_shard_magic(magic: &[u8]) -> bool {
     magic == SHARD_MAGIC || magic == SHARD_MAGIC_V2
 }
+/// The longest shard header read: mostly the pilot sample, about 10 MB at
+/// 10^9 photons.
+const MAX_HEADER_BYTES: u64 = 1 << 30;
 /// Last bytes of a complete shard file.
 const SHARD_END: &[u8; 8] = b"LTSHEND1";
 const TRAILER: u64 = 8 + 4 + 8;
@@ -309,7 +312,11 @@ impl ShardFile {
             return Err(bad("corrupt shard trailer (header length)"));
         }
         // The length is outside the CRC: a damaged one the size of the
-        // file must be an error, not an allocation that aborts.
+        // file must be an error, not an allocation that aborts or takes
+        // the machine's memory (overcommit lets any reservation succeed).
+        if json_len > MAX_HEADER_BYTES {
+            return Err(bad("corrupt shard trailer (header length past 1 GiB)"));
+        }
         let mut json = Vec::new();
         json.try_reserve_exact(json_len as usize)
             .map_err(|_| bad("corrupt shard trailer (header length beyond memory)"))?;

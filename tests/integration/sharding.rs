@@ -184,6 +184,21 @@ fn bad_shard_sets_are_refused_naming_the_file() {
         "--quiet",
     ]));
     assert_clean_failure(&merge(&[&parts[0], &foreign, &parts[2]]), "foreign.shard");
+    // The same emission's shard at another budget (its pilot is the same
+    // at this count, its tiles would not be).
+    let budget = dir.path().join("budget.shard");
+    ok(littoral(&[
+        "emit",
+        p(&scene),
+        "--shard",
+        "1/3",
+        "--map",
+        p(&budget),
+        "--mem-budget",
+        "64MiB",
+        "--quiet",
+    ]));
+    assert_clean_failure(&merge(&[&parts[0], &budget, &parts[2]]), "--mem-budget");
     // Truncated and corrupted files.
     let bytes = std::fs::read(&parts[1]).unwrap();
     let cut = dir.path().join("cut.shard");
