@@ -301,6 +301,9 @@ impl TileEncoder {
             blob[2 + 4 * k..6 + 4 * k].copy_from_slice(&(stored as u32).to_le_bytes());
         }
         blob[0..2].copy_from_slice(&raw_planes.to_le_bytes());
+        // The blob grew by doubling; a finished tile may wait in memory,
+        // charged at its length, behind the tiles before it.
+        blob.shrink_to_fit();
         let crc = crc32fast::hash(&blob);
         Ok(EncodedTile {
             blob,
