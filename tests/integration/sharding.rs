@@ -46,22 +46,26 @@ fn ok(out: std::process::Output) {
     );
 }
 
+/// `littoral emit SCENE --shard SHARD --map PATH EXTRA...`, which must succeed.
+fn emit_shard(scene: &Path, shard: &str, path: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "emit",
+        p(scene),
+        "--shard",
+        shard,
+        "--map",
+        p(path),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    ok(littoral(&args));
+}
+
 fn shards(dir: &Path, scene: &Path, n: u64, extra: &[&str]) -> Vec<PathBuf> {
     (0..n)
         .map(|i| {
             let part = dir.join(format!("part{i}.shard"));
-            let shard = format!("{i}/{n}");
-            let mut args = vec![
-                "emit",
-                p(scene),
-                "--shard",
-                &shard,
-                "--map",
-                p(&part),
-                "--quiet",
-            ];
-            args.extend_from_slice(extra);
-            ok(littoral(&args));
+            emit_shard(scene, &format!("{i}/{n}"), &part, extra);
             part
         })
         .collect()
@@ -134,17 +138,7 @@ fn merged_shards_are_the_single_run_map_byte_for_byte() {
     let a = dir.path().join("t1.shard");
     let b = dir.path().join("t2.shard");
     for (path, threads) in [(&a, "1"), (&b, "2")] {
-        ok(littoral(&[
-            "emit",
-            p(&scene),
-            "--shard",
-            "1/3",
-            "--map",
-            p(path),
-            "--threads",
-            threads,
-            "--quiet",
-        ]));
+        emit_shard(&scene, "1/3", path, &["--threads", threads]);
     }
     assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
 }
@@ -174,30 +168,12 @@ fn bad_shard_sets_are_refused_naming_the_file() {
     )
     .unwrap();
     let foreign = dir.path().join("foreign.shard");
-    ok(littoral(&[
-        "emit",
-        p(&other),
-        "--shard",
-        "1/3",
-        "--map",
-        p(&foreign),
-        "--quiet",
-    ]));
+    emit_shard(&other, "1/3", &foreign, &[]);
     assert_clean_failure(&merge(&[&parts[0], &foreign, &parts[2]]), "foreign.shard");
     // The same emission's shard at another budget (its pilot is the same
     // at this count, its tiles would not be).
     let budget = dir.path().join("budget.shard");
-    ok(littoral(&[
-        "emit",
-        p(&scene),
-        "--shard",
-        "1/3",
-        "--map",
-        p(&budget),
-        "--mem-budget",
-        "64MiB",
-        "--quiet",
-    ]));
+    emit_shard(&scene, "1/3", &budget, &["--mem-budget", "64MiB"]);
     assert_clean_failure(&merge(&[&parts[0], &budget, &parts[2]]), "--mem-budget");
     // Truncated and corrupted files.
     let bytes = std::fs::read(&parts[1]).unwrap();
