@@ -359,22 +359,33 @@ fn shard_payload(payload: &ShardEmission) -> Result<Box<serde_json::value::RawVa
         .map_err(|e| crate::Error::invalid("shard payload", e.to_string()))
 }
 
+/// The merge's budget for shards that do not say what theirs was.
+pub const DEFAULT_MERGE_BUDGET: u64 = 256 << 20;
+
 /// Merge the shard files of one sharded emission into the map at `out`:
 /// byte-identical to the map a single `emit` of the scene writes with the
 /// same budget. The shards must be all of one emission (same provenance,
-/// pilot and shard count, each shard once), in any order; the merge reads
-/// them one after another, within `options`' budget.
+/// pilot, budget and shard count, each shard once), in any order; the
+/// merge reads them one after another, within `budget` bytes, or when
+/// `None` the budget the shards were emitted with (so the map is the
+/// single run's; [`DEFAULT_MERGE_BUDGET`] for shards that did not record
+/// it). Returns the map and the budget it was written within.
 pub fn merge_shards(
     paths: &[std::path::PathBuf],
     out: &Path,
-    options: &BuildOptions,
+    budget: Option<u64>,
     progress: &dyn Progress,
-) -> Result<Emission> {
+) -> Result<(Emission, u64)> {
     use crate::store::shard::{shard_range, ShardFile};
     let Some(first_path) = paths.first() else {
         return Err(crate::Error::invalid("map merge", "no shard files given"));
     };
-    let head = ShardFile::open(first_path)?.header().clone();
+    let first = ShardFile::open(first_path)?;
+    let head = first.header().clone();
+    let budget = budget.unwrap_or(match head.mem_budget {
+        0 => DEFAULT_MERGE_BUDGET,
+        recorded => recorded,
+    });
     let n = head.shards;
     let mismatch = |s: &ShardFile, what: &str| {
         crate::Error::data(
@@ -392,8 +403,9 @@ pub fn merge_shards(
     let mut shards = Vec::with_capacity(paths.len());
     let mut totals: Option<Totals> = None;
     let mut inputs = None;
-    for path in paths {
-        let mut s = ShardFile::open(path)?;
+    let rest = paths[1..].iter().map(|p| ShardFile::open(p));
+    for s in std::iter::once(Ok(first)).chain(rest) {
+        let mut s = s?;
         let h = s.header();
         if h.shards != n {
             return Err(mismatch(&s, "the shard count"));
@@ -511,10 +523,10 @@ pub fn merge_shards(
         pilot,
         &mut batches,
         &metadata,
-        options,
+        &BuildOptions::with_budget(budget),
         progress,
     )?;
-    Ok(Emission { map, report })
+    Ok((Emission { map, report }, budget))
 }
 
 #[cfg(test)]

@@ -90,34 +90,21 @@ pub struct MergeJob<'a> {
     pub parts: &'a [PathBuf],
     pub map: PathBuf,
     /// The budget; `None` takes the one the shards were emitted with (so
-    /// the map is the single run's), or [`DEFAULT_MERGE_BUDGET`] for
-    /// shards that did not record it.
+    /// the map is the single run's; see [`crate::emit::merge_shards`]).
     pub budget: Option<MemoryBudget>,
 }
-
-/// The merge's budget for shards that do not say what theirs was.
-pub const DEFAULT_MERGE_BUDGET: u64 = 256 << 20;
 
 impl MergeJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
         crate::mem::tune_allocator();
         let sampler = crate::mem::PeakSampler::start();
-        let budget = match (self.budget, self.parts.first()) {
-            (Some(b), _) => b,
-            (None, Some(first)) => {
-                let recorded = crate::store::shard::ShardFile::open(first)?
-                    .header()
-                    .mem_budget;
-                MemoryBudget::new(if recorded > 0 {
-                    recorded
-                } else {
-                    DEFAULT_MERGE_BUDGET
-                })
-            }
-            (None, None) => MemoryBudget::new(DEFAULT_MERGE_BUDGET),
-        };
-        let em = crate::emit::merge_shards(self.parts, &self.map, &budget.emission(0), progress)?;
+        let (em, budget) = crate::emit::merge_shards(
+            self.parts,
+            &self.map,
+            self.budget.map(|b| b.total()),
+            progress,
+        )?;
         let provenance = MapFile::open(&self.map)?.header().provenance.digest_hex();
         let seconds = start.elapsed().as_secs_f64();
         let peaks = sampler.finish();
@@ -130,7 +117,7 @@ impl MergeJob<'_> {
                 total: seconds,
             },
             peak_memory: peaks,
-            mem_budget_bytes: budget.total(),
+            mem_budget_bytes: budget,
             peak_rss_bytes: peaks.rss_bytes,
             units: units::report_units(),
         })

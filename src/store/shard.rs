@@ -38,8 +38,9 @@ use std::path::{Path, PathBuf};
 
 /// First bytes of a shard file. `LTSHARD3` frames may hold their byte
 /// planes in one zstd frame (plane mode 1); `LTSHARD2` files are read as
-/// well (the same layout; most hold each plane apart). (`LTSHARD1` files held zstd over 32-byte
-/// records with an id; they are refused with a message saying so.)
+/// well (the same layout; most hold each plane apart). (`LTSHARD1` files
+/// held zstd over 32-byte records with an id; they are refused with a
+/// message saying so.)
 pub const SHARD_MAGIC: &[u8; 8] = b"LTSHARD3";
 /// The magic of shards whose frames store each plane apart.
 const SHARD_MAGIC_V2: &[u8; 8] = b"LTSHARD2";
