@@ -420,6 +420,71 @@ impl<'a> PathTracer<'a> {
         true
     }
 
+    /// The density per sr of the scattering mixture, `q` pure water and
+    /// `1 - q` particles, at `m` = 1 - cos of the scattering angle.
+    fn mixture(&self, q: f64, m: f64) -> f64 {
+        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
+        q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m)
+    }
+
+    /// A direction drawn from the scattering mixture (`q` pure water)
+    /// around `axis`.
+    fn sample_around(&self, axis: Vec3, q: f64, rng: &mut Pcg32) -> Vec3 {
+        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
+        let u = rng.uniform_f64();
+        let mu = if rng.uniform_f64() < q {
+            pw.sample_cos(u)
+        } else {
+            pp.sample_cos(u)
+        };
+        let phi = std::f64::consts::TAU * rng.uniform_f64();
+        scatter(axis, mu as f32, phi as f32)
+    }
+
+    /// The direction leaving a Lambertian floor or target point `pos` with
+    /// normal `n`, and each band's throughput `w` times its cosine lobe
+    /// over the direction's pdf (the reflectance is already in `w`); None
+    /// when the drawn direction points into the surface (the path ends).
+    ///
+    /// With a sun, `GUIDE_FRACTION` of the directions are drawn around the
+    /// direction toward it from the water's scattering mixture at `pos`,
+    /// as at scatterings (one-sample MIS with the cosine lobe). A bounce
+    /// toward the sun is where the path's next vertex meets the forward
+    /// peak of the phase function in its sun estimate: drawn by the cosine
+    /// alone, its weight is the phase function within a degree of its
+    /// peak, the heavy tail of radiance over a bright floor (Fournier–Forand
+    /// water over a white floor at 3 m: per-path deviation 21 by cosine
+    /// sampling; see `benches/README.md`).
+    fn bounce(
+        &self,
+        pos: Vec3,
+        n: Vec3,
+        w: &mut [f64],
+        iops: &mut [Iop],
+        rng: &mut Pcg32,
+    ) -> Option<Vec3> {
+        let Some(axis) = self.guide else {
+            return Some(cosine_hemisphere(n, rng));
+        };
+        self.scene.water.iops(pos, iops);
+        let q = water_share(w, iops);
+        let next = if rng.uniform_f64() < GUIDE_FRACTION {
+            self.sample_around(axis, q, rng)
+        } else {
+            cosine_hemisphere(n, rng)
+        };
+        let cos_n = next.dot(n) as f64;
+        if cos_n <= 0.0 {
+            return None;
+        }
+        let lambert = cos_n / PI;
+        let pdf = (1.0 - GUIDE_FRACTION) * lambert
+            + GUIDE_FRACTION * self.mixture(q, one_minus(next, axis));
+        let k = lambert / pdf;
+        w.iter_mut().for_each(|x| *x *= k);
+        Some(next)
+    }
+
     /// Radiance per band arriving at `p0` (in water) travelling along
     /// `-dir`, i.e. what an instrument at p0 looking along `dir` sees.
     pub fn in_water(
@@ -482,7 +547,10 @@ impl<'a> PathTracer<'a> {
                 for (b, x) in w.iter_mut().enumerate() {
                     *x *= scene.reflectance(h.surface, pos, b);
                 }
-                dir = cosine_hemisphere(n, rng);
+                let Some(next) = self.bounce(pos, n, w, iops, rng) else {
+                    return;
+                };
+                dir = next;
                 pos += n * 1e-4;
                 on_surface = true;
                 events += 1;
@@ -561,20 +629,8 @@ impl<'a> PathTracer<'a> {
                 *x *= iop.b() * k;
             }
             let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
-            // The two phase functions' shares of the next direction's mixture.
-            let (mut sw, mut sp) = (0.0, 0.0);
-            for (x, iop) in w.iter().zip(iops.iter()) {
-                let bb = iop.b();
-                if bb > 0.0 {
-                    sw += x * iop.b_w / bb;
-                    sp += x * iop.b_p / bb;
-                }
-            }
-            let q = if sw + sp > 0.0 { sw / (sw + sp) } else { 0.0 };
-            // 1 - cos from |a - b|^2 / 2: near the forward peak a cosine has
-            // too few digits.
-            let one_minus = |a: Vec3, b: Vec3| 0.5 * (a - b).length_squared() as f64;
-            let mix = |m: f64| q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m);
+            let q = water_share(w, iops);
+            let mix = |m: f64| self.mixture(q, m);
             // Density (per sr) of drawing `next` as the next direction: the
             // mixture around the path's direction and, guiding, around the
             // direction toward the sun.
@@ -630,19 +686,11 @@ impl<'a> PathTracer<'a> {
             if !Self::survive(w, events, importance, rng) {
                 return;
             }
-            let sample_around = |axis: Vec3, rng: &mut Pcg32| -> Vec3 {
-                let u = rng.uniform_f64();
-                let mu = if rng.uniform_f64() < q {
-                    pw.sample_cos(u)
-                } else {
-                    pp.sample_cos(u)
-                };
-                let phi = std::f64::consts::TAU * rng.uniform_f64();
-                scatter(axis, mu as f32, phi as f32)
-            };
             let next = match self.guide {
-                Some(axis) if rng.uniform_f64() < GUIDE_FRACTION => sample_around(axis, rng),
-                _ => sample_around(dir, rng),
+                Some(axis) if rng.uniform_f64() < GUIDE_FRACTION => {
+                    self.sample_around(axis, q, rng)
+                }
+                _ => self.sample_around(dir, q, rng),
             };
             let m = one_minus(next, dir);
             let (fw, fp) = (pw.eval_one_minus_cos(m), pp.eval_one_minus_cos(m));
@@ -671,4 +719,28 @@ impl<'a> PathTracer<'a> {
             dir = next;
         }
     }
+}
+
+/// The throughput-weighted share of pure-water scattering among the bands'
+/// scattering, `q` of the scattering mixture (`1 - q` is the particles').
+fn water_share(w: &[f64], iops: &[Iop]) -> f64 {
+    let (mut sw, mut sp) = (0.0, 0.0);
+    for (x, iop) in w.iter().zip(iops) {
+        let bb = iop.b();
+        if bb > 0.0 {
+            sw += x * iop.b_w / bb;
+            sp += x * iop.b_p / bb;
+        }
+    }
+    if sw + sp > 0.0 {
+        sw / (sw + sp)
+    } else {
+        0.0
+    }
+}
+
+/// 1 - cos of the angle between unit vectors, from |a - b|^2 / 2: near the
+/// forward peak a cosine has too few digits.
+fn one_minus(a: Vec3, b: Vec3) -> f64 {
+    0.5 * (a - b).length_squared() as f64
 }
