@@ -387,6 +387,21 @@ impl WaterModel {
         }
     }
 
+    /// A lower bound of the extinction anywhere in `band` (exact for
+    /// uniform water): every IOP grows with each concentration, so the
+    /// smallest concentrations give it.
+    pub fn minorant(&self, band: usize) -> f64 {
+        match self {
+            WaterModel::Explicit { a, b } => a + b,
+            WaterModel::Bands(iops) => iops[band].c(),
+            WaterModel::Constituents {
+                spectra,
+                field,
+                bp_550,
+            } => Self::from_constituents(spectra, &field.min(), *bp_550, band).c(),
+        }
+    }
+
     /// Optical depth per band (c integrated, into `out`) along the segment
     /// from `x` along unit `dir` for `len` m, exactly, when the IOPs are
     /// piecewise constant in depth (uniform water or depth layers): the

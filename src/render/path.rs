@@ -143,6 +143,9 @@ pub struct PathTracer<'a> {
     sun_h: Vec<f64>,
     /// Extinction majorant over every band and the whole water (1/m).
     c_bar: f64,
+    /// Each band's smallest extinction anywhere in the water (1/m): the
+    /// control of residual ratio tracking.
+    c_min: Vec<f64>,
     /// Under a rough surface, the facet sampler's normalisation for the
     /// sun's direction (`SeaSurface::facing_normalisation`); None when flat.
     rough_norm: Option<f64>,
@@ -208,6 +211,7 @@ impl<'a> PathTracer<'a> {
                 .map(|b| scene.sun.horizontal_irradiance(b))
                 .collect(),
             c_bar,
+            c_min: (0..nb).map(|b| scene.water.minorant(b)).collect(),
             rough_norm: (scene.surface.slope_variance > 0.0).then(|| {
                 scene
                     .surface
@@ -340,6 +344,19 @@ impl<'a> PathTracer<'a> {
 
     /// Transmittance per band from `x` along `up` to the surface, into `tr`
     /// (0 where the floor, a target or an open edge is in the way).
+    ///
+    /// Exact in uniform and depth-layered water. Elsewhere by residual
+    /// ratio tracking (Novák et al. 2014, "Residual ratio tracking for
+    /// estimating attenuation in participating media"): each band's
+    /// smallest extinction `c_min` is attenuated exactly and only the
+    /// residual `c - c_min` by the product of null-collision
+    /// probabilities at tentative collisions of rate `c_bar`. Plain ratio
+    /// tracking's relative variance, exp(c^2 d / c_bar) - 1, is about
+    /// 1 / T for the band whose extinction sets the majorant (water's own
+    /// absorption in the near infrared: a 780 nm zenith radiance 3 m deep
+    /// in the built-in scene read with a per-path deviation of 33); with
+    /// the control it is exp((c - c_min)^2 d / c_bar) - 1, near 0 where a
+    /// band's extinction hardly varies.
     fn transmittance(&self, x: Vec3, up: Vec3, rng: &mut Pcg32, tmp: &mut [Iop], tr: &mut [f64]) {
         let scene = self.scene;
         tr.iter_mut().for_each(|t| *t = 1.0);
@@ -348,6 +365,7 @@ impl<'a> PathTracer<'a> {
         } else {
             0.0
         };
+        let layered = self.uniform.is_none() && scene.water.is_layered();
         let mut remaining = total;
         let mut pos = x;
         // Segments between periodic edges (bounded in case a ray runs along one).
@@ -359,19 +377,8 @@ impl<'a> PathTracer<'a> {
                 tr.iter_mut().for_each(|t| *t = 0.0);
                 return;
             }
-            if self.uniform.is_none() {
-                // Ratio tracking: the product of null-collision probabilities.
-                let mut t = 0.0;
-                loop {
-                    t += rng.exponential(self.c_bar);
-                    if t >= seg {
-                        break;
-                    }
-                    scene.water.iops(pos + up * t as f32, tmp);
-                    for (o, iop) in tr.iter_mut().zip(tmp.iter()) {
-                        *o *= (1.0 - iop.c() / self.c_bar).max(0.0);
-                    }
-                }
+            if self.uniform.is_none() && !layered {
+                self.segment_transmittance(pos, up, seg, rng, tmp, tr);
             }
             remaining -= seg;
             if remaining <= 1e-6 {
@@ -386,6 +393,40 @@ impl<'a> PathTracer<'a> {
         if let Some(u) = &self.uniform {
             for (o, iop) in tr.iter_mut().zip(u) {
                 *o = (-iop.c() * total).exp();
+            }
+        } else if layered {
+            // Layers are horizontally uniform: the wraps do not matter.
+            scene
+                .water
+                .layered_optical_depth(x, up, total as f32, tmp, tr);
+            tr.iter_mut().for_each(|t| *t = (-*t).exp());
+        }
+    }
+
+    /// Multiply `tr` by each band's transmittance along the `seg` m from
+    /// `pos` along `dir`, by residual ratio tracking (see `transmittance`).
+    fn segment_transmittance(
+        &self,
+        pos: Vec3,
+        dir: Vec3,
+        seg: f64,
+        rng: &mut Pcg32,
+        tmp: &mut [Iop],
+        tr: &mut [f64],
+    ) {
+        let water = &self.scene.water;
+        for (t, c_min) in tr.iter_mut().zip(&self.c_min) {
+            *t *= (-c_min * seg).exp();
+        }
+        let mut t = 0.0;
+        loop {
+            t += rng.exponential(self.c_bar);
+            if t >= seg {
+                break;
+            }
+            water.iops(pos + dir * t as f32, tmp);
+            for ((o, iop), c_min) in tr.iter_mut().zip(tmp.iter()).zip(&self.c_min) {
+                *o *= (1.0 - (iop.c() - c_min) / self.c_bar).clamp(0.0, 1.0);
             }
         }
     }
@@ -744,3 +785,6 @@ fn water_share(w: &[f64], iops: &[Iop]) -> f64 {
 fn one_minus(a: Vec3, b: Vec3) -> f64 {
     0.5 * (a - b).length_squared() as f64
 }
+
+#[cfg(test)]
+mod tests;
