@@ -363,6 +363,7 @@ fn publish_run(
         emission,
         map,
         reused_map,
+        warnings: report::radiometer_warnings(&rendered.radiometers),
         radiometers: rendered.radiometers,
         estimate: scene.estimate.clone(),
         sensor: SensorSummary {

@@ -98,6 +98,41 @@ pub struct EmitReport {
     pub units: std::collections::BTreeMap<String, String>,
 }
 
+/// A warning for every radiometer whose samples are dominated by a few
+/// (VOV above [`VOV_LIMIT`](crate::render::VOV_LIMIT) in some band): its
+/// standard error understates the error.
+pub fn radiometer_warnings(readings: &[RadiometerReading]) -> Vec<String> {
+    readings
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let bad: Vec<usize> = (0..r.vov.len())
+                .filter(|&b| r.vov[b] > crate::render::VOV_LIMIT)
+                .collect();
+            let worst = *bad
+                .iter()
+                .max_by(|&&a, &&b| r.vov[a].total_cmp(&r.vov[b]))?;
+            Some(format!(
+                "radiometer {i} ({} at {} m, [{}, {}] m): a few samples dominate its reading in \
+                 {} of {} bands, so its standard error is itself uncertain by about {:.0} % \
+                 (band {worst}: relative variance of the variance {:.2}, trusted below {}; \
+                 the largest sample is {:.1} % of the sum); take more samples",
+                r.view,
+                r.depth_m,
+                r.position_m[0],
+                r.position_m[1],
+                bad.len(),
+                r.vov.len(),
+                // The relative error of a standard error is half that of its variance.
+                50.0 * r.vov[worst].sqrt(),
+                r.vov[worst],
+                crate::render::VOV_LIMIT,
+                100.0 * r.largest_share.get(worst).copied().unwrap_or(0.0),
+            ))
+        })
+        .collect()
+}
+
 /// The sensor a render imaged with.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SensorSummary {
@@ -207,6 +242,10 @@ pub struct RunReport {
     /// Peak resident memory of the process (VmHWM, bytes): anonymous memory
     /// plus resident pages of the mapped photon map.
     pub peak_rss_bytes: u64,
+    /// What the user should know about the results: readings whose error
+    /// bar cannot be trusted. `render` also prints each on stderr.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// The unit of every number above, by field path (`job::units`).
     #[serde(default)]
     pub units: std::collections::BTreeMap<String, String>,

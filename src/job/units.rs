@@ -63,6 +63,8 @@ const UNITS: &[(&str, &str)] = &[
     ("radiometers[].position_m", "m"),
     ("radiometers[].L", SPECTRAL_RADIANCE),
     ("radiometers[].stderr", SPECTRAL_RADIANCE),
+    ("radiometers[].vov", "1"),
+    ("radiometers[].largest_share", "1"),
     ("estimate.k", "photons"),
     ("estimate.k_expanded", "photons"),
     ("estimate.radius_m", "m"),

@@ -68,7 +68,20 @@ pub struct RadiometerReading {
     /// spread of the jittered samples given the map.
     #[serde(deserialize_with = "crate::json::f64s")]
     pub stderr: Vec<f64>,
+    /// Relative variance of the variance per band over the reading's
+    /// samples (MCNP's VOV: sum (x - m)^4 / (sum (x - m)^2)^2 - 1/N). Below
+    /// 0.1 the standard error can be trusted; above it a few samples
+    /// dominate and `stderr` understates the error (a heavy tail).
+    #[serde(default, deserialize_with = "crate::json::f64s")]
+    pub vov: Vec<f64>,
+    /// Per band, the largest single sample's share of the samples' sum.
+    #[serde(default, deserialize_with = "crate::json::f64s")]
+    pub largest_share: Vec<f64>,
 }
+
+/// The VOV above which a reading's standard error is not trusted (the
+/// MCNP manual's criterion for a reliable confidence interval).
+pub const VOV_LIMIT: f64 = 0.1;
 
 /// A light-transport integrator: radiance along sensor rays and at
 /// radiometers. Implementations are shared by all rendering threads.
@@ -587,6 +600,11 @@ struct Moments {
     bands: usize,
     sum: Vec<f64>,
     sum_sq: Vec<f64>,
+    /// Third and fourth moments' sums and the largest sample, per band,
+    /// for the variance of the variance.
+    sum_cu: Vec<f64>,
+    sum_qu: Vec<f64>,
+    max: Vec<f64>,
     /// Sums of the group channels (empty for a one-channel integrator).
     groups: Vec<f64>,
     scratch: Vec<f64>,
@@ -599,6 +617,9 @@ impl Moments {
             bands,
             sum: vec![0.0; bands],
             sum_sq: vec![0.0; bands],
+            sum_cu: vec![0.0; bands],
+            sum_qu: vec![0.0; bands],
+            max: vec![0.0; bands],
             groups: vec![0.0; bands * (channels - 1)],
             scratch: vec![0.0; bands],
         }
@@ -608,6 +629,9 @@ impl Moments {
         self.n = 0;
         self.sum.iter_mut().for_each(|v| *v = 0.0);
         self.sum_sq.iter_mut().for_each(|v| *v = 0.0);
+        self.sum_cu.iter_mut().for_each(|v| *v = 0.0);
+        self.sum_qu.iter_mut().for_each(|v| *v = 0.0);
+        self.max.iter_mut().for_each(|v| *v = 0.0);
         self.groups.iter_mut().for_each(|v| *v = 0.0);
     }
 
@@ -619,6 +643,12 @@ impl Moments {
             *s += v;
             *s2 += v * v;
         }
+        for (b, v) in l.iter().enumerate() {
+            let v2 = v * v;
+            self.sum_cu[b] += v2 * v;
+            self.sum_qu[b] += v2 * v2;
+            self.max[b] = self.max[b].max(v.abs());
+        }
         for (a, v) in self.groups.iter_mut().zip(g) {
             *a += v;
         }
@@ -627,6 +657,36 @@ impl Moments {
     fn mean(&self) -> impl Iterator<Item = f64> + '_ {
         let n = self.n.max(1) as f64;
         self.sum.iter().map(move |s| s / n)
+    }
+
+    /// Per band, the relative variance of the variance (see
+    /// [`RadiometerReading::vov`]; 0 with fewer than two samples or none
+    /// spread) and the largest sample's share of the sum.
+    fn tail(&self) -> (Vec<f64>, Vec<f64>) {
+        let n = self.n as f64;
+        (0..self.bands)
+            .map(|b| {
+                let (s1, s2, s3, s4) =
+                    (self.sum[b], self.sum_sq[b], self.sum_cu[b], self.sum_qu[b]);
+                let share = if s1 != 0.0 {
+                    self.max[b] / s1.abs()
+                } else {
+                    0.0
+                };
+                if self.n < 2 {
+                    return (0.0, share);
+                }
+                let m = s1 / n;
+                let m2 = s2 - n * m * m;
+                let m4 = s4 - 4.0 * m * s3 + 6.0 * m * m * s2 - 3.0 * n * m.powi(4);
+                let vov = if m2 > 0.0 {
+                    (m4.max(0.0) / (m2 * m2) - 1.0 / n).max(0.0)
+                } else {
+                    0.0
+                };
+                (vov, share)
+            })
+            .unzip()
     }
 
     /// Standard error per band of the mean: the samples' spread over their
@@ -693,11 +753,17 @@ fn read_radiometer(
     let l: Vec<f64> = acc.mean().collect();
     let mut se = vec![0f64; nb];
     acc.standard_error(&mut se);
+    let (vov, largest_share) = acc.tail();
     Ok(RadiometerReading {
         depth_m: r.depth_m,
         view: r.view_name.clone(),
         position_m: r.position_m,
         L: l,
         stderr: se,
+        vov,
+        largest_share,
     })
 }
+
+#[cfg(test)]
+mod tests;

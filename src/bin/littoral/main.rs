@@ -89,6 +89,9 @@ fn run_render(a: RenderArgs) -> AnyResult<()> {
     if !a.quiet {
         eprintln!("{}", r.summary());
     }
+    for w in &r.warnings {
+        eprintln!("littoral: warning: {w}");
+    }
     Ok(())
 }
 
