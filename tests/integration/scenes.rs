@@ -204,6 +204,19 @@ fn scene_commands() {
         dir.path().join("missing.toml").to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(1));
+    // Placement is checked too: a radiometer outside the domain.
+    let outside = dir.path().join("outside.toml");
+    let text =
+        format!("{MINIMAL_SCENE}[[radiometer]]\ndepth_m = 1.0\nposition_m = [5200.0, 5.0]\n");
+    std::fs::write(&outside, &text).unwrap();
+    let out = littoral(&["scene", "check", outside.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let line = text.lines().position(|l| l.contains("5200")).unwrap() + 1;
+    assert!(
+        err.contains(&format!("outside.toml:{line}: radiometer[0].position_m: ")),
+        "{err}"
+    );
 }
 
 /// `emit` on the built-in scene: report fields, a valid map, and the same

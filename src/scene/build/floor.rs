@@ -116,20 +116,24 @@ pub(super) fn targets(
             TargetKind::Panel if size.len() == 2 && positive => {
                 geo.add_panel(c, [size[0] as f32, size[1] as f32], id)
             }
-            TargetKind::Box => return Err(ctx.err(
-                &tk("size_m"),
-                format!(
+            TargetKind::Box => {
+                return Err(ctx.err(
+                    &tk("size_m"),
+                    format!(
                     "a box needs size_m = [x, y, z], 3 values each 1e-4 to 1e5 m (got {} values)",
                     size.len()
                 ),
-            )),
-            TargetKind::Panel => return Err(ctx.err(
-                &tk("size_m"),
-                format!(
+                ))
+            }
+            TargetKind::Panel => {
+                return Err(ctx.err(
+                    &tk("size_m"),
+                    format!(
                     "a panel needs size_m = [x, y], 2 values each 1e-4 to 1e5 m (got {} values)",
                     size.len()
                 ),
-            )),
+                ))
+            }
             TargetKind::Mesh => {
                 let file = t
                     .file
