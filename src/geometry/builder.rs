@@ -46,6 +46,20 @@ impl GeometryBuilder {
         self.tris.len()
     }
 
+    /// Bounds of the triangles added from index `first` on (a shape just
+    /// added: `first` is [`GeometryBuilder::triangle_count`] before it), and
+    /// how many of them are proper (finite with non-zero area, the ones
+    /// `build` keeps). [`Aabb::EMPTY`] when there are none.
+    pub fn extent_since(&self, first: usize) -> (Aabb, usize) {
+        let mut bounds = Aabb::EMPTY;
+        let mut proper = 0;
+        for tri in self.tris.iter().skip(first) {
+            tri.iter().for_each(|&v| bounds.grow(v));
+            proper += usize::from(is_proper(tri));
+        }
+        (bounds, proper)
+    }
+
     /// Add one triangle (m). Its index in [`super::Hit::triangle`] is the
     /// number of triangles added before it.
     pub fn add_triangle(&mut self, v0: Vec3, v1: Vec3, v2: Vec3, surface: SurfaceId) {

@@ -814,3 +814,29 @@ fn intersect_from_point_finds_a_surface_inside_the_epsilon() {
 }
 
 mod ceiling;
+
+#[test]
+fn extent_since_bounds_the_last_shape_and_counts_proper_triangles() {
+    let mut b = GeometryBuilder::new([10.0, 10.0]);
+    b.flat_floor(3.0, 0);
+    let first = b.triangle_count();
+    b.add_box(Vec3::new(5.0, 4.0, -1.0), Vec3::new(2.0, 1.0, 0.5), 1);
+    let (bounds, proper) = b.extent_since(first);
+    assert_eq!(bounds.min, Vec3::new(4.0, 3.5, -1.25));
+    assert_eq!(bounds.max, Vec3::new(6.0, 4.5, -0.75));
+    assert_eq!(proper, 12);
+    // Zero-area triangles count in the bounds but not as proper.
+    let first = b.triangle_count();
+    b.add_triangle(Vec3::ZERO, Vec3::X, 2.0 * Vec3::X, 2);
+    assert_eq!(
+        b.extent_since(first),
+        (
+            Aabb {
+                min: Vec3::ZERO,
+                max: 2.0 * Vec3::X
+            },
+            0
+        )
+    );
+    assert_eq!(b.extent_since(b.triangle_count()).0, Aabb::EMPTY);
+}

@@ -368,7 +368,14 @@ fn parse_csv(
             }
         }
         for (k, &col) in wanted.iter().enumerate() {
-            ys[k].push(csv.number(row, col)?);
+            let y = csv.number(row, col)?;
+            // A spectrum, a reflectance or a phase function: never negative
+            // (a negative spectrum would otherwise surface only as a scene
+            // that emits no light).
+            if matches!(columns, Columns::UserPair) && y < 0.0 {
+                return Err(csv.error(Some(row.line), format!("value {y} at {x} is negative")));
+            }
+            ys[k].push(y);
         }
         x_nm.push(x);
     }

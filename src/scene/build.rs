@@ -64,6 +64,35 @@ impl Ctx<'_> {
         path
     }
 
+    /// The path of a file the scene names at `steps` (see [`Ctx::path`]),
+    /// refused naming the scene's line and key when it cannot be read.
+    fn file(&self, name: &str, steps: &[Step]) -> Result<PathBuf> {
+        let path = self.path(name);
+        match std::fs::metadata(&path) {
+            Ok(m) if m.is_file() => Ok(path),
+            Ok(_) => Err(self.err(steps, format!("{} is not a file", path.display()))),
+            Err(e) => Err(self.err(steps, format!("cannot read {}: {e}", path.display()))),
+        }
+    }
+
+    /// Refuse `v` outside [lo, hi], saying which bound it breaks: `low`
+    /// when it is below `lo`, "must be at most `hi` `unit`" above, and
+    /// that it must be a number for NaN.
+    fn within(
+        &self,
+        steps: &[Step],
+        v: f64,
+        lo: f64,
+        hi: f64,
+        low: &str,
+        unit: &str,
+    ) -> Result<()> {
+        match range_error(v, lo, hi, low, unit) {
+            None => Ok(()),
+            Some(what) => Err(self.err(steps, what)),
+        }
+    }
+
     /// A reflectance per band: constant, bottom-table name or CSV path.
     fn reflectance(&self, r: &Reflectance, steps: &[Step]) -> Result<Vec<f64>> {
         let values = match r {
@@ -74,8 +103,10 @@ impl Ctx<'_> {
                         .map_err(|e| self.err(steps, e.to_string()))?;
                     self.per_band(t, steps)?
                 } else if name.ends_with(".csv") {
-                    let t =
-                        Table::from_csv_file(&self.path(name), &super::locate::key_name(steps))?;
+                    let t = Table::from_csv_file(
+                        &self.file(name, steps)?,
+                        &super::locate::key_name(steps),
+                    )?;
                     self.per_band(&t, steps)?
                 } else {
                     return Err(self.err(
@@ -98,6 +129,39 @@ impl Ctx<'_> {
 fn finite_in(v: f64, lo: f64, hi: f64) -> bool {
     v.is_finite() && v >= lo && v <= hi
 }
+
+/// What is wrong with `v` outside [lo, hi] (`None` inside): `low` below,
+/// the upper bound above, or that it is not a number.
+fn range_error(v: f64, lo: f64, hi: f64, low: &str, unit: &str) -> Option<String> {
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    if v.is_nan() {
+        Some(format!("{low}{unit}; nan is not a number"))
+    } else if v < lo {
+        Some(format!("{low}{unit}, not {v}"))
+    } else if v > hi {
+        if hi == f64::MAX {
+            Some(format!("must be finite{unit}, not {v}"))
+        } else {
+            Some(format!("must be at most {hi}{unit}, not {v}"))
+        }
+    } else {
+        None
+    }
+}
+
+/// The most photons a scene may trace: 10^12. The stored map holds about
+/// 16 bytes per stored photon (several per traced photon), so 10^12 is a map
+/// of tens of terabytes and, at a few million photons per second per core,
+/// weeks on a cluster; anything larger would never finish.
+pub const MAX_PHOTONS: u64 = 1_000_000_000_000;
+
+/// The longest scene name: outputs are named `NAME.json`, `.NAME.parts`,
+/// `NAME.profiles.csv` and so on, and a file name has at most 255 bytes.
+pub const MAX_NAME_BYTES: usize = 200;
 
 pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let src = Source::new(text, path);
@@ -172,12 +236,20 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     let sun = light::sun(&ctx, &f.sun)?;
     let sky = light::sky(&ctx, &f.sky, &sun)?;
+    light::check_emits(&ctx, &f, &sun, &sky)?;
     let (surface, water_index) = light::surface(&ctx, &f.surface)?;
 
     // Domain.
     let size = f.domain.size_m;
-    if !size.iter().all(|&v| finite_in(v, 1e-3, 1e7)) {
-        return Err(ctx.err(&[K("domain"), K("size_m")], "sizes must be positive (m)"));
+    for v in size {
+        ctx.within(
+            &[K("domain"), K("size_m")],
+            v,
+            1e-3,
+            1e7,
+            "sizes must be positive",
+            "m",
+        )?;
     }
     let periodic = f.domain.edges.unwrap_or_default() == Edges::Periodic;
     let domain = Domain {
@@ -191,10 +263,15 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
-    let bottom = floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)?;
-    let target_reflectance = floor::targets(&ctx, &f.target, &mut geo)?;
+    let (bottom, deepest_floor_m) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)? {
+        Some((b, deepest)) => (Some(b), Some(deepest)),
+        None => (None, None),
+    };
+    let (target_reflectance, extents) = floor::targets(&ctx, &f.target, &mut geo)?;
     let geometry = geo.build();
-    let (sensor, radiometers, estimate, render) = render_settings(&ctx, &f, &domain, ov)?;
+    floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;
+    let (sensor, radiometers, estimate, render) =
+        render_settings(&ctx, &f, &domain, &geometry, ov)?;
     let georef = Georef {
         origin_m: f.georef.origin_m.unwrap_or([0.0, 0.0]),
         epsg: f.georef.epsg,
@@ -215,6 +292,15 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     if f.photons.count == 0 {
         return Err(ctx.err(&[K("photons"), K("count")], "must be at least 1"));
     }
+    if f.photons.count > MAX_PHOTONS {
+        return Err(ctx.err(
+            &[K("photons"), K("count")],
+            format!(
+                "{} photons would never finish: at most {MAX_PHOTONS} (10^12); split the work over more runs",
+                f.photons.count
+            ),
+        ));
+    }
     let split = f.photons.upward_split;
     if !(split.is_power_of_two() && split <= 64) {
         return Err(ctx.err(
@@ -223,20 +309,43 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         ));
     }
     let mut tally_depths = f.tally.depths_m.clone();
-    for (i, d) in tally_depths.iter().enumerate() {
-        if !finite_in(*d, 0.0, 1e5) {
-            return Err(ctx.err(
-                &[K("tally"), K("depths_m"), I(i)],
-                "depths must be >= 0 (m)",
-            ));
+    for (i, &d) in tally_depths.iter().enumerate() {
+        let steps = [K("tally"), K("depths_m"), I(i)];
+        ctx.within(&steps, d, 0.0, 1e5, "depths must be >= 0", "m")?;
+        // Below the deepest point of the floor no photon ever crosses the
+        // depth: the tally would read 0. Between the shallowest and the
+        // deepest point it is in the water over part of the domain.
+        if let Some(deepest) = deepest_floor_m {
+            if d > deepest + 1e-6 * deepest.max(1.0) {
+                return Err(ctx.err(
+                    &steps,
+                    format!(
+                        "{d} m is below the floor everywhere (deepest point {deepest} m): no light reaches it"
+                    ),
+                ));
+            }
         }
     }
     tally_depths.sort_by(f64::total_cmp);
     tally_depths.dedup();
-    if f.name.trim().is_empty() || f.name.contains(['/', '\\']) {
+    if f.name.trim().is_empty()
+        || f.name.contains(['/', '\\'])
+        || f.name.chars().any(char::is_control)
+        || f.name == "."
+        || f.name == ".."
+    {
         return Err(ctx.err(
             &[K("name")],
-            "must be a non-empty name without path separators",
+            "must be a non-empty name without path separators or control characters (it names the output files)",
+        ));
+    }
+    if f.name.len() > MAX_NAME_BYTES {
+        return Err(ctx.err(
+            &[K("name")],
+            format!(
+                "{} bytes is too long: at most {MAX_NAME_BYTES} (it names the output files, NAME.json and so on)",
+                f.name.len()
+            ),
         ));
     }
 

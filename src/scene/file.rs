@@ -46,6 +46,7 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct GeorefFile {
     /// Map coordinates (easting, northing, m) of the scene's origin (x = 0, y = 0).
+    #[serde(default, deserialize_with = "exact::opt")]
     pub origin_m: Option<[f64; 2]>,
     /// EPSG code of the map's CRS: a WGS 84 / UTM zone (32601-32660 north,
     /// 32701-32760 south). None: a local metric frame.
@@ -63,12 +64,16 @@ pub struct RenderFile {
 #[serde(deny_unknown_fields)]
 pub struct SensorFile {
     pub kind: Option<SensorKindName>,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub pixels: Option<[usize; 2]>,
     pub gsd_m: Option<f64>,
     pub samples_per_pixel: Option<u32>,
     /// Orthographic: centre of the image on the surface (default: domain centre).
+    #[serde(default, deserialize_with = "exact::opt")]
     pub center_m: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub position_m: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub look_at_m: Option<[f64; 3]>,
     pub fov_deg: Option<f64>,
     /// A real sensor's bands to write the cubes in as well
@@ -82,6 +87,7 @@ pub struct RadiometerFile {
     pub depth_m: f64,
     pub view: Option<View>,
     /// Horizontal position (default: domain centre).
+    #[serde(default, deserialize_with = "exact::opt")]
     pub position_m: Option<[f64; 2]>,
 }
 
@@ -90,7 +96,7 @@ pub struct RadiometerFile {
 #[serde(untagged)]
 pub enum View {
     Named(String),
-    Vector([f64; 3]),
+    Vector(#[serde(deserialize_with = "exact::array")] [f64; 3]),
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -244,6 +250,7 @@ pub enum RefractiveIndex {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DomainFile {
+    #[serde(deserialize_with = "exact::array")]
     pub size_m: [f64; 2],
     pub edges: Option<Edges>,
 }
@@ -292,8 +299,11 @@ pub struct PhaseFile {
 #[serde(deny_unknown_fields)]
 pub struct GradientFile {
     pub axis: Axis,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub chl: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub cdom_440: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact::opt")]
     pub nap_440: Option<[f64; 2]>,
 }
 
@@ -330,7 +340,9 @@ pub struct SlopeFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PatchFile {
+    #[serde(deserialize_with = "exact::array")]
     pub min_m: [f64; 2],
+    #[serde(deserialize_with = "exact::array")]
     pub max_m: [f64; 2],
     pub reflectance: Reflectance,
 }
@@ -347,6 +359,7 @@ pub enum Reflectance {
 #[serde(deny_unknown_fields)]
 pub struct TargetFile {
     pub kind: TargetKind,
+    #[serde(deserialize_with = "exact::array")]
     pub center_m: [f64; 3],
     pub size_m: Option<Vec<f64>>,
     pub file: Option<String>,
@@ -377,4 +390,41 @@ fn default_upward_split() -> u32 {
 pub struct TallyFile {
     #[serde(default)]
     pub depths_m: Vec<f64>,
+}
+
+/// Fixed-length arrays read exactly: serde's own array impl takes the first
+/// N values of a longer TOML array and ignores the rest, so `pixels = [32,
+/// 32, 32]` would pass. These refuse any other length, naming the expected
+/// one (the parser's error points at the value, so the key and line are
+/// reported like every type error).
+mod exact {
+    use serde::de::{Deserialize, Deserializer, Error, Expected};
+    use std::fmt;
+
+    struct Values(usize);
+
+    impl Expected for Values {
+        fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            write!(f, "exactly {} values", self.0)
+        }
+    }
+
+    pub fn array<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        let v = Vec::<T>::deserialize(d)?;
+        let n = v.len();
+        v.try_into()
+            .map_err(|_| D::Error::invalid_length(n, &Values(N)))
+    }
+
+    pub fn opt<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        array(d).map(Some)
+    }
 }

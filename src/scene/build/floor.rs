@@ -2,23 +2,32 @@
 //! `[[bottom.patch]]` and `[[target]]`, added to the geometry.
 
 use super::*;
+use crate::bounds::Aabb;
+use crate::geometry::Geometry;
 
-/// The floor's shape (into `geo`) and reflectance; `None` without a floor.
+/// The floor's shape (into `geo`) and reflectance, and its deepest point
+/// (m); `None` without a floor.
 pub(super) fn bottom(
     ctx: &Ctx,
     b: Option<&BottomFile>,
     geo: &mut GeometryBuilder,
-) -> Result<Option<Bottom>> {
+) -> Result<Option<(Bottom, f64)>> {
     let bottom = match b {
         None => None,
         Some(b) => {
             let bk = |k| [K("bottom"), K(k)];
-            match (b.depth_m, &b.slope, &b.heightfield) {
+            let deepest = match (b.depth_m, &b.slope, &b.heightfield) {
                 (Some(d), None, None) => {
-                    if !finite_in(d, 1e-3, 1e5) {
-                        return Err(ctx.err(&bk("depth_m"), "must be a positive depth (m)"));
-                    }
+                    ctx.within(
+                        &bk("depth_m"),
+                        d,
+                        1e-3,
+                        1e5,
+                        "must be a positive depth",
+                        "m",
+                    )?;
                     geo.flat_floor(d as f32, FLOOR);
+                    d
                 }
                 (None, Some(s), None) => {
                     let sk = |k| [K("bottom"), K("slope"), K(k)];
@@ -26,17 +35,18 @@ pub(super) fn bottom(
                         ("from_depth_m", s.from_depth_m),
                         ("to_depth_m", s.to_depth_m),
                     ] {
-                        if !finite_in(v, 1e-3, 1e5) {
-                            return Err(ctx.err(&sk(k), "must be a positive depth (m)"));
-                        }
+                        ctx.within(&sk(k), v, 1e-3, 1e5, "must be a positive depth", "m")?;
                     }
                     let axis = s.axis.unwrap_or(Axis::X);
                     geo.slope_floor(s.from_depth_m as f32, s.to_depth_m as f32, axis, FLOOR);
+                    s.from_depth_m.max(s.to_depth_m)
                 }
                 (None, None, Some(h)) => {
-                    let (depths, nx, ny) = GeometryBuilder::heightfield_from_csv(&ctx.path(h))?;
+                    let path = ctx.file(h, &bk("heightfield"))?;
+                    let (depths, nx, ny) = GeometryBuilder::heightfield_from_csv(&path)?;
                     geo.heightfield_floor(&depths, nx, ny, FLOOR)
                         .map_err(|e| ctx.err(&bk("heightfield"), e.to_string()))?;
+                    depths.iter().fold(0.0f32, |a, &d| a.max(d)) as f64
                 }
                 _ => {
                     return Err(ctx.err(
@@ -44,7 +54,7 @@ pub(super) fn bottom(
                         "give exactly one of depth_m, slope or heightfield",
                     ))
                 }
-            }
+            };
             let refl = b.reflectance.clone().unwrap_or(Reflectance::Constant(0.2));
             let reflectance = ctx.reflectance(&refl, &bk("reflectance"))?;
             let mut patches = Vec::new();
@@ -62,22 +72,27 @@ pub(super) fn bottom(
                     reflectance: ctx.reflectance(&p.reflectance, &steps)?,
                 });
             }
-            Some(Bottom {
-                reflectance,
-                patches,
-            })
+            Some((
+                Bottom {
+                    reflectance,
+                    patches,
+                },
+                deepest,
+            ))
         }
     };
     Ok(bottom)
 }
 
-/// The targets (into `geo`, surface ids 1, 2, ...) and their reflectances.
+/// The targets (into `geo`, surface ids 1, 2, ...), their reflectances
+/// and their extents (the bounds of each one's triangles).
 pub(super) fn targets(
     ctx: &Ctx,
     targets: &[TargetFile],
     geo: &mut GeometryBuilder,
-) -> Result<Vec<Vec<f64>>> {
+) -> Result<(Vec<Vec<f64>>, Vec<Aabb>)> {
     let mut target_reflectance = Vec::new();
+    let mut extents = Vec::new();
     for (i, t) in targets.iter().enumerate() {
         let tk = |k| [K("target"), I(i), K(k)];
         let id = (i + 1) as SurfaceId;
@@ -91,6 +106,7 @@ pub(super) fn targets(
         }
         let size = t.size_m.clone().unwrap_or_default();
         let positive = size.iter().all(|&v| finite_in(v, 1e-4, 1e5));
+        let first = geo.triangle_count();
         match t.kind {
             TargetKind::Box if size.len() == 3 && positive => geo.add_box(
                 c,
@@ -101,10 +117,22 @@ pub(super) fn targets(
                 geo.add_panel(c, [size[0] as f32, size[1] as f32], id)
             }
             TargetKind::Box => {
-                return Err(ctx.err(&tk("size_m"), "a box needs size_m = [x, y, z] > 0"))
+                return Err(ctx.err(
+                    &tk("size_m"),
+                    format!(
+                    "a box needs size_m = [x, y, z], 3 values each 1e-4 to 1e5 m (got {} values)",
+                    size.len()
+                ),
+                ))
             }
             TargetKind::Panel => {
-                return Err(ctx.err(&tk("size_m"), "a panel needs size_m = [x, y] > 0"))
+                return Err(ctx.err(
+                    &tk("size_m"),
+                    format!(
+                    "a panel needs size_m = [x, y], 2 values each 1e-4 to 1e5 m (got {} values)",
+                    size.len()
+                ),
+                ))
             }
             TargetKind::Mesh => {
                 let file = t
@@ -112,13 +140,103 @@ pub(super) fn targets(
                     .as_ref()
                     .ok_or_else(|| ctx.err(&tk("file"), "a mesh needs file = \"mesh.obj\""))?;
                 let scale = t.scale.unwrap_or(1.0);
-                if !finite_in(scale, 1e-6, 1e6) {
-                    return Err(ctx.err(&tk("scale"), "must be positive"));
+                ctx.within(&tk("scale"), scale, 1e-6, 1e6, "must be positive", "")?;
+                let path = ctx.file(file, &tk("file"))?;
+                geo.add_obj(&path, c, scale as f32, id)?;
+                let (_, proper) = geo.extent_since(first);
+                let added = geo.triangle_count() - first;
+                if added == 0 {
+                    let what =
+                        format!("{}: the mesh has no triangles (no f lines)", path.display());
+                    return Err(ctx.err(&tk("file"), what));
                 }
-                geo.add_obj(&ctx.path(file), c, scale as f32, id)?;
+                if proper == 0 {
+                    let what = format!(
+                        "{}: all {added} triangles of the mesh have zero area (at scale {scale})",
+                        path.display()
+                    );
+                    return Err(ctx.err(&tk("file"), what));
+                }
             }
         }
+        extents.push(geo.extent_since(first).0);
         target_reflectance.push(ctx.reflectance(&t.reflectance, &tk("reflectance"))?);
     }
-    Ok(target_reflectance)
+    Ok((target_reflectance, extents))
+}
+
+/// Each target's whole extent must lie in the water of the domain: inside
+/// [0, size_x] x [0, size_y] (with either kind of edge: geometry is not
+/// repeated across a periodic edge, so the part of a target past one would
+/// be cut off, not wrapped to the other side), at or below the surface
+/// (z <= 0), and not entirely under the floor (its top below the floor at
+/// every point of a grid over its footprint). A target partly sunk into the
+/// floor is allowed.
+pub(super) fn place_targets(
+    ctx: &Ctx,
+    targets: &[TargetFile],
+    extents: &[Aabb],
+    domain: &Domain,
+    geometry: &Geometry,
+) -> Result<()> {
+    let [sx, sy] = domain.size_m;
+    // The geometry is f32: allow its rounding at the domain's scale.
+    let tol = 1e-5 * sx.max(sy).max(1.0);
+    for (i, (t, e)) in targets.iter().zip(extents).enumerate() {
+        let key = if t.kind == TargetKind::Mesh {
+            [K("target"), I(i), K("file")]
+        } else {
+            [K("target"), I(i), K("size_m")]
+        };
+        let ck = [K("target"), I(i), K("center_m")];
+        let (lo, hi) = (e.min.as_dvec3(), e.max.as_dvec3());
+        let what = |which: &str| {
+            format!(
+                "the target spans x {:.3} to {:.3}, y {:.3} to {:.3}, z {:.3} to {:.3} m: {which}",
+                lo.x, hi.x, lo.y, hi.y, lo.z, hi.z
+            )
+        };
+        if lo.x < -tol || hi.x > sx + tol || lo.y < -tol || hi.y > sy + tol {
+            // Too large to fit anywhere: its size; else its place.
+            let steps = if hi.x - lo.x > sx || hi.y - lo.y > sy {
+                &key
+            } else {
+                &ck
+            };
+            return Err(ctx.err(
+                steps,
+                what(&format!(
+                    "it reaches outside the domain, x 0 to {sx} and y 0 to {sy} m (targets are not repeated across periodic edges)"
+                )),
+            ));
+        }
+        if hi.z > tol {
+            let steps = if lo.z > tol { &ck } else { &key };
+            return Err(ctx.err(steps, what("part of it is above the water (z > 0)")));
+        }
+        // The shallowest floor over a 5 x 5 grid of the footprint (none
+        // without a floor).
+        const N: usize = 5;
+        let mut shallowest = f64::INFINITY;
+        for a in 0..N {
+            for b in 0..N {
+                let x = lo.x + (hi.x - lo.x) * a as f64 / (N - 1) as f64;
+                let y = lo.y + (hi.y - lo.y) * b as f64 / (N - 1) as f64;
+                let (x, y) = (x.clamp(0.0, sx), y.clamp(0.0, sy));
+                if let Some(d) = geometry.floor_depth_at(x as f32, y as f32) {
+                    shallowest = shallowest.min(d as f64);
+                }
+            }
+        }
+        let top = -hi.z;
+        if shallowest.is_finite() && top > shallowest + tol {
+            return Err(ctx.err(
+                &ck,
+                what(&format!(
+                    "it lies entirely below the floor (its top is {top:.3} m deep, the floor under it at most {shallowest:.3} m)"
+                )),
+            ));
+        }
+    }
+    Ok(())
 }

@@ -24,7 +24,8 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
                 "astm-g173-direct" => solar(SolarSpectrum::DirectCircumsolar)?,
                 "astm-g173-extraterrestrial" => solar(SolarSpectrum::Extraterrestrial)?,
                 csv if csv.ends_with(".csv") => {
-                    let t = Table::from_csv_file(&ctx.path(csv), "sun.spectrum")?;
+                    let t =
+                        Table::from_csv_file(&ctx.file(csv, &key("spectrum"))?, "sun.spectrum")?;
                     ctx.per_band(&t, &key("spectrum"))?
                 }
                 other => {
@@ -35,8 +36,17 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
                 }
             }
         }
-        (None, Some(e)) if finite_in(e, 0.0, f64::MAX) => vec![e; nb],
-        (None, Some(_)) => return Err(ctx.err(&key("irradiance"), "must be >= 0")),
+        (None, Some(e)) => {
+            ctx.within(
+                &key("irradiance"),
+                e,
+                0.0,
+                f64::MAX,
+                "must be >= 0",
+                "W m^-2 nm^-1",
+            )?;
+            vec![e; nb]
+        }
         (None, None) => return Err(ctx.err(&[K("sun")], "give spectrum or irradiance")),
         (Some(_), Some(_)) => {
             let what = "give spectrum or irradiance, not both";
@@ -70,7 +80,7 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
             ctx.per_band(tables::sky_diffuse_irradiance(), &key("spectrum"))?
         }
         (Some(n), None) if n.ends_with(".csv") => {
-            let t = Table::from_csv_file(&ctx.path(n), "sky.spectrum")?;
+            let t = Table::from_csv_file(&ctx.file(n, &key("spectrum"))?, "sky.spectrum")?;
             ctx.per_band(&t, &key("spectrum"))?
         }
         (Some(n), None) => {
@@ -79,8 +89,11 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
             );
             return Err(ctx.err(&key("spectrum"), what));
         }
-        (None, Some(l)) if finite_in(l, 0.0, f64::MAX) => vec![std::f64::consts::PI * l; nb],
-        (None, Some(_)) => return Err(ctx.err(&key("radiance"), "must be >= 0")),
+        (None, Some(l)) => {
+            let unit = "W m^-2 sr^-1 nm^-1";
+            ctx.within(&key("radiance"), l, 0.0, f64::MAX, "must be >= 0", unit)?;
+            vec![std::f64::consts::PI * l; nb]
+        }
         (Some(_), Some(_)) => {
             let what = "give spectrum or radiance, not both";
             return Err(ctx.err(&key("radiance"), what));
@@ -95,6 +108,35 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
         model,
     };
     Ok(sky)
+}
+
+/// Refuse a scene that emits no light: the sun's horizontal irradiance
+/// and the sky's are zero in every band. Names the sun's key, and the
+/// sky's when one is given.
+pub(super) fn check_emits(ctx: &Ctx, f: &SceneFile, sun: &Sun, sky: &Sky) -> Result<()> {
+    let fwhm = ctx.bands.fwhm_nm();
+    let total: f64 = (0..ctx.bands.len())
+        .map(|b| (sun.horizontal_irradiance(b) + sky.irradiance[b]) * fwhm[b] as f64)
+        .sum();
+    if total > 0.0 && total.is_finite() {
+        return Ok(());
+    }
+    let sun_key = if f.sun.spectrum.is_some() {
+        "spectrum"
+    } else {
+        "irradiance"
+    };
+    let sky_key = match (&f.sky.spectrum, f.sky.radiance) {
+        (Some(_), _) => "sky.spectrum is zero too",
+        (None, Some(_)) => "sky.radiance is zero too",
+        (None, None) => "there is no sky (sky.spectrum or sky.radiance)",
+    };
+    let what = if total.is_finite() {
+        format!("the scene emits no light: the sun is zero in every band and {sky_key}")
+    } else {
+        "the total emitted power overflows".to_string()
+    };
+    Err(ctx.err(&[K("sun"), K(sun_key)], what))
 }
 
 /// Quan & Fry's defaults: a temperate ocean.

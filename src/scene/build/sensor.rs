@@ -11,6 +11,7 @@ pub(super) fn render_settings(
     ctx: &Ctx,
     f: &SceneFile,
     domain: &Domain,
+    geometry: &crate::geometry::Geometry,
     ov: &Overrides,
 ) -> Result<(Sensor, Vec<Radiometer>, EstimateSettings, RenderSettings)> {
     let sk = |k| [K("sensor"), K(k)];
@@ -44,18 +45,15 @@ pub(super) fn render_settings(
                 let gsd = s.gsd_m.unwrap_or(
                     domain.size_m[0].min(domain.size_m[1]) / pixels[0].max(pixels[1]) as f64,
                 );
-                if !finite_in(gsd, 1e-6, 1e6) {
-                    return Err(ctx.err(
-                        &sk("gsd_m"),
-                        "must be a positive ground sample distance (m)",
-                    ));
-                }
+                let low = "must be a positive ground sample distance";
+                ctx.within(&sk("gsd_m"), gsd, 1e-6, 1e6, low, "m")?;
                 let center_m = s
                     .center_m
                     .unwrap_or([domain.size_m[0] / 2.0, domain.size_m[1] / 2.0]);
                 if !center_m.iter().all(|v| v.is_finite()) {
                     return Err(ctx.err(&sk("center_m"), "must be finite"));
                 }
+                footprint(ctx, s, domain, pixels, gsd, center_m)?;
                 SensorKind::Orthographic {
                     gsd_m: gsd,
                     center_m,
@@ -140,6 +138,29 @@ pub(super) fn render_settings(
         if !position_m.iter().all(|v| v.is_finite()) {
             return Err(ctx.err(&rk("position_m"), "must be finite"));
         }
+        // Outside the domain there is no water to measure (with either kind
+        // of edge: a position past a periodic edge is not wrapped).
+        let [sx, sy] = domain.size_m;
+        let [x, y] = position_m;
+        if !((0.0..=sx).contains(&x) && (0.0..=sy).contains(&y)) {
+            return Err(ctx.err(
+                &rk("position_m"),
+                format!("[{x}, {y}] is outside the domain, x 0 to {sx} and y 0 to {sy} m"),
+            ));
+        }
+        // Below the floor no light arrives: it would read exactly 0.
+        if let Some(floor) = geometry.floor_depth_at(x as f32, y as f32) {
+            let floor = floor as f64;
+            if r.depth_m > floor + 1e-6 * floor.max(1.0) {
+                return Err(ctx.err(
+                    &rk("depth_m"),
+                    format!(
+                        "{} m is below the floor, {floor:.3} m deep at [{x}, {y}]",
+                        r.depth_m
+                    ),
+                ));
+            }
+        }
         radiometers.push(Radiometer {
             depth_m: r.depth_m,
             view_name: name,
@@ -159,18 +180,27 @@ pub(super) fn render_settings(
         return Err(ctx.err(&ek("k_expanded"), "must be at least k and at most 1000000"));
     }
     if let Some(r) = e.radius_m {
-        if !finite_in(r, 1e-6, 1e4) {
-            return Err(ctx.err(&ek("radius_m"), "must be a positive radius (m)"));
-        }
+        ctx.within(
+            &ek("radius_m"),
+            r,
+            1e-6,
+            1e4,
+            "must be a positive radius",
+            "m",
+        )?;
     }
     let max_radius_m = e.max_radius_m.unwrap_or(DEFAULT_MAX_RADIUS_M);
-    if !finite_in(max_radius_m, 1e-6, 1e4) {
-        return Err(ctx.err(&ek("max_radius_m"), "must be a positive radius (m)"));
-    }
+    let low = "must be a positive radius";
+    ctx.within(&ek("max_radius_m"), max_radius_m, 1e-6, 1e4, low, "m")?;
     let step_m = e.step_m.unwrap_or(DEFAULT_STEP_M);
-    if !finite_in(step_m, 1e-3, 1e3) {
-        return Err(ctx.err(&ek("step_m"), "must be a positive step (m)"));
-    }
+    ctx.within(
+        &ek("step_m"),
+        step_m,
+        1e-3,
+        1e3,
+        "must be a positive step",
+        "m",
+    )?;
     let boundary = ov.boundary.or(e.boundary).unwrap_or_default();
     let spectral = ov.spectral.or(e.spectral).unwrap_or_default();
     let peak = |key: &'static str, value: Option<f64>, default: f64| -> Result<f64> {
@@ -229,4 +259,42 @@ pub(super) fn render_settings(
         exr_compression: f.render.exr_compression.unwrap_or_default(),
     };
     Ok((sensor, radiometers, estimate, render))
+}
+
+/// The orthographic image must lie inside the domain, with either kind of
+/// edge: camera rays are not wrapped at periodic edges, so pixels past one
+/// would see water without photons. Names `gsd_m` (or `pixels`) when the
+/// image is larger than the domain, `center_m` when it only sits off it.
+fn footprint(
+    ctx: &Ctx,
+    s: &SensorFile,
+    domain: &Domain,
+    pixels: [usize; 2],
+    gsd: f64,
+    center_m: [f64; 2],
+) -> Result<()> {
+    let sk = |k| [K("sensor"), K(k)];
+    let [sx, sy] = domain.size_m;
+    let (wx, wy) = (pixels[0] as f64 * gsd, pixels[1] as f64 * gsd);
+    let (x0, x1) = (center_m[0] - wx / 2.0, center_m[0] + wx / 2.0);
+    let (y0, y1) = (center_m[1] - wy / 2.0, center_m[1] + wy / 2.0);
+    // Pixel edges are sums of f64 steps: allow their rounding.
+    let tol = 1e-9 * sx.max(sy);
+    if x0 >= -tol && y0 >= -tol && x1 <= sx + tol && y1 <= sy + tol {
+        return Ok(());
+    }
+    let what = format!(
+        "the image ({} x {} pixels of {gsd} m) spans x {x0} to {x1}, y {y0} to {y1} m, outside the domain (x 0 to {sx}, y 0 to {sy} m; camera rays are not wrapped at periodic edges)",
+        pixels[0], pixels[1]
+    );
+    let key = if wx > sx + tol || wy > sy + tol {
+        if s.gsd_m.is_some() {
+            "gsd_m"
+        } else {
+            "pixels"
+        }
+    } else {
+        "center_m"
+    };
+    Err(ctx.err(&sk(key), what))
 }

@@ -31,7 +31,7 @@ fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
             let file = p.file.as_ref().ok_or_else(|| {
                 ctx.err(&pk("file"), "a table needs file = \"angle_deg,value CSV\"")
             })?;
-            let t = Table::from_csv_file(&ctx.path(file), "water.phase.file")?;
+            let t = Table::from_csv_file(&ctx.file(file, &pk("file"))?, "water.phase.file")?;
             let (angles, values) = (t.x_nm(), t.y());
             wrap(
                 "file",
@@ -69,7 +69,7 @@ fn iop_table(
     particle_phase: &PhaseFunction,
 ) -> Result<Vec<Iop>> {
     let steps = [K("water"), K("iop_file")];
-    let path = ctx.path(file);
+    let path = ctx.file(file, &steps)?;
     let field = "water.iop_file";
     let t = crate::csv::read(&path, field)?;
     let col = |name: &str| t.column(name);
@@ -154,14 +154,14 @@ pub(super) fn water(
     }
     if let Some(iop) = &w.iop {
         reject_constituents(ctx, w, "iop")?;
-        if !finite_in(iop.a, 0.0, 1e4) || iop.a <= 0.0 && iop.b <= 0.0 {
-            return Err(ctx.err(
-                &[K("water"), K("iop"), K("a")],
-                "must be >= 0 with a + b > 0 (1/m)",
-            ));
-        }
-        if !finite_in(iop.b, 0.0, 1e4) {
-            return Err(ctx.err(&[K("water"), K("iop"), K("b")], "must be >= 0 (1/m)"));
+        let (ak, bk) = (
+            [K("water"), K("iop"), K("a")],
+            [K("water"), K("iop"), K("b")],
+        );
+        ctx.within(&ak, iop.a, 0.0, 1e4, "must be >= 0", "1/m")?;
+        ctx.within(&bk, iop.b, 0.0, 1e4, "must be >= 0", "1/m")?;
+        if iop.a <= 0.0 && iop.b <= 0.0 {
+            return Err(ctx.err(&ak, "a + b must be > 0 (1/m)"));
         }
         return Ok((WaterModel::Explicit { a: iop.a, b: iop.b }, particle_phase));
     }
@@ -172,9 +172,7 @@ pub(super) fn water(
         ("bp_550", w.bp_550),
     ] {
         if let Some(v) = v {
-            if !finite_in(v, 0.0, 1e4) {
-                return Err(ctx.err(&wk(k), "must be >= 0"));
-            }
+            ctx.within(&wk(k), v, 0.0, 1e4, "must be >= 0", "")?;
         }
     }
     for (k, v) in [
@@ -183,9 +181,7 @@ pub(super) fn water(
         ("bp_slope", w.bp_slope),
     ] {
         if let Some(v) = v {
-            if !finite_in(v, 0.0, 10.0) {
-                return Err(ctx.err(&wk(k), "must be between 0 and 10"));
-            }
+            ctx.within(&wk(k), v, 0.0, 10.0, "must be >= 0", "")?;
         }
     }
     let base = Constituents {
@@ -203,11 +199,10 @@ pub(super) fn water(
             };
             let pair = |k: &'static str, v: Option<[f64; 2]>, d: f64| -> Result<[f64; 2]> {
                 let v = v.unwrap_or([d, d]);
-                if v.iter().all(|&x| finite_in(x, 0.0, 1e4)) {
-                    Ok(v)
-                } else {
-                    Err(ctx.err(&gk(k), "values must be >= 0"))
+                for x in v {
+                    ctx.within(&gk(k), x, 0.0, 1e4, "values must be >= 0", "")?;
                 }
+                Ok(v)
             };
             let chl = pair("chl", g.chl, base.chl)?;
             let cdom = pair("cdom_440", g.cdom_440, base.cdom_440)?;
@@ -231,28 +226,52 @@ pub(super) fn water(
             let mut layers = Vec::new();
             for (i, l) in w.layer.iter().enumerate() {
                 let lk = |k| [K("water"), K("layer"), I(i), K(k)];
-                if !(finite_in(l.top_m, 0.0, 1e5)
-                    && finite_in(l.bottom_m, 0.0, 1e5)
-                    && l.bottom_m > l.top_m)
-                {
-                    return Err(ctx.err(&lk("bottom_m"), "need 0 <= top_m < bottom_m (m)"));
+                ctx.within(&lk("top_m"), l.top_m, 0.0, 1e5, "must be a depth >= 0", "m")?;
+                ctx.within(
+                    &lk("bottom_m"),
+                    l.bottom_m,
+                    0.0,
+                    1e5,
+                    "must be a depth >= 0",
+                    "m",
+                )?;
+                if l.bottom_m <= l.top_m {
+                    return Err(ctx.err(&lk("bottom_m"), "need top_m < bottom_m (m)"));
+                }
+                for (k, v) in [
+                    ("chl", l.chl),
+                    ("cdom_440", l.cdom_440),
+                    ("nap_440", l.nap_440),
+                ] {
+                    if let Some(v) = v {
+                        ctx.within(&lk(k), v, 0.0, 1e4, "concentrations must be >= 0", "")?;
+                    }
                 }
                 let c = Constituents {
                     chl: l.chl.unwrap_or(base.chl),
                     cdom_440: l.cdom_440.unwrap_or(base.cdom_440),
                     nap_440: l.nap_440.unwrap_or(base.nap_440),
                 };
-                if ![c.chl, c.cdom_440, c.nap_440]
+                // Layers may not overlap: which one would hold the water
+                // between?
+                if let Some((j, (top, bottom, _))) = layers
                     .iter()
-                    .all(|&v| finite_in(v, 0.0, 1e4))
+                    .enumerate()
+                    .find(|(_, (t, b, _))| l.top_m < *b && *t < l.bottom_m)
                 {
-                    return Err(ctx.err(&lk("chl"), "concentrations must be >= 0"));
+                    return Err(ctx.err(
+                        &lk("top_m"),
+                        format!(
+                            "water.layer[{i}] ({} to {} m) overlaps water.layer[{j}] ({top} to {bottom} m)",
+                            l.top_m, l.bottom_m
+                        ),
+                    ));
                 }
                 layers.push((l.top_m, l.bottom_m, c));
             }
             ConstituentField::Layers { base, layers }
         }
-        (None, true, Some(g)) => ConstituentField::Grid(read_grid(&ctx.path(g))?),
+        (None, true, Some(g)) => ConstituentField::Grid(read_grid(&ctx.file(g, &wk("grid"))?)?),
         _ => {
             return Err(ctx.err(
                 &[K("water")],
