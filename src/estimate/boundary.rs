@@ -153,9 +153,10 @@ impl BoundaryMode {
 
     /// Whether a surface photon at `offset` = P - O, found by a Euclidean
     /// search of radius `r`, belongs to this mode's search disc (the
-    /// offset is measured in the tangent plane). Unlike a volume, a surface
-    /// may go on past the lines that clip the disc (the floor under a
-    /// target), so the clipped disc keeps only photons inside its lines.
+    /// offset is measured in the tangent plane). A surface may go on past
+    /// the lines that clip the disc (the floor under a target), so the
+    /// clipped disc keeps only photons inside its lines (as the clipped
+    /// sphere keeps only those inside its planes).
     pub fn accepts_in_disc(self, offset: Vec3, r: f32, b: &DiscDistances) -> bool {
         let [x, y] = b.coords(offset);
         match self {
@@ -185,7 +186,21 @@ impl BoundaryMode {
     /// search of radius `r`, belongs to this mode's search region.
     pub fn accepts(self, offset: Vec3, r: f32, b: &AxialDistances) -> bool {
         match self {
-            BoundaryMode::None | BoundaryMode::ClippedSphere => offset.length_squared() <= r * r,
+            BoundaryMode::None => offset.length_squared() <= r * r,
+            // Within the box whose volume is counted: a photon past an
+            // axial plane is beyond a boundary that does not reach it (past
+            // a target's edge, beside the box on the floor below), and its
+            // space is not in the volume.
+            BoundaryMode::ClippedSphere => {
+                let d = &b.0;
+                offset.length_squared() <= r * r
+                    && offset.x <= d[0]
+                    && -offset.x <= d[1]
+                    && offset.y <= d[2]
+                    && -offset.y <= d[3]
+                    && offset.z <= d[4]
+                    && -offset.z <= d[5]
+            }
             BoundaryMode::Ellipsoid => ellipsoid_distance(offset, r, b) <= r,
         }
     }

@@ -70,6 +70,7 @@ const UNITS: &[(&str, &str)] = &[
     ("estimate.radius_m", "m"),
     ("estimate.max_radius_m", "m"),
     ("estimate.step_m", "m"),
+    ("estimate.gather_rays", "rays"),
     ("estimate.boundary_grid_m", "m"),
     ("estimate.forward_peak_deg", "deg"),
     ("estimate.forward_peak_down_deg", "deg"),

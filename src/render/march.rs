@@ -15,7 +15,9 @@
 //! varying water; the surface seen from the air is
 //! `interface::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! radiometer looking up at the surface sees the transmitted sky (internal
-//! reflection of upwelling light there is not followed).
+//! reflection of upwelling light there is not followed); a target's face
+//! is read by final gathering (`RayMarcher::gather`), the floor by its
+//! surface photon estimate.
 
 use super::camera::CameraRay;
 use super::interface::{from_air_parts, sky_radiance};
@@ -25,7 +27,7 @@ use crate::estimate::groups::CHANNELS;
 use crate::optics::iop::Iop;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
-use crate::scene::Scene;
+use crate::scene::{Scene, FLOOR};
 use glam::{DVec3, Vec3};
 
 /// Longest march through water without a hit (m).
@@ -33,6 +35,8 @@ const MAX_MARCH_M: f32 = 500.0;
 /// Longest step of the midpoint rule for the sun's transmittance through
 /// smoothly varying water (m).
 const SUN_STEP_M: f32 = 0.5;
+/// Share of final-gather directions drawn around the refracted sun.
+const GATHER_GUIDE: f64 = 0.3;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
 
@@ -125,6 +129,20 @@ impl<'a> RayMarcher<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
+        self.march_with(p0, dir, rng, scratch, out, true)
+    }
+
+    /// [`march`](Self::march), gathering at a target it meets when `gather`
+    /// (see [`gather`](Self::gather); gather rays do not gather again).
+    fn march_with(
+        &self,
+        p0: Vec3,
+        dir: Vec3,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+        gather: bool,
+    ) -> Result<()> {
         let nb = self.bands();
         let channels = out.len() / nb;
         debug_assert!(channels == 1 || channels == CHANNELS);
@@ -147,8 +165,11 @@ impl<'a> RayMarcher<'a> {
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
         let (fw, fp) = self.est.forward_fractions(dir);
-        let cos_ss = self.sun_w.dot(-dir) as f64;
-        let (pw_ss, pp_ss) = (pw.eval(cos_ss), pp.eval(cos_ss));
+        // 1 - cos of the single-scattering angle from |sun_w + dir|^2 / 2: a
+        // ray looking into the sun (a final-gather ray) meets the forward
+        // peak, where a cosine has too few digits.
+        let m_ss = 0.5 * (self.sun_w + dir).length_squared() as f64;
+        let (pw_ss, pp_ss) = (pw.eval_one_minus_cos(m_ss), pp.eval_one_minus_cos(m_ss));
         // Stratified: one jittered sample in each step, weighted by the
         // transmittance to the sample itself (unbiased for the step's
         // integral of T times the source). Single scattering of the sun is
@@ -209,8 +230,13 @@ impl<'a> RayMarcher<'a> {
             let x = h.position + n * 1e-3;
             scene.water.iops(x, &mut iops);
             self.sun_transmittance(x, &iops, &mut tmp, &mut sun_t);
-            self.est
-                .surface(h.position, n, h.surface, scratch, &mut est)?;
+            let rays = scene.estimate.gather_rays;
+            if gather && rays > 0 && h.surface != FLOOR {
+                self.gather(h.position, n, h.surface, rays, rng, scratch, &mut est)?;
+            } else {
+                self.est
+                    .surface(h.position, n, h.surface, scratch, &mut est)?;
+            }
             for b in 0..nb {
                 let r = scene.reflectance(h.surface, h.position, b);
                 let direct = self.e_w[b] * sun_t[b] * cos_n * r / std::f64::consts::PI;
@@ -229,6 +255,91 @@ impl<'a> RayMarcher<'a> {
                 let n = scene.water_index[b];
                 let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
                 out[b] += tr[b] * t * n * n * g * self.sky_l[b];
+            }
+        }
+        Ok(())
+    }
+
+    /// Radiance per band leaving a target's Lambertian face at `x` (normal
+    /// `n`, facing the water) in the light of everything but the direct
+    /// sun, by final gathering: the irradiance from `rays` marches out of
+    /// the face, each seeing what a sensor ray sees there (single
+    /// scattering of the sun, the volume photons' in-scatter with its band
+    /// shapes, the sky through the surface, the floor's surface estimate),
+    /// times R / pi. `out` is laid out as [`march`](Self::march)'s.
+    ///
+    /// Why: a target's face is small next to the surface search it needs
+    /// (a 1 m face holds a few hundred surface photons at the built-in
+    /// scene's density, a handful per band), so its band shapes and level
+    /// from the surface map were off by tens of per cent; the volume
+    /// photons around it are many more, and the march's band shapes come
+    /// from the band-shape grid.
+    ///
+    /// Directions: the cosine lobe, and [`GATHER_GUIDE`] of them drawn
+    /// around the refracted sun's direction from the water's scattering
+    /// mixture at `x` (one-sample MIS), since a gather ray near the sun
+    /// sees its single-scattered aureole through the forward peak.
+    #[allow(clippy::too_many_arguments)]
+    fn gather(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        surface: crate::geometry::SurfaceId,
+        rays: u32,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let scene = self.scene;
+        let nb = self.bands();
+        let mut l = vec![0.0f64; out.len()];
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let axis = -self.sun_w;
+        let sun = scene.sun.irradiance.iter().any(|&e| e > 0.0);
+        let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
+        let mut iops = vec![Iop::default(); nb];
+        scene.water.iops(x, &mut iops);
+        let (bw, b) = iops
+            .iter()
+            .fold((0.0, 0.0), |(w, t), i| (w + i.b_w, t + i.b()));
+        let q = if b > 0.0 { bw / b } else { 0.0 };
+        let guide = if sun && b > 0.0 { GATHER_GUIDE } else { 0.0 };
+        let start = x + n * 1e-3;
+        for _ in 0..rays {
+            let w = if rng.uniform_f64() < guide {
+                let u = rng.uniform_f64();
+                let mu = if rng.uniform_f64() < q {
+                    pw.sample_cos(u)
+                } else {
+                    pp.sample_cos(u)
+                };
+                let phi = std::f64::consts::TAU * rng.uniform_f64();
+                crate::optics::phase::scatter(axis, mu as f32, phi as f32)
+            } else {
+                crate::optics::phase::cosine_hemisphere(n, rng)
+            };
+            let cos_n = w.dot(n) as f64;
+            if cos_n <= 0.0 {
+                continue;
+            }
+            let m = 0.5 * (w - axis).length_squared() as f64;
+            let lambert = cos_n / std::f64::consts::PI;
+            let phase = q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m);
+            let pdf = (1.0 - guide) * lambert + guide * phase;
+            if !pdf.is_finite() {
+                continue; // exactly on the peak of a phase function without a finite one
+            }
+            // L cos / pdf over the rays is the irradiance; times R / pi.
+            let k = lambert / pdf / rays as f64;
+            self.march_with(start, w, rng, scratch, &mut l, false)?;
+            for (o, v) in out.iter_mut().zip(&l) {
+                *o += k * v;
+            }
+        }
+        for b in 0..nb {
+            let r = scene.reflectance(surface, x, b);
+            for k in (b..out.len()).step_by(nb) {
+                out[k] *= r;
             }
         }
         Ok(())

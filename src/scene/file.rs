@@ -113,6 +113,7 @@ pub struct EstimateFile {
     pub forward_peak_down_deg: Option<f64>,
     pub boundary_grid_m: Option<f64>,
     pub shape_photons_per_band: Option<usize>,
+    pub gather_rays: Option<u32>,
 }
 
 /// `[spectral] out_of_range`: what to do with a band centre outside a data

@@ -258,6 +258,17 @@ pub struct EstimateSettings {
     /// Photons per band in a band-shape voxel (`spectral = "grid"`).
     #[serde(default = "default_shape_photons_per_band")]
     pub shape_photons_per_band: usize,
+    /// Final-gather rays per target hit (0: targets read the surface
+    /// photon map, like the floor).
+    #[serde(default = "default_gather_rays")]
+    pub gather_rays: u32,
+}
+
+/// Final-gather rays per target hit unless `[estimate] gather_rays` says.
+pub const DEFAULT_GATHER_RAYS: u32 = 32;
+
+fn default_gather_rays() -> u32 {
+    DEFAULT_GATHER_RAYS
 }
 
 fn default_shape_photons_per_band() -> usize {

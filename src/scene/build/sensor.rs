@@ -3,8 +3,8 @@
 
 use super::*;
 use crate::scene::settings::{
-    policy_k, DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_K_EXPANDED_PER_K,
-    DEFAULT_MAX_RADIUS_M, DEFAULT_SHAPE_PHOTONS_PER_BAND, DEFAULT_STEP_M,
+    policy_k, DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_GATHER_RAYS,
+    DEFAULT_K_EXPANDED_PER_K, DEFAULT_MAX_RADIUS_M, DEFAULT_SHAPE_PHOTONS_PER_BAND, DEFAULT_STEP_M,
 };
 
 pub(super) fn render_settings(
@@ -241,6 +241,10 @@ pub(super) fn render_settings(
             "must be between 1 and 1000000",
         ));
     }
+    let gather_rays = e.gather_rays.unwrap_or(DEFAULT_GATHER_RAYS);
+    if gather_rays > 4096 {
+        return Err(ctx.err(&ek("gather_rays"), "must be at most 4096"));
+    }
     let estimate = EstimateSettings {
         k,
         radius_m: e.radius_m,
@@ -253,6 +257,7 @@ pub(super) fn render_settings(
         forward_peak_down_deg,
         boundary_grid_m: e.boundary_grid_m,
         shape_photons_per_band,
+        gather_rays,
     };
     let render = RenderSettings {
         integrator: ov.integrator.or(f.render.integrator).unwrap_or_default(),
