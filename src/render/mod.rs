@@ -77,6 +77,12 @@ pub struct RadiometerReading {
     /// Per band, the largest single sample's share of the samples' sum.
     #[serde(default, deserialize_with = "crate::json::f64s")]
     pub largest_share: Vec<f64>,
+    /// Standard error of the mean of `L` over all bands, from the samples'
+    /// own band means (and the photon groups' band means): the bands of
+    /// one sample are correlated, so it is neither the mean of `stderr`
+    /// nor that over the square root of the band count.
+    #[serde(default)]
+    pub band_mean_stderr: f64,
 }
 
 /// The VOV above which a reading's standard error is not trusted (the
@@ -607,6 +613,9 @@ struct Moments {
     max: Vec<f64>,
     /// Sums of the group channels (empty for a one-channel integrator).
     groups: Vec<f64>,
+    /// Sums of each sample's band mean and of its square.
+    band_mean: f64,
+    band_mean_sq: f64,
     scratch: Vec<f64>,
 }
 
@@ -621,6 +630,8 @@ impl Moments {
             sum_qu: vec![0.0; bands],
             max: vec![0.0; bands],
             groups: vec![0.0; bands * (channels - 1)],
+            band_mean: 0.0,
+            band_mean_sq: 0.0,
             scratch: vec![0.0; bands],
         }
     }
@@ -633,6 +644,8 @@ impl Moments {
         self.sum_qu.iter_mut().for_each(|v| *v = 0.0);
         self.max.iter_mut().for_each(|v| *v = 0.0);
         self.groups.iter_mut().for_each(|v| *v = 0.0);
+        self.band_mean = 0.0;
+        self.band_mean_sq = 0.0;
     }
 
     /// Add one sample (its channels, radiance first).
@@ -652,6 +665,9 @@ impl Moments {
         for (a, v) in self.groups.iter_mut().zip(g) {
             *a += v;
         }
+        let m = l.iter().sum::<f64>() / self.bands as f64;
+        self.band_mean += m;
+        self.band_mean_sq += m * m;
     }
 
     fn mean(&self) -> impl Iterator<Item = f64> + '_ {
@@ -712,6 +728,30 @@ impl Moments {
         }
         out.iter_mut().for_each(|o| *o = o.sqrt());
     }
+
+    /// Standard error of the band mean: [`Self::standard_error`] with the
+    /// bands of every sample and every photon group averaged first.
+    fn band_mean_standard_error(&self) -> f64 {
+        let n = self.n as f64;
+        let mut var = if self.n >= 2 {
+            let m = self.band_mean / n;
+            (self.band_mean_sq / n - m * m).max(0.0) / (n - 1.0)
+        } else {
+            0.0
+        };
+        if !self.groups.is_empty() {
+            let nb = self.bands as f64;
+            let means: Vec<f64> = self
+                .groups
+                .chunks(self.bands)
+                .map(|g| g.iter().sum::<f64>() / nb)
+                .collect();
+            let mut v = [0.0];
+            groups::variance(&means, &mut v);
+            var += v[0] / (n * n);
+        }
+        var.sqrt()
+    }
 }
 
 fn read_radiometer(
@@ -755,6 +795,7 @@ fn read_radiometer(
     acc.standard_error(&mut se);
     let (vov, largest_share) = acc.tail();
     Ok(RadiometerReading {
+        band_mean_stderr: acc.band_mean_standard_error(),
         depth_m: r.depth_m,
         view: r.view_name.clone(),
         position_m: r.position_m,

@@ -36,6 +36,59 @@ fn variance_of_the_variance_and_the_largest_share() {
     assert_eq!(vov[0], 0.0);
 }
 
+/// The band mean's standard error follows the bands' correlation: bands
+/// that move together give each band's own standard error, bands that move
+/// against each other give none, and independent bands give that over
+/// the square root of their count. The photon groups' part is averaged
+/// over the bands the same way.
+#[test]
+fn band_mean_standard_error_follows_the_correlation_of_the_bands() {
+    let mut rng = Pcg32::new(5, 0);
+    let xs: Vec<f64> = (0..4000).map(|_| rng.uniform_f64()).collect();
+    let ys: Vec<f64> = (0..4000).map(|_| rng.uniform_f64()).collect();
+    let run = |pair: &dyn Fn(usize) -> [f64; 2]| {
+        let mut m = Moments::new(2, 1);
+        (0..xs.len()).for_each(|i| m.add(&pair(i)));
+        let mut se = [0.0; 2];
+        m.standard_error(&mut se);
+        (se, m.band_mean_standard_error())
+    };
+    let (se, mean) = run(&|i| [xs[i], xs[i]]);
+    assert!((mean / se[0] - 1.0).abs() < 1e-9, "{mean} {se:?}");
+    let (_, mean) = run(&|i| [xs[i], 1.0 - xs[i]]);
+    assert!(mean < 1e-12, "{mean}");
+    // Independent: sqrt(1/12 / 2 / n) / ... within the spread of a
+    // standard error from 4000 samples (about 1.1 %, 5 sigma).
+    let (se, mean) = run(&|i| [xs[i], ys[i]]);
+    let expected = 0.5 * (se[0] * se[0] + se[1] * se[1]).sqrt();
+    assert!(
+        (mean / expected - 1.0).abs() < 0.06,
+        "{mean} against {expected}"
+    );
+
+    // Photon groups: every sample's group channels carry the band values
+    // in group 0 and nothing elsewhere, so the groups' band means spread
+    // as the bands' do.
+    let mut m = Moments::new(2, CHANNELS);
+    let mut sample = vec![0.0; 2 * CHANNELS];
+    for i in 0..100 {
+        sample[..2].copy_from_slice(&[1.0, 1.0]);
+        sample[2..4].copy_from_slice(&[xs[i], 1.0 - xs[i]]);
+        m.add(&sample);
+    }
+    // The band means of the groups: group 0 sums to 100 * 0.5 = 50, the
+    // others 0; variance GROUPS / (GROUPS - 1) * sum of squared
+    // deviations, over n^2.
+    let g = GROUPS as f64;
+    let ss = 50.0f64.powi(2) * (1.0 - 1.0 / g);
+    let expected = (g / (g - 1.0) * ss).sqrt() / 100.0;
+    let got = m.band_mean_standard_error();
+    assert!(
+        (got / expected - 1.0).abs() < 1e-9,
+        "{got} against {expected}"
+    );
+}
+
 /// A radiometer is warned about when some band's VOV passes the limit,
 /// and the warning names it and the band.
 #[test]
@@ -47,6 +100,7 @@ fn dominated_readings_are_warned_about() {
         L: vec![1.0; vov.len()],
         stderr: vec![0.1; vov.len()],
         largest_share: vec![0.02; vov.len()],
+        band_mean_stderr: 0.05,
         vov,
     };
     let w = crate::job::report::radiometer_warnings(&[
