@@ -485,7 +485,7 @@ fn path_error_bar_holds_over_a_floor_in_forward_peaked_water() {
 
 /// Chandrasekhar's H function for isotropic scattering of albedo `omega`
 /// at `mu`: the fixed point of 1 / H(mu) = sqrt(1 - omega) + (omega / 2)
-/// int_0^1 mu' H(mu') / (mu + mu') dmu' (Chandrasekhar 1960, eq. V.(31)),
+/// int_0^1 mu' H(mu') / (mu + mu') dmu' (Chandrasekhar 1960, Radiative Transfer, ch. V),
 /// iterated on a midpoint grid of 4000 nodes until it moves by less than
 /// 1e-13. Checked against its zeroth moment, int_0^1 H = (2 / omega)
 /// (1 - sqrt(1 - omega)).
@@ -532,13 +532,12 @@ fn chandrasekhar_h(omega: f64, mus: &[f64]) -> Vec<f64> {
 /// under an index-matched surface (n = 1: no refraction, no Fresnel), lit
 /// by a collimated beam of unit normal irradiance at 30 degrees, reflects
 /// I(mu) = (1 / 4 pi) omega mu0 / (mu + mu0) H(mu) H(mu0) (Chandrasekhar
-/// 1960, eq. IV.(42)) in every azimuth. Radiometers in the air look at
-/// nadir (mu = 1) and 60 degrees off it (mu = 0.5), along and across the
-/// sun in two azimuths; each reads the closed form within three of its standard errors
-/// plus 2e-4 for the quadrature and the sun's finite disc. Every order of
-/// scattering counts (about 40 % of the nadir radiance comes from
-/// paths of five or more events here), so Russian roulette, the albedo
-/// weights and the sun's next-event estimation are all seen.
+/// 1960, Radiative Transfer, ch. IV) in every azimuth. Radiometers in the air look at
+/// nadir (mu = 1) and 60 degrees off it (mu = 0.5) in two azimuths; each
+/// reads the closed form within three of its standard errors plus 2e-4
+/// for the quadrature and the sun's finite disc. Single scattering is 1 /
+/// (H(1) H(mu0)) = 30 % of the nadir radiance, so the higher orders,
+/// Russian roulette, the albedo weights and the sun's next-event estimation are all seen.
 #[test]
 fn semi_infinite_isotropic_medium_matches_chandrasekhar() {
     let omega = 0.9;
