@@ -243,6 +243,12 @@ impl<'a> Estimator<'a> {
         (w.forward_fraction(), p.forward_fraction())
     }
 
+    /// The truncated particle phase function along a ray looking along
+    /// `view`, whose forward delta `render::march` scatters into explicitly.
+    pub fn particle_peak(&self, view: Vec3) -> &TruncatedPhase {
+        &self.phases_for(-view)[1]
+    }
+
     fn search(&self, k: usize) -> Search {
         match self.scene.estimate.radius_m {
             Some(r) => Search::Radius {

@@ -63,6 +63,7 @@ const UNITS: &[(&str, &str)] = &[
     ("radiometers[].position_m", "m"),
     ("radiometers[].L", SPECTRAL_RADIANCE),
     ("radiometers[].stderr", SPECTRAL_RADIANCE),
+    ("radiometers[].band_mean_stderr", SPECTRAL_RADIANCE),
     ("radiometers[].vov", "1"),
     ("radiometers[].largest_share", "1"),
     ("estimate.k", "photons"),

@@ -40,6 +40,23 @@ const GATHER_GUIDE: f64 = 0.3;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
 
+/// Per-march buffers, one entry per band (`est` one per channel).
+struct MarchBuffers {
+    est: Vec<f64>,
+    sun_t: Vec<f64>,
+    iops: Vec<Iop>,
+    tmp: Vec<Iop>,
+}
+
+/// How a straight run of a march ended.
+enum Segment {
+    /// Scattered into the forward peak at `at`, on along `to`, every band
+    /// weighted by `weight`.
+    Turned { at: Vec3, to: Vec3, weight: f64 },
+    /// At the floor, a target, the surface or the end of the march.
+    Ended,
+}
+
 /// The photon-map integrator along one ray: precomputed light sources, the
 /// estimator, and the march through surface, water, floor and targets.
 pub struct RayMarcher<'a> {
@@ -134,6 +151,24 @@ impl<'a> RayMarcher<'a> {
 
     /// [`march`](Self::march), gathering at a target it meets when `gather`
     /// (see [`gather`](Self::gather); gather rays do not gather again).
+    ///
+    /// **The particles' forward peak is scattered into explicitly.** The
+    /// photon estimates weigh photons by the truncated phase functions
+    /// (`estimate::peak`), whose forward delta scatters light of the ray's
+    /// own direction back into it. Where the radiance varies within the
+    /// peak's cone (20 degrees looking down) that is wrong: above a small
+    /// bright target the delta carried the target's radiance up at reduced
+    /// extinction where the cone sees the floor around it (a 0.5 m box 6 m
+    /// down read 15 % bright from the air). So the ray itself scatters into
+    /// the particle delta: at rate sigma = f_p min_b b_p (the same for every
+    /// band, so no band is reweighted) it turns by an angle drawn from the
+    /// delta's own shape (`TruncatedPhase::sample_peak`) and the march goes
+    /// on from there, each band still attenuated by c - f_w b_w - f_p b_p.
+    /// What a band's f_p b_p exceeds sigma by, and the pure-water delta
+    /// (about 1e-3 of b_w), stay a delta, as does the peak along rays
+    /// looking up (see `segment`). This turns bias into variance: a pixel
+    /// over a small target sees the floor around it through the turns, as
+    /// light does.
     fn march_with(
         &self,
         p0: Vec3,
@@ -146,22 +181,66 @@ impl<'a> RayMarcher<'a> {
         let nb = self.bands();
         let channels = out.len() / nb;
         debug_assert!(channels == 1 || channels == CHANNELS);
-        let scene = self.scene;
         out.iter_mut().for_each(|o| *o = 0.0);
         let mut tr = vec![1.0f64; nb];
-        let mut est = vec![0.0f64; out.len()];
-        let mut sun_t = vec![0.0f64; nb];
-        let mut iops = vec![Iop::default(); nb];
-        let mut tmp = vec![Iop::default(); nb];
+        let mut buf = MarchBuffers {
+            est: vec![0.0f64; out.len()],
+            sun_t: vec![0.0f64; nb],
+            iops: vec![Iop::default(); nb],
+            tmp: vec![Iop::default(); nb],
+        };
+        let (mut p, mut dir) = (p0, dir);
+        let mut travelled = 0.0f32;
+        loop {
+            match self.segment(
+                p, dir, travelled, rng, scratch, out, &mut tr, &mut buf, gather,
+            )? {
+                Segment::Turned { at, to, weight } => {
+                    travelled += (at - p).length();
+                    tr.iter_mut().for_each(|t| *t *= weight);
+                    p = at;
+                    dir = to;
+                }
+                Segment::Ended => return Ok(()),
+            }
+        }
+    }
+
+    /// One straight run of [`march_with`](Self::march_with) from `p0` along
+    /// `dir`: the steps' sources into `out` with each band's transmittance
+    /// `tr` (carried in and out), up to a scattering into the forward peak
+    /// (`Turned`) or the end of the ray, where the floor, a target or the
+    /// sky through the surface is added (`Ended`).
+    #[allow(clippy::too_many_arguments)]
+    fn segment(
+        &self,
+        p0: Vec3,
+        dir: Vec3,
+        travelled: f32,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+        tr: &mut [f64],
+        buf: &mut MarchBuffers,
+        gather: bool,
+    ) -> Result<Segment> {
+        let nb = self.bands();
+        let scene = self.scene;
+        let MarchBuffers {
+            est,
+            sun_t,
+            iops,
+            tmp,
+        } = buf;
         let t_surface = if dir.z > 0.0 {
             -p0.z / dir.z
         } else {
             f32::INFINITY
         };
-        let limit = t_surface.min(MAX_MARCH_M);
+        let limit = t_surface.min(MAX_MARCH_M - travelled);
         // An instrument may sit closer to the floor than the self-intersection epsilon.
         let hit = scene.geometry.intersect_from_point(p0, dir, limit);
-        let t_end = hit.map_or(limit, |h| h.t);
+        let t_end = hit.map_or(limit.max(0.0), |h| h.t);
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
         let (fw, fp) = self.est.forward_fractions(dir);
@@ -180,32 +259,57 @@ impl<'a> RayMarcher<'a> {
         // strongly absorbed bands (at 650 nm in the built-in scene, c dt ~
         // 0.35: the transmittance across a step varies by 30 %).
         let closed_form = !scene.water.is_layered();
+        // Only rays looking down scatter into the peak: looking up, a turn
+        // toward the sun meets the forward peak of its single scattering
+        // with nothing to bound it (a double forward scattering sampled
+        // from one side), so the delta stays there.
+        let turns = dir.z < 0.0;
         let up_len_per_s = (-dir.z / -self.sun_w.z).max(0.0) as f64;
         let mut t0 = 0.0f32;
         while t0 < t_end {
             let dt = step.min(t_end - t0);
-            let s = dt * rng.uniform_f32();
-            let x = p0 + dir * (t0 + s);
-            scene.water.iops(x, &mut iops);
-            self.est
-                .volume_with_iops(x, -dir, &iops, scratch, &mut est)?;
-            self.sun_transmittance(x, &iops, &mut tmp, &mut sun_t);
+            let mut s = dt * rng.uniform_f32();
+            let mut x = p0 + dir * (t0 + s);
+            scene.water.iops(x, iops);
+            // A scattering into the particles' forward peak within the step
+            // (at the rate of the IOPs at the sample, as the step takes
+            // them) ends the run there, and the step's sample is drawn again
+            // before it.
+            let sigma = if turns {
+                fp * iops.iter().fold(f64::INFINITY, |m, i| m.min(i.b_p))
+            } else {
+                0.0
+            };
+            let turn = if sigma > 0.0 && sigma.is_finite() {
+                let d = rng.exponential(sigma);
+                (d < dt as f64).then_some(d as f32)
+            } else {
+                None
+            };
+            let len = turn.unwrap_or(dt);
+            if turn.is_some() {
+                s = len * rng.uniform_f32();
+                x = p0 + dir * (t0 + s);
+                scene.water.iops(x, iops);
+            }
+            self.est.volume_with_iops(x, -dir, iops, scratch, est)?;
+            self.sun_transmittance(x, iops, tmp, sun_t);
             let mut alive = false;
             for b in 0..nb {
                 let iop = iops[b];
-                let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
                 // The forward delta of the truncated phase functions puts
                 // its share of scattering back into the ray (see `peak`).
                 let c = iop.c() - fw * iop.b_w - fp * iop.b_p;
-                let f = tr[b] * (-c * s as f64).exp() * dt as f64;
+                let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
+                let f = tr[b] * (-c * s as f64).exp() * len as f64;
                 let single_step = if closed_form {
                     // single at s is single(0) exp(-k s); T(s) = exp(-c s).
                     let k = iop.c() * up_len_per_s;
                     let rate = c + k;
-                    let integral = if rate * (dt as f64) > 1e-9 {
-                        (1.0 - (-rate * dt as f64).exp()) / rate
+                    let integral = if rate * (len as f64) > 1e-9 {
+                        (1.0 - (-rate * len as f64).exp()) / rate
                     } else {
-                        dt as f64
+                        len as f64
                     };
                     tr[b] * single * (k * s as f64).exp() * integral
                 } else {
@@ -215,27 +319,36 @@ impl<'a> RayMarcher<'a> {
                 for k in (nb + b..out.len()).step_by(nb) {
                     out[k] += f * est[k];
                 }
-                tr[b] *= (-c * dt as f64).exp();
+                tr[b] *= (-c * len as f64).exp();
                 alive |= tr[b] > MIN_TRANSMITTANCE;
             }
-            t0 += dt;
             if !alive {
-                return Ok(());
+                return Ok(Segment::Ended);
             }
+            if let Some(d) = turn {
+                let peak = self.est.particle_peak(dir);
+                if let Some((to, weight)) = peak.sample_peak(dir, rng) {
+                    return Ok(Segment::Turned {
+                        at: p0 + dir * (t0 + d),
+                        to,
+                        weight,
+                    });
+                }
+            }
+            t0 += len;
         }
         if let Some(h) = hit {
             // Floor or target: direct sun plus the surface photon estimate.
             let n = h.normal;
             let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
             let x = h.position + n * 1e-3;
-            scene.water.iops(x, &mut iops);
-            self.sun_transmittance(x, &iops, &mut tmp, &mut sun_t);
+            scene.water.iops(x, iops);
+            self.sun_transmittance(x, iops, tmp, sun_t);
             let rays = scene.estimate.gather_rays;
             if gather && rays > 0 && h.surface != FLOOR {
-                self.gather(h.position, n, h.surface, rays, rng, scratch, &mut est)?;
+                self.gather(h.position, n, h.surface, rays, rng, scratch, est)?;
             } else {
-                self.est
-                    .surface(h.position, n, h.surface, scratch, &mut est)?;
+                self.est.surface(h.position, n, h.surface, scratch, est)?;
             }
             for b in 0..nb {
                 let r = scene.reflectance(h.surface, h.position, b);
@@ -245,7 +358,7 @@ impl<'a> RayMarcher<'a> {
                     out[k] += tr[b] * est[k];
                 }
             }
-        } else if t_surface <= MAX_MARCH_M {
+        } else if t_surface <= limit {
             // Looking up through the surface: the transmitted sky, n^2
             // brighter, from the direction the ray leaves the water in.
             let n = scene.surface.n_water;
@@ -257,7 +370,7 @@ impl<'a> RayMarcher<'a> {
                 out[b] += tr[b] * t * n * n * g * self.sky_l[b];
             }
         }
-        Ok(())
+        Ok(Segment::Ended)
     }
 
     /// Radiance per band leaving a target's Lambertian face at `x` (normal

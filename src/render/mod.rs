@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 /// Side of an image tile in pixels.
 pub const TILE_PX: usize = 16;
 /// Samples (jittered positions within 0.5 m) per radiometer reading.
-pub const RADIOMETER_SAMPLES: u64 = 32;
+pub const RADIOMETER_SAMPLES: u64 = 256;
 
 const PIXEL_STREAM: u64 = 0x7069_7865_6c73;
 const RADIOMETER_STREAM: u64 = 0x7261_6469_6f6d;

@@ -71,9 +71,9 @@ fn band_mean_standard_error_follows_the_correlation_of_the_bands() {
     // as the bands' do.
     let mut m = Moments::new(2, CHANNELS);
     let mut sample = vec![0.0; 2 * CHANNELS];
-    for i in 0..100 {
+    for &x in &xs[..100] {
         sample[..2].copy_from_slice(&[1.0, 1.0]);
-        sample[2..4].copy_from_slice(&[xs[i], 1.0 - xs[i]]);
+        sample[2..4].copy_from_slice(&[x, 1.0 - x]);
         m.add(&sample);
     }
     // The band means of the groups: group 0 sums to 100 * 0.5 = 50, the
