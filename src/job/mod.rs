@@ -363,7 +363,10 @@ fn publish_run(
         emission,
         map,
         reused_map,
-        warnings: report::radiometer_warnings(&rendered.radiometers),
+        warnings: report::radiometer_warnings(&rendered.radiometers)
+            .into_iter()
+            .chain(rendered.warnings.iter().cloned())
+            .collect(),
         radiometers: rendered.radiometers,
         estimate: scene.estimate.clone(),
         sensor: SensorSummary {

@@ -21,6 +21,7 @@
 
 use super::camera::CameraRay;
 use super::interface::{from_air_parts, sky_radiance};
+use super::sun::SunBeam;
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
 use crate::estimate::groups::CHANNELS;
@@ -44,6 +45,7 @@ const MIN_TRANSMITTANCE: f64 = 1e-4;
 struct MarchBuffers {
     est: Vec<f64>,
     sun_t: Vec<f64>,
+    beam: Vec<f64>,
     iops: Vec<Iop>,
     tmp: Vec<Iop>,
 }
@@ -68,6 +70,11 @@ pub struct RayMarcher<'a> {
     pub e_w: Vec<f64>,
     /// Sky radiance per band (isotropic).
     pub sky_l: Vec<f64>,
+    /// The sun's beam below a rough surface, sampled for the direct sun
+    /// on floors and targets (a flat surface refracts it exactly, `sun_w`).
+    sun: SunBeam<'a>,
+    /// Horizontal irradiance of the sun above the surface per band.
+    sun_h: Vec<f64>,
 }
 
 impl<'a> RayMarcher<'a> {
@@ -93,6 +100,10 @@ impl<'a> RayMarcher<'a> {
             sun_w: sun_w.as_vec3(),
             e_w,
             sky_l,
+            sun: SunBeam::new(scene),
+            sun_h: (0..scene.bands.len())
+                .map(|b| scene.sun.horizontal_irradiance(b))
+                .collect(),
         }
     }
 
@@ -104,7 +115,48 @@ impl<'a> RayMarcher<'a> {
     /// (0 where a target or the floor shades x); `here` holds the IOPs at x,
     /// `tmp` is space for other points in heterogeneous water.
     fn sun_transmittance(&self, x: Vec3, here: &[Iop], tmp: &mut [Iop], out: &mut [f64]) {
-        let up = -self.sun_w;
+        self.transmittance_up(x, -self.sun_w, here, tmp, out);
+    }
+
+    /// The direct sun's irradiance per band on a face at `x` (normal `n`,
+    /// IOPs `here`) under a rough surface, into `out`: the beams
+    /// [`SunBeam::sample`] draws through the facets (one by the facet
+    /// density, one for light meeting more than one facet), each
+    /// attenuated along its own way up to the surface (`t` is scratch), as
+    /// the path integrator draws them, in place of the mean flat surface's
+    /// single refracted direction. Single scattering along the march
+    /// still sees the sun through the mean flat surface.
+    #[allow(clippy::too_many_arguments)]
+    fn rough_direct(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        here: &[Iop],
+        tmp: &mut [Iop],
+        t: &mut [f64],
+        rng: &mut Pcg32,
+        out: &mut [f64],
+    ) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let scene = self.scene;
+        for beam in self.sun.sample(rng).into_iter().flatten() {
+            let cos = n.dot(-beam.dir) as f64;
+            if cos <= 0.0 {
+                continue;
+            }
+            self.transmittance_up(x, -beam.dir, here, tmp, t);
+            for (b, o) in out.iter_mut().enumerate() {
+                let f = beam
+                    .crossing
+                    .band_factor(scene.water_index[b], scene.surface.n_water);
+                *o += self.sun_h[b] * beam.g * f * cos * t[b];
+            }
+        }
+    }
+
+    /// Transmittance per band from `x` along `up` (pointing up) to the
+    /// surface, 0 where a target or the floor is in the way.
+    fn transmittance_up(&self, x: Vec3, up: Vec3, here: &[Iop], tmp: &mut [Iop], out: &mut [f64]) {
         let len = (-x.z / up.z).max(0.0);
         if self.scene.geometry.occluded(x, up, len) {
             out.iter_mut().for_each(|o| *o = 0.0);
@@ -186,6 +238,7 @@ impl<'a> RayMarcher<'a> {
         let mut buf = MarchBuffers {
             est: vec![0.0f64; out.len()],
             sun_t: vec![0.0f64; nb],
+            beam: vec![0.0f64; nb],
             iops: vec![Iop::default(); nb],
             tmp: vec![Iop::default(); nb],
         };
@@ -229,6 +282,7 @@ impl<'a> RayMarcher<'a> {
         let MarchBuffers {
             est,
             sun_t,
+            beam,
             iops,
             tmp,
         } = buf;
@@ -340,10 +394,18 @@ impl<'a> RayMarcher<'a> {
         if let Some(h) = hit {
             // Floor or target: direct sun plus the surface photon estimate.
             let n = h.normal;
-            let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
             let x = h.position + n * 1e-3;
             scene.water.iops(x, iops);
-            self.sun_transmittance(x, iops, tmp, sun_t);
+            // The direct sun's irradiance on the face per band, into sun_t.
+            if self.sun.rough_norm.is_some() {
+                self.rough_direct(x, n, iops, tmp, beam, rng, sun_t);
+            } else {
+                let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
+                self.sun_transmittance(x, iops, tmp, sun_t);
+                for (e, w) in sun_t.iter_mut().zip(&self.e_w) {
+                    *e = *w * *e * cos_n;
+                }
+            }
             let rays = scene.estimate.gather_rays;
             if gather && rays > 0 && h.surface != FLOOR {
                 self.gather(h.position, n, h.surface, rays, rng, scratch, est)?;
@@ -352,7 +414,7 @@ impl<'a> RayMarcher<'a> {
             }
             for b in 0..nb {
                 let r = scene.reflectance(h.surface, h.position, b);
-                let direct = self.e_w[b] * sun_t[b] * cos_n * r / std::f64::consts::PI;
+                let direct = sun_t[b] * r / std::f64::consts::PI;
                 out[b] += tr[b] * (direct + est[b]);
                 for k in (nb + b..out.len()).step_by(nb) {
                     out[k] += tr[b] * est[k];

@@ -25,6 +25,8 @@ pub mod camera;
 pub mod interface;
 pub mod march;
 pub mod path;
+pub mod sun;
+pub mod targets;
 
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::cube::quicklook::{write_png, Quicklook};
@@ -241,6 +243,9 @@ pub struct Rendered {
     pub radiometers: Vec<RadiometerReading>,
     /// Tile-cache counters after the render (zero without a photon map).
     pub cache: crate::store::cache::CacheStats,
+    /// What the render found wrong with its inputs (see
+    /// [`targets::face_warnings`]).
+    pub warnings: Vec<String>,
 }
 
 /// Render `scene` from `map` with the photon-map integrator into
@@ -255,6 +260,7 @@ pub fn render(
     let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
     let mut r = render_with(scene, &light, dir, threads, progress)?;
     r.cache = map.cache_stats();
+    r.warnings = targets::face_warnings(scene, map)?;
     Ok(r)
 }
 
@@ -526,6 +532,7 @@ impl RenderOutputs {
             products,
             radiometers,
             cache: Default::default(),
+            warnings: Vec::new(),
         })
     }
 }

@@ -74,6 +74,7 @@
 
 use super::camera::CameraRay;
 use super::interface::{from_air_parts, sky_radiance};
+use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
 use crate::error::Result;
 use crate::optics::iop::Iop;
@@ -89,51 +90,6 @@ const ROULETTE_AFTER: u32 = 4;
 /// Share of scattering directions drawn around the direction toward the
 /// sun rather than around the path's own direction.
 const GUIDE_FRACTION: f64 = 0.3;
-/// Angular radius of the sun's disc seen from the Earth (0.2665 degrees).
-pub const SUN_HALF_ANGLE_RAD: f64 = 4.6513e-3;
-
-/// A sample of the direct sun in the water.
-struct SunSample {
-    /// Direction of travel of the sampled sunlight in the water.
-    dir: Vec3,
-    /// The sampled radiance over its pdf, divided by the sun's horizontal
-    /// irradiance above the surface: E_h g is the beam-normal irradiance
-    /// the sample stands for.
-    g: f64,
-    /// Light-sampling pdf of `-dir` per sr in the water (infinite under a
-    /// rough surface, where it is not computed and no MIS is done).
-    pdf: f64,
-    /// How the beam crossed the surface, for each band's own Fresnel
-    /// transmittance ([`Crossing::band_factor`]).
-    crossing: Crossing,
-}
-
-/// How sunlight crossed the surface into the water, drawn at the reference
-/// refractive index.
-#[derive(Clone, Copy)]
-enum Crossing {
-    /// Through one facet (or the flat surface) at this incidence cosine.
-    Facet(f64),
-    /// Through the facets `interact` met.
-    Event(crate::optics::surface::SurfaceEvent),
-}
-
-impl Crossing {
-    /// A band's transmittance over the one the sample carries: 1 unless
-    /// the water's index varies between bands.
-    fn band_factor(&self, n_band: f64, n_ref: f64) -> f64 {
-        if n_band == n_ref {
-            return 1.0;
-        }
-        match self {
-            Crossing::Facet(cos_i) => {
-                (1.0 - fresnel_reflectance(*cos_i, 1.0, n_band))
-                    / (1.0 - fresnel_reflectance(*cos_i, 1.0, n_ref))
-            }
-            Crossing::Event(ev) => ev.weight_for(n_band, n_ref),
-        }
-    }
-}
 
 /// The path integrator of one scene.
 pub struct PathTracer<'a> {
@@ -146,9 +102,8 @@ pub struct PathTracer<'a> {
     /// Each band's smallest extinction anywhere in the water (1/m): the
     /// control of residual ratio tracking.
     c_min: Vec<f64>,
-    /// Under a rough surface, the facet sampler's normalisation for the
-    /// sun's direction (`SeaSurface::facing_normalisation`); None when flat.
-    rough_norm: Option<f64>,
+    /// Samples of the sun's beam in the water.
+    sun: SunBeam<'a>,
     /// The IOPs of uniform water (None when they vary in space).
     uniform: Option<Vec<Iop>>,
     /// Direction toward the sun in the water (through the mean surface),
@@ -212,11 +167,7 @@ impl<'a> PathTracer<'a> {
                 .collect(),
             c_bar,
             c_min: (0..nb).map(|b| scene.water.minorant(b)).collect(),
-            rough_norm: (scene.surface.slope_variance > 0.0).then(|| {
-                scene
-                    .surface
-                    .facing_normalisation(scene.sun.direction.as_dvec3())
-            }),
+            sun: SunBeam::new(scene),
             uniform,
         }
     }
@@ -245,69 +196,6 @@ impl<'a> PathTracer<'a> {
         )
     }
 
-    /// A direction of the sun's disc, uniform in solid angle (travel, in air).
-    fn sun_disc_direction(&self, rng: &mut Pcg32) -> Vec3 {
-        let cos_max = SUN_HALF_ANGLE_RAD.cos();
-        let cos_t = 1.0 - rng.uniform_f64() * (1.0 - cos_max);
-        let phi = std::f64::consts::TAU * rng.uniform_f64();
-        scatter(self.scene.sun.direction, cos_t as f32, phi as f32)
-    }
-
-    /// Solid angle of the sun's disc in air (sr).
-    fn disc_solid_angle() -> f64 {
-        std::f64::consts::TAU * (1.0 - SUN_HALF_ANGLE_RAD.cos())
-    }
-
-    /// Samples of the direct sun in the water: `[0]` weighed by MIS (the
-    /// sun's disc refracted by a flat surface, or the beam refracted by
-    /// the first facet of a rough one), `[1]` the part of a rough
-    /// surface's transmission that meets more than one facet (drawn by
-    /// `interact`, no MIS). None where the sampled ray does not enter the
-    /// water (see [`SunSample`]).
-    fn sample_sun(&self, rng: &mut Pcg32) -> [Option<SunSample>; 2] {
-        let n = self.scene.surface.n_water;
-        let Some(z_norm) = self.rough_norm else {
-            let d_a = self.sun_disc_direction(rng);
-            let cos_s = -self.scene.sun.direction.z as f64;
-            let cos_a = -d_a.z as f64;
-            let single = refract(d_a.as_dvec3(), DVec3::Z, 1.0, n)
-                .filter(|_| cos_a > 0.0)
-                .map(|d_w| {
-                    let cos_w = -d_w.z;
-                    let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
-                    SunSample {
-                        dir: d_w.as_vec3(),
-                        g: t * cos_a / (cos_s * cos_w),
-                        pdf: n * n * cos_w / (cos_a * Self::disc_solid_angle()),
-                        crossing: Crossing::Facet(cos_a),
-                    }
-                });
-            return [single, None];
-        };
-        let surface = &self.scene.surface;
-        let i = self.scene.sun.direction.as_dvec3();
-        let m = surface.sample_facet_from_above(i, rng);
-        let single = refract(i, m, 1.0, n).filter(|o| o.z < 0.0).and_then(|o| {
-            let (pdf, t, cos_im) = surface.beam_transmission(i, o, z_norm)?;
-            // The refracted beam escapes the facets unshadowed (Smith).
-            Some(SunSample {
-                dir: o.as_vec3(),
-                g: t * surface.masking(o) / -o.z,
-                pdf,
-                crossing: Crossing::Facet(cos_im),
-            })
-        });
-        let ev = surface.interact(self.scene.sun.direction, rng);
-        let multiple =
-            (ev.transmitted && ev.facets > 1 && ev.direction.z < 0.0).then(|| SunSample {
-                dir: ev.direction,
-                g: 1.0 / -(ev.direction.z as f64),
-                pdf: f64::INFINITY,
-                crossing: Crossing::Event(ev),
-            });
-        [single, multiple]
-    }
-
     /// For a path direction `next` (in water, pointing up): the direct
     /// sun's radiance along it divided by the sun's horizontal irradiance,
     /// and the MIS light-sampling pdf of that direction per sr; None when
@@ -319,7 +207,7 @@ impl<'a> PathTracer<'a> {
             return None;
         }
         let n = self.scene.surface.n_water;
-        if let Some(z_norm) = self.rough_norm {
+        if let Some(z_norm) = self.sun.rough_norm {
             let o = -next.as_dvec3();
             let i = self.scene.sun.direction.as_dvec3();
             let surface = &self.scene.surface;
@@ -333,7 +221,7 @@ impl<'a> PathTracer<'a> {
             return None;
         }
         let (cos_a, cos_w, cos_s) = (up_a.z, next.z as f64, to_sun.z);
-        let omega = Self::disc_solid_angle();
+        let omega = SunBeam::disc_solid_angle();
         let t = 1.0 - fresnel_reflectance(cos_a, 1.0, n);
         Some((
             n * n * t / (cos_s * omega),
@@ -573,7 +461,7 @@ impl<'a> PathTracer<'a> {
                 // Floor or target: the sun directly, then a Lambertian bounce.
                 pos = h.position;
                 let n = h.normal;
-                for sun in self.sample_sun(rng).into_iter().flatten() {
+                for sun in self.sun.sample(rng).into_iter().flatten() {
                     let (s_w, g) = (sun.dir, sun.g);
                     let cos_n = (-s_w).dot(n) as f64;
                     if cos_n > 0.0 {
@@ -688,7 +576,7 @@ impl<'a> PathTracer<'a> {
             // The sun scattered toward the viewer: light sampling, weighed
             // (balance heuristic) against finding the disc by the direction
             // drawn below.
-            for sun in self.sample_sun(rng).into_iter().flatten() {
+            for sun in self.sun.sample(rng).into_iter().flatten() {
                 let s_w = sun.dir;
                 self.transmittance(pos, -s_w, rng, tmp, tr);
                 let mis = if sun.pdf.is_finite() {

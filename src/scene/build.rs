@@ -363,6 +363,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         water_phase,
         bottom,
         target_reflectance,
+        target_extents: extents,
         geometry,
         photons: f.photons.count,
         store_direct: f.photons.store_direct,

@@ -215,6 +215,8 @@ pub struct Scene {
     pub bottom: Option<Bottom>,
     /// Lambertian reflectance per band of each target (surface id 1 + index).
     pub target_reflectance: Vec<Vec<f64>>,
+    /// The bounds of each target's triangles (surface id 1 + index).
+    pub target_extents: Vec<crate::bounds::Aabb>,
     pub geometry: Geometry,
     pub photons: u64,
     pub store_direct: bool,

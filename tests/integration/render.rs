@@ -662,3 +662,69 @@ fn render_outputs_and_errors() {
         "{err}"
     );
 }
+
+/// A target whose top face is narrower than the surface search at its
+/// centre is warned about in the report when its faces are read from the
+/// surface map (`gather_rays = 0`), naming it; a 10 m panel is not, and
+/// with final gathering (the default) neither is.
+#[test]
+fn targets_narrower_than_their_surface_search_are_warned_about() {
+    let text = |gather: u32| {
+        format!(
+            r#"
+name = "small"
+[spectral]
+start_nm = 450.0
+end_nm = 650.0
+bands = 4
+[sun]
+zenith_deg = 30.0
+irradiance = 1.0
+[domain]
+size_m = [40.0, 40.0]
+[water]
+chl = 1.0
+[bottom]
+depth_m = 4.0
+reflectance = 0.2
+[[target]]
+kind = "panel"
+center_m = [10.0, 10.0, -2.0]
+size_m = [10.0, 10.0]
+reflectance = 0.5
+[[target]]
+kind = "box"
+center_m = [30.0, 30.0, -3.75]
+size_m = [0.3, 0.3, 0.5]
+reflectance = 0.5
+[photons]
+count = 100000
+[sensor]
+pixels = [2, 2]
+[estimate]
+gather_rays = {gather}
+"#
+        )
+    };
+    let dir = tempdir();
+    let s = Scene::parse(&text(0), Path::new("small.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("surface"), 0);
+    let faces: Vec<&String> = r
+        .warnings
+        .iter()
+        .filter(|w| w.starts_with("target"))
+        .collect();
+    assert_eq!(faces.len(), 1, "{:?}", r.warnings);
+    assert!(
+        faces[0].starts_with("target 1: its top face (0.30 x 0.30 m)"),
+        "{}",
+        faces[0]
+    );
+    let s = Scene::parse(&text(32), Path::new("small.toml"), &Overrides::default()).unwrap();
+    let r = render_job(&s, &dir.path().join("gathered"), 0);
+    assert!(
+        r.warnings.iter().all(|w| !w.starts_with("target")),
+        "{:?}",
+        r.warnings
+    );
+}
