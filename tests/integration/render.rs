@@ -488,9 +488,11 @@ fn check_against_tally(
 /// directly (photons crossing the depth within 10 degrees of straight up),
 /// Lu(z) decays with Kd from the irradiance tallies within 10 %, and the
 /// camera equals the radiometer just below the surface carried through it
-/// (Fresnel, n^2). The 3 % allowed beyond three standard errors covers the
-/// tally's cone average and the forward-peak delta of the estimate
-/// (`estimate::peak`, measured there within +4 %).
+/// (Fresnel, n^2). The 1 % allowed beyond three standard errors covers the
+/// tally's average over its 10-degree cone. (It was 3 % while rays looking
+/// down kept the particles' forward peak as a delta, `estimate::peak`,
+/// measured there within +4 %; they now turn into it, `render::march`:
+/// 1.009, 1.016 and 1.030 +- 0.047 of the tally at 0.01, 1 and 6 m.)
 #[test]
 fn radiometers_match_the_lu_tally_and_decay_with_kd() {
     let dir = tempdir();
@@ -505,7 +507,7 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
     // Tally rows: depths 0, 1, 2 and 6 m.
     let lu: Vec<f64> = [(0usize, 0usize), (1, 1), (2, 3)]
         .iter()
-        .map(|&(i, row)| check_against_tally(&r, i, depths[i], row, "Lu", bands, 0.03))
+        .map(|&(i, row)| check_against_tally(&r, i, depths[i], row, "Lu", bands, 0.01))
         .collect();
     let k_lu = (lu[1] / lu[2]).ln() / 5.0;
     let kd = (tally_mean(&r, 1, "Ed", bands).0 / tally_mean(&r, 3, "Ed", bands).0).ln() / 5.0;
@@ -539,7 +541,9 @@ fn radiometers_match_the_lu_tally_and_decay_with_kd() {
 /// count within 10 degrees of straight down. Measured 2-4 % low with the
 /// default 10-degree forward-peak delta for rays looking up (`estimate::peak`: looking up, the
 /// light field brightens toward the sun inside the peak), hence the 5 %
-/// allowed beyond three standard errors.
+/// allowed beyond three standard errors. Rays looking up keep the delta
+/// (`render::march`: a turn toward the sun meets its single scattering's
+/// forward peak unbounded); 0.996 and 0.967 of the tally at 1 and 6 m.
 #[test]
 fn zenith_radiometers_match_the_ld_tally() {
     let dir = tempdir();
