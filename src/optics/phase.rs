@@ -231,6 +231,35 @@ pub fn scatter(w: Vec3, cos_theta: f32, phi: f32) -> Vec3 {
     scatter_sin_cos(w, sin_theta, cos_theta, phi)
 }
 
+/// Scattering by two phase functions at once: `q` of it by `first` (pure
+/// water), the rest by `second` (particles).
+pub struct Mixture<'a> {
+    pub first: &'a PhaseFunction,
+    pub second: &'a PhaseFunction,
+    pub q: f64,
+}
+
+impl Mixture<'_> {
+    /// The density per sr at `m` = 1 - cos of the scattering angle.
+    pub fn eval_one_minus_cos(&self, m: f64) -> f64 {
+        self.q * self.first.eval_one_minus_cos(m)
+            + (1.0 - self.q) * self.second.eval_one_minus_cos(m)
+    }
+
+    /// A direction drawn from the mixture around unit `axis` (the cosine's
+    /// uniform first, then the choice of function, then the azimuth).
+    pub fn sample_around(&self, axis: Vec3, rng: &mut crate::rng::Pcg32) -> Vec3 {
+        let u = rng.uniform_f64();
+        let mu = if rng.uniform_f64() < self.q {
+            self.first.sample_cos(u)
+        } else {
+            self.second.sample_cos(u)
+        };
+        let phi = TWO_PI * rng.uniform_f64();
+        scatter(axis, mu as f32, phi as f32)
+    }
+}
+
 /// Cosine-weighted (Lambertian) direction of travel in the hemisphere
 /// around the unit normal `n`.
 pub fn cosine_hemisphere(n: Vec3, rng: &mut crate::rng::Pcg32) -> Vec3 {

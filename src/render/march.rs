@@ -26,6 +26,7 @@ use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
 use crate::estimate::groups::CHANNELS;
 use crate::optics::iop::Iop;
+use crate::optics::phase::Mixture;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
 use crate::scene::{Scene, FLOOR};
@@ -471,25 +472,21 @@ impl<'a> RayMarcher<'a> {
         out.iter_mut().for_each(|o| *o = 0.0);
         let axis = -self.sun_w;
         let sun = scene.sun.irradiance.iter().any(|&e| e > 0.0);
-        let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
         let mut iops = vec![Iop::default(); nb];
         scene.water.iops(x, &mut iops);
         let (bw, b) = iops
             .iter()
             .fold((0.0, 0.0), |(w, t), i| (w + i.b_w, t + i.b()));
-        let q = if b > 0.0 { bw / b } else { 0.0 };
+        let mixture = Mixture {
+            first: &scene.water_phase,
+            second: &scene.particle_phase,
+            q: if b > 0.0 { bw / b } else { 0.0 },
+        };
         let guide = if sun && b > 0.0 { GATHER_GUIDE } else { 0.0 };
         let start = x + n * 1e-3;
         for _ in 0..rays {
             let w = if rng.uniform_f64() < guide {
-                let u = rng.uniform_f64();
-                let mu = if rng.uniform_f64() < q {
-                    pw.sample_cos(u)
-                } else {
-                    pp.sample_cos(u)
-                };
-                let phi = std::f64::consts::TAU * rng.uniform_f64();
-                crate::optics::phase::scatter(axis, mu as f32, phi as f32)
+                mixture.sample_around(axis, rng)
             } else {
                 crate::optics::phase::cosine_hemisphere(n, rng)
             };
@@ -499,7 +496,7 @@ impl<'a> RayMarcher<'a> {
             }
             let m = 0.5 * (w - axis).length_squared() as f64;
             let lambert = cos_n / std::f64::consts::PI;
-            let phase = q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m);
+            let phase = mixture.eval_one_minus_cos(m);
             let pdf = (1.0 - guide) * lambert + guide * phase;
             if !pdf.is_finite() {
                 continue; // exactly on the peak of a phase function without a finite one

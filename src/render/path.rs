@@ -78,7 +78,7 @@ use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
 use crate::error::Result;
 use crate::optics::iop::Iop;
-use crate::optics::phase::{cosine_hemisphere, scatter};
+use crate::optics::phase::{cosine_hemisphere, Mixture};
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
@@ -349,25 +349,25 @@ impl<'a> PathTracer<'a> {
         true
     }
 
+    /// The scattering mixture, `q` pure water and `1 - q` particles.
+    fn mixture_of(&self, q: f64) -> Mixture<'_> {
+        Mixture {
+            first: &self.scene.water_phase,
+            second: &self.scene.particle_phase,
+            q,
+        }
+    }
+
     /// The density per sr of the scattering mixture, `q` pure water and
     /// `1 - q` particles, at `m` = 1 - cos of the scattering angle.
     fn mixture(&self, q: f64, m: f64) -> f64 {
-        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
-        q * pw.eval_one_minus_cos(m) + (1.0 - q) * pp.eval_one_minus_cos(m)
+        self.mixture_of(q).eval_one_minus_cos(m)
     }
 
     /// A direction drawn from the scattering mixture (`q` pure water)
     /// around `axis`.
     fn sample_around(&self, axis: Vec3, q: f64, rng: &mut Pcg32) -> Vec3 {
-        let (pw, pp) = (&self.scene.water_phase, &self.scene.particle_phase);
-        let u = rng.uniform_f64();
-        let mu = if rng.uniform_f64() < q {
-            pw.sample_cos(u)
-        } else {
-            pp.sample_cos(u)
-        };
-        let phi = std::f64::consts::TAU * rng.uniform_f64();
-        scatter(axis, mu as f32, phi as f32)
+        self.mixture_of(q).sample_around(axis, rng)
     }
 
     /// The direction leaving a Lambertian floor or target point `pos` with
