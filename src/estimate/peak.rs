@@ -16,7 +16,8 @@
 //! weighted by p*. This is exact except that the radiance inside the peak
 //! (a few degrees) is taken as the radiance along the ray itself, which is
 //! smooth there — except over a target smaller than the cone's footprint
-//! on it, so rays looking down scatter into the particles' delta
+//! on it, or where the light brightens toward the sun inside the cone, so
+//! rays scatter into the particles' delta
 //! explicitly (`render::march`, drawing directions from the delta's own
 //! shape with [`TruncatedPhase::sample_peak`]) instead of keeping it. Single scattering of the sun keeps the exact phase
 //! function and the full extinction, since the direct beam is not in the
@@ -104,6 +105,10 @@ struct PeakSampling {
     /// P_cone / f, with f = P_cone - p_t 2 pi (1 - cos theta_t) the
     /// delta's mass.
     scale: f64,
+    /// f itself.
+    mass: f64,
+    /// 1 - cos theta_t.
+    x_t: f64,
 }
 
 impl PeakSampling {
@@ -127,6 +132,8 @@ impl PeakSampling {
             u_t,
             p_t,
             scale: cone / mass,
+            mass,
+            x_t: 1.0 - cos_t,
         })
     }
 }
@@ -167,6 +174,25 @@ impl TruncatedPhase {
             exact: None,
             peak: PeakSampling::new(p, cos_t),
         }
+    }
+
+    /// The density per sr of [`Self::sample_peak`]'s directions `to`
+    /// around `w` (unit vectors): (p - p_t) / f inside the cone, 0 outside
+    /// it and without a delta.
+    pub fn peak_density(&self, w: Vec3, to: Vec3) -> f64 {
+        let Some(s) = self.peak.as_ref() else {
+            return 0.0;
+        };
+        let x = 0.5 * (to - w).length_squared() as f64;
+        if x > s.x_t {
+            return 0.0;
+        }
+        (s.phase.eval_one_minus_cos(x) - s.p_t).max(0.0) / s.mass
+    }
+
+    /// The cone's half-angle (radians), 0 without a delta.
+    pub fn peak_half_angle(&self) -> f64 {
+        self.peak.as_ref().map_or(0.0, |s| (1.0 - s.x_t).acos())
     }
 
     /// A direction of travel scattered into the forward delta from `w`,
