@@ -14,8 +14,9 @@
 //! as 3 m) and by the midpoint rule at most 0.5 m apart in smoothly
 //! varying water; the surface seen from the air is
 //! `interface::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
-//! radiometer looking up at the surface sees the transmitted sky (internal
-//! reflection of upwelling light there is not followed); a target's face
+//! ray looking up at the surface sees the sky through it and, marching on
+//! down, the light from below that it reflects (a rough surface's event
+//! drawn as the path integrator draws it); a target's face
 //! is read by final gathering (`RayMarcher::gather`), the floor by its
 //! surface photon estimate.
 
@@ -424,18 +425,82 @@ impl<'a> RayMarcher<'a> {
                 }
             }
         } else if t_surface <= limit {
-            // Looking up through the surface: the transmitted sky, n^2
-            // brighter, from the direction the ray leaves the water in.
-            let n = scene.surface.n_water;
-            let g = crate::optics::surface::refract(dir.as_dvec3(), glam::DVec3::NEG_Z, n, 1.0)
-                .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
-            for b in 0..nb {
-                let n = scene.water_index[b];
-                let t = 1.0 - fresnel_reflectance(dir.z as f64, n, 1.0);
-                out[b] += tr[b] * t * n * n * g * self.sky_l[b];
-            }
+            let at = p0 + dir * t_surface;
+            return Ok(self.under_surface(Vec3::new(at.x, at.y, 0.0), dir, rng, out, tr));
         }
         Ok(Segment::Ended)
+    }
+
+    /// A ray looking up meets the surface at `at`: the sky it sees through
+    /// the surface (n^2 brighter) into `out`, and the light from below
+    /// that the surface reflects down along the ray (`Turned`: the march
+    /// goes on down with `tr` times the reflectance). A flat surface
+    /// splits the ray by Fresnel (the reflected part by Russian roulette,
+    /// so that a ray looking up is seldom marched twice); a rough one draws the facets' event as
+    /// the path integrator does (`SeaSurface::interact`: transmitted to
+    /// the sky or reflected down, each band reweighted to its own index),
+    /// so both read the same light through the facets, and past the
+    /// critical angle a radiometer sees the water below.
+    fn under_surface(
+        &self,
+        at: Vec3,
+        dir: Vec3,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        tr: &mut [f64],
+    ) -> Segment {
+        let scene = self.scene;
+        let n_ref = scene.surface.n_water;
+        let to = if scene.surface.slope_variance <= 0.0 {
+            let g = refract(dir.as_dvec3(), glam::DVec3::NEG_Z, n_ref, 1.0)
+                .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
+            // The reflected part goes on with probability q, its largest
+            // reflectance (every ray past the critical angle, 2 % of those
+            // looking straight up), each band weighted by r / q.
+            let mut q = 0.0f64;
+            for (b, t) in tr.iter_mut().enumerate() {
+                let n = scene.water_index[b];
+                let r = fresnel_reflectance(dir.z as f64, n, 1.0);
+                out[b] += *t * (1.0 - r) * n * n * g * self.sky_l[b];
+                *t *= r;
+                q = q.max(r);
+            }
+            if q <= 0.0 || rng.uniform_f64() >= q {
+                return Segment::Ended;
+            }
+            tr.iter_mut().for_each(|t| *t /= q);
+            Vec3::new(dir.x, dir.y, -dir.z)
+        } else {
+            let ev = scene.surface.interact(dir, rng);
+            let dispersive = scene.dispersive();
+            let weight = |b: usize| {
+                if dispersive {
+                    ev.weight_for(scene.water_index[b], n_ref)
+                } else {
+                    1.0
+                }
+            };
+            if ev.transmitted {
+                let g = scene.sky.model.relative(ev.direction);
+                for (b, t) in tr.iter().enumerate() {
+                    let n = scene.water_index[b];
+                    out[b] += t * weight(b) * n * n * g * self.sky_l[b];
+                }
+                return Segment::Ended;
+            }
+            for (b, t) in tr.iter_mut().enumerate() {
+                *t *= weight(b);
+            }
+            ev.direction
+        };
+        if to.z >= 0.0 || tr.iter().all(|&t| t <= MIN_TRANSMITTANCE) {
+            return Segment::Ended;
+        }
+        Segment::Turned {
+            at,
+            to,
+            weight: 1.0,
+        }
     }
 
     /// A turn into the particles' forward peak from `dir`: the new

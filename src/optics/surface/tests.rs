@@ -433,7 +433,11 @@ fn bundle_quadrature(s: &SeaSurface, d: DVec3) -> (f64, f64, f64, f64) {
         for j in 0..CELLS {
             let zy = -s_max + (j as f64 + 0.5) * h;
             let m_up = DVec3::new(-zx, -zy, 1.0);
-            let facing = if from_above { -d.dot(m_up) } else { d.dot(m_up) };
+            let facing = if from_above {
+                -d.dot(m_up)
+            } else {
+                d.dot(m_up)
+            };
             if facing <= 0.0 {
                 continue;
             }
