@@ -170,7 +170,8 @@ fn photon_map_radiometers_match_the_path_integrator_in_six_scenes() {
 /// (`[estimate] gather_rays`).
 ///
 /// Not held: a 0.5 m box with its top at 1.5 m in this water reads 5-7 %
-/// low in the band mean and 11 % low in its worst band, a limit of the
+/// low in the band mean and 11 % low in its worst band, and a 1 m box
+/// there 9-10 % low (1.5 % from 5 cm above its top), a limit of the
 /// estimate rather than noise. Looking down, photons travelling toward the
 /// viewer are counted at the expanded search's scale (about a metre
 /// here), which spreads the bright light rising off a box smaller than
