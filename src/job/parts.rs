@@ -94,7 +94,8 @@ fn tile_path(dir: &Path, (i, j): (usize, usize)) -> PathBuf {
 /// A tile's file: magic, scene digest (64 hex bytes), i, j, w, h, bands,
 /// error flag (u32 LE each), the f32 LE arrays, CRC-32 of all before it.
 fn tile_bytes(t: &TileResult, digest: &str, bands: usize) -> Vec<u8> {
-    let mut b = Vec::with_capacity(128 + 4 * (t.values.len() * 5 + t.rgb.len()));
+    let arrays = 2 + t.products.len();
+    let mut b = Vec::with_capacity(128 + 4 * (t.values.len() * arrays + t.rgb.len()));
     b.extend_from_slice(TILE_MAGIC);
     b.extend_from_slice(digest.as_bytes());
     for v in [t.i, t.j, t.w, t.h, bands, !t.errors.is_empty() as usize] {
@@ -144,8 +145,16 @@ fn read_tile(
     if [u(0), u(1), u(2), u(3), u(4), u(5)] != [i, j, w, h, bands, errors as usize] {
         return Err(bad("tile position, size or bands do not match the scene"));
     }
+    // The radiance, its standard error (or nothing), each product, the
+    // quicklook's RGB: sized from the product list, so a tile of another
+    // product count is refused by its length.
     let n = w * h * bands;
-    let sizes = [n, if errors { n } else { 0 }, n, n, n, w * h * 3];
+    let products = crate::render::PRODUCTS.len();
+    let sizes: Vec<usize> = [n, if errors { n } else { 0 }]
+        .into_iter()
+        .chain(std::iter::repeat_n(n, products))
+        .chain([w * h * 3])
+        .collect();
     if body.len() != head + 4 * sizes.iter().sum::<usize>() {
         return Err(bad("tile length does not match its size"));
     }
@@ -160,7 +169,7 @@ fn read_tile(
     });
     let values = arrays.next().expect("values");
     let errors = arrays.next().expect("errors");
-    let products = (0..crate::render::PRODUCTS.len())
+    let products = (0..products)
         .map(|_| arrays.next().expect("product"))
         .collect();
     let rgb = arrays.next().expect("rgb");

@@ -1,4 +1,4 @@
-//! The map file layout, version 2.
+//! The map file layout, version 5 (`FORMAT_VERSION`).
 //!
 //! ```text
 //! offset 0   header   magic "LTRLMAP\0", version u32, header length u32,
@@ -23,8 +23,10 @@
 //! A reader checks the length, both magics, the version, the footer, the
 //! index, the header and the metadata before it touches any blob.
 //!
-//! Version 1 (no provenance, no metadata) is refused with a message to emit
-//! the map again: without provenance a map cannot be safely reused.
+//! Versions 1-4 are refused with a message to emit the map again: version
+//! 4 compressed a tile as one zstd frame, 3 kept volume photons in one
+//! layer, 2 recorded no photon groups, and 1 had no provenance (without
+//! it a map cannot be safely reused).
 
 use crate::bounds::Aabb;
 use crate::error::{Error, Result};
