@@ -97,9 +97,9 @@ pub struct Estimator<'a> {
     pub spectral: SpectralMode,
     /// Phase functions with the forward peak truncated, for photon weights
     /// (see `peak`).
-    /// [water, particle] for rays looking up or sideways, then for rays
-    /// looking down.
-    phases: [[TruncatedPhase; 2]; 2],
+    /// [water, particle] for rays looking up or sideways, for rays
+    /// looking down, and for rays looking down at a target.
+    phases: [[TruncatedPhase; 2]; 3],
     /// Precomputed axial distances, when the scene asks for them.
     grid: Option<BoundaryGrid>,
     /// Band shapes of the `grid` spectral mode.
@@ -140,6 +140,7 @@ impl<'a> Estimator<'a> {
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
+                scene.estimate.forward_peak_target_deg,
             ]
             .map(|deg| {
                 [
@@ -172,7 +173,7 @@ impl<'a> Estimator<'a> {
         let b = iop.b();
         let fw = if b > 0.0 { iop.b_w / b } else { 0.0 };
         let cos = p.direction.dot(toward_viewer) as f64;
-        mixture(self.phases_for(toward_viewer), fw, cos)
+        mixture(self.phases_for(toward_viewer, false), fw, cos)
     }
 
     /// Voxels of the band-shape grid over a map of `volume_photons` volume
@@ -229,24 +230,30 @@ impl<'a> Estimator<'a> {
 
     /// The truncated [water, particle] phase functions for light leaving
     /// toward the viewer along `toward_viewer` (a ray looking down sees
-    /// light travelling up).
-    fn phases_for(&self, toward_viewer: Vec3) -> &[TruncatedPhase; 2] {
-        &self.phases[usize::from(toward_viewer.z > 0.0)]
+    /// light travelling up); `at_target`: a ray looking down at a target
+    /// (`forward_peak_target_deg`).
+    fn phases_for(&self, toward_viewer: Vec3, at_target: bool) -> &[TruncatedPhase; 2] {
+        let i = match (toward_viewer.z > 0.0, at_target) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+        };
+        &self.phases[i]
     }
 
     /// The fractions of pure-water and particle scattering that the
     /// truncated phase functions leave in the forward delta along a ray
-    /// looking along `view`: it is marched with extinction
-    /// c - f_w b_w - f_p b_p.
-    pub fn forward_fractions(&self, view: Vec3) -> (f64, f64) {
-        let [w, p] = self.phases_for(-view);
+    /// looking along `view` (`at_target`: see [`Self::volume_with_iops`]):
+    /// it is marched with extinction c - f_w b_w - f_p b_p.
+    pub fn forward_fractions(&self, view: Vec3, at_target: bool) -> (f64, f64) {
+        let [w, p] = self.phases_for(-view, at_target);
         (w.forward_fraction(), p.forward_fraction())
     }
 
     /// The truncated particle phase function along a ray looking along
     /// `view`, whose forward delta `render::march` scatters into explicitly.
-    pub fn particle_peak(&self, view: Vec3) -> &TruncatedPhase {
-        &self.phases_for(-view)[1]
+    pub fn particle_peak(&self, view: Vec3, at_target: bool) -> &TruncatedPhase {
+        &self.phases_for(-view, at_target)[1]
     }
 
     fn search(&self, k: usize) -> Search {
@@ -405,16 +412,20 @@ impl<'a> Estimator<'a> {
         let mut iops = std::mem::take(&mut scratch.iops);
         iops.resize(self.scene.bands.len(), Iop::default());
         self.scene.water.iops(x, &mut iops);
-        let r = self.volume_with_iops(x, toward_viewer, &iops, scratch, out);
+        let r = self.volume_with_iops(x, toward_viewer, false, &iops, scratch, out);
         scratch.iops = iops;
         r
     }
 
-    /// [`Estimator::volume`] with the IOPs at `x` (one per band) given.
+    /// [`Estimator::volume`] with the IOPs at `x` (one per band) given;
+    /// `at_target`: the viewer looks down at a target, and the phase
+    /// functions' forward peak is `forward_peak_target_deg` wide (the
+    /// band shapes of the `grid` mode stay those of `forward_peak_down_deg`).
     pub fn volume_with_iops(
         &self,
         x: Vec3,
         toward_viewer: Vec3,
+        at_target: bool,
         iops: &[Iop],
         scratch: &mut Scratch,
         out: &mut [f64],
@@ -430,7 +441,7 @@ impl<'a> Estimator<'a> {
             }
         }));
         let mix = std::mem::take(&mut scratch.mix);
-        let phases = self.phases_for(toward_viewer);
+        let phases = self.phases_for(toward_viewer, at_target);
         // Where the IOPs jump (depth layers), a photon stored at a
         // scattering event counts at x as the light field there, not as
         // its own water's scattering: weighted by b(x) / b(x_p), the

@@ -26,8 +26,10 @@
 //! theta_t is `[estimate] forward_peak_deg` along rays looking up or
 //! sideways (default [`crate::scene::settings::DEFAULT_FORWARD_PEAK_DEG`]) and `forward_peak_down_deg`
 //! along rays looking down (default
-//! [`crate::scene::settings::DEFAULT_FORWARD_PEAK_DOWN_DEG`]);
-//! 0 = the exact phase function, f = 0.
+//! [`crate::scene::settings::DEFAULT_FORWARD_PEAK_DOWN_DEG`]), and
+//! `forward_peak_target_deg` along rays looking down at a target (default
+//! [`crate::scene::settings::DEFAULT_FORWARD_PEAK_TARGET_DEG`]; see
+//! `render::march`); 0 = the exact phase function, f = 0.
 //!
 //! Measured in deep water (a = 0.3, b = 0.6, Fournier–Forand bb = 0.02, 10 M
 //! photons, 8 identical bands, 4 positions), as the ratio of radiometers to

@@ -75,6 +75,7 @@ const UNITS: &[(&str, &str)] = &[
     ("estimate.boundary_grid_m", "m"),
     ("estimate.forward_peak_deg", "deg"),
     ("estimate.forward_peak_down_deg", "deg"),
+    ("estimate.forward_peak_target_deg", "deg"),
     (
         "estimate.shape_photons_per_band",
         "photons per band and voxel",

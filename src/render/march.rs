@@ -30,6 +30,7 @@ use crate::optics::iop::Iop;
 use crate::optics::phase::Mixture;
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
+use crate::scene::settings::TARGET_PEAK_MARGIN_M;
 use crate::scene::{Scene, FLOOR};
 use glam::{DVec3, Vec3};
 
@@ -258,9 +259,10 @@ impl<'a> RayMarcher<'a> {
         };
         let (mut p, mut dir) = (p0, dir);
         let mut travelled = 0.0f32;
+        let at_target = self.looks_at_target(p0, dir);
         loop {
             match self.segment(
-                p, dir, travelled, rng, scratch, out, &mut tr, &mut buf, gather,
+                p, dir, travelled, at_target, rng, scratch, out, &mut tr, &mut buf, gather,
             )? {
                 Segment::Turned { at, to, weight } => {
                     travelled += (at - p).length();
@@ -284,6 +286,7 @@ impl<'a> RayMarcher<'a> {
         p0: Vec3,
         dir: Vec3,
         travelled: f32,
+        at_target: bool,
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         out: &mut [f64],
@@ -311,7 +314,7 @@ impl<'a> RayMarcher<'a> {
         let t_end = hit.map_or(limit.max(0.0), |h| h.t);
         let step = scene.estimate.step_m as f32;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
-        let (fw, fp) = self.est.forward_fractions(dir);
+        let (fw, fp) = self.est.forward_fractions(dir, at_target);
         // 1 - cos of the single-scattering angle from |sun_w + dir|^2 / 2: a
         // ray looking into the sun (a final-gather ray) meets the forward
         // peak, where a cosine has too few digits.
@@ -351,7 +354,8 @@ impl<'a> RayMarcher<'a> {
                 x = p0 + dir * (t0 + s);
                 scene.water.iops(x, iops);
             }
-            self.est.volume_with_iops(x, -dir, iops, scratch, est)?;
+            self.est
+                .volume_with_iops(x, -dir, at_target, iops, scratch, est)?;
             self.sun_transmittance(x, iops, tmp, sun_t);
             let mut alive = false;
             for b in 0..nb {
@@ -385,7 +389,7 @@ impl<'a> RayMarcher<'a> {
                 return Ok(Segment::Ended);
             }
             if let Some(d) = turn {
-                if let Some((to, weight)) = self.turn(dir, rng) {
+                if let Some((to, weight)) = self.turn(dir, at_target, rng) {
                     return Ok(Segment::Turned {
                         at: p0 + dir * (t0 + d),
                         to,
@@ -503,6 +507,36 @@ impl<'a> RayMarcher<'a> {
         }
     }
 
+    /// Whether a march from `p0` along `dir` looks down at a target: at
+    /// the depth of some target's top (below `p0`) its line passes within
+    /// [`TARGET_PEAK_MARGIN_M`] of the target's horizontal extent. Such a
+    /// ray takes the phase functions' forward peak as
+    /// `forward_peak_target_deg` wide instead of `forward_peak_down_deg`
+    /// for its whole march, turns included (each ray's transfer equation
+    /// holds for any split of the peak): the light rising off a target
+    /// smaller than the expanded search that counts photons travelling
+    /// toward the viewer (about a metre at 2500 photons per m^2 in Chl 10)
+    /// is smeared by it over the darker water around, and the wider peak
+    /// leaves more of that light's in-scatter to the exact turns. A 1 m
+    /// box 1.5 m down in Chl 10 read 10 % low with 20 degrees and 3 % low
+    /// with 40; applied to every ray looking down, 40 degrees raised the
+    /// built-in scene's deep-water pixel noise from 2.2 % to 3.8 %.
+    fn looks_at_target(&self, p0: Vec3, dir: Vec3) -> bool {
+        if dir.z >= 0.0 {
+            return false;
+        }
+        self.scene.target_extents.iter().any(|b| {
+            let top = b.max.z;
+            if p0.z < top {
+                return false;
+            }
+            let at = p0 + dir * ((top - p0.z) / dir.z);
+            let dx = (b.min.x - at.x).max(at.x - b.max.x).max(0.0);
+            let dy = (b.min.y - at.y).max(at.y - b.max.y).max(0.0);
+            dx.hypot(dy) <= TARGET_PEAK_MARGIN_M
+        })
+    }
+
     /// A turn into the particles' forward peak from `dir`: the new
     /// direction and its weight. Where the sun lies within
     /// [`TURN_SUN_MARGIN_RAD`] of the peak's cone, by one-sample MIS with
@@ -511,8 +545,8 @@ impl<'a> RayMarcher<'a> {
     /// sun meets the forward peak of its single scattering, which turns
     /// drawn from the peak alone reach rarely and with a weight of
     /// thousands. A draw outside the cone weighs 0.
-    fn turn(&self, dir: Vec3, rng: &mut Pcg32) -> Option<(Vec3, f64)> {
-        let peak = self.est.particle_peak(dir);
+    fn turn(&self, dir: Vec3, at_target: bool, rng: &mut Pcg32) -> Option<(Vec3, f64)> {
+        let peak = self.est.particle_peak(dir, at_target);
         let to_sun = -self.sun_w;
         let apart = (dir.dot(to_sun) as f64).clamp(-1.0, 1.0).acos();
         if !self.has_sun || apart > peak.peak_half_angle() + TURN_SUN_MARGIN_RAD {

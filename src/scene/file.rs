@@ -111,6 +111,7 @@ pub struct EstimateFile {
     pub step_m: Option<f64>,
     pub forward_peak_deg: Option<f64>,
     pub forward_peak_down_deg: Option<f64>,
+    pub forward_peak_target_deg: Option<f64>,
     pub boundary_grid_m: Option<f64>,
     pub shape_photons_per_band: Option<usize>,
     pub gather_rays: Option<u32>,

@@ -45,6 +45,14 @@ pub const DEFAULT_SHAPE_PHOTONS_PER_BAND: usize = 400;
 pub const DEFAULT_FORWARD_PEAK_DEG: f64 = 10.0;
 /// The same along rays looking down, into the smooth upwelling light.
 pub const DEFAULT_FORWARD_PEAK_DOWN_DEG: f64 = 20.0;
+/// The same along rays looking down at a target (see
+/// [`TARGET_PEAK_MARGIN_M`]): the light rising off a small target is not
+/// smooth on the scale of the search that counts it, and a wider peak
+/// leaves more of its in-scatter to the march's exact turns.
+pub const DEFAULT_FORWARD_PEAK_TARGET_DEG: f64 = 40.0;
+/// A ray looking down is "at a target" when, at the depth of a target's
+/// top, it passes within this horizontal distance of the target's extent.
+pub const TARGET_PEAK_MARGIN_M: f32 = 1.0;
 
 /// How the density estimate treats boundaries inside the search sphere.
 /// Named in scene files and on the command line as `none`, `ellipsoid` or
@@ -252,6 +260,8 @@ pub struct EstimateSettings {
     pub forward_peak_deg: f64,
     /// The same along rays looking down (into upwelling light).
     pub forward_peak_down_deg: f64,
+    /// The same along rays looking down at a target (`render::march`).
+    pub forward_peak_target_deg: f64,
     /// Node spacing (m) of a precomputed boundary-distance grid for volume
     /// estimates, or None to trace six rays per estimate.
     pub boundary_grid_m: Option<f64>,

@@ -3,8 +3,9 @@
 
 use super::*;
 use crate::scene::settings::{
-    policy_k, DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG, DEFAULT_GATHER_RAYS,
-    DEFAULT_K_EXPANDED_PER_K, DEFAULT_MAX_RADIUS_M, DEFAULT_SHAPE_PHOTONS_PER_BAND, DEFAULT_STEP_M,
+    policy_k, DEFAULT_FORWARD_PEAK_DEG, DEFAULT_FORWARD_PEAK_DOWN_DEG,
+    DEFAULT_FORWARD_PEAK_TARGET_DEG, DEFAULT_GATHER_RAYS, DEFAULT_K_EXPANDED_PER_K,
+    DEFAULT_MAX_RADIUS_M, DEFAULT_SHAPE_PHOTONS_PER_BAND, DEFAULT_STEP_M,
 };
 
 pub(super) fn render_settings(
@@ -224,6 +225,11 @@ pub(super) fn render_settings(
         e.forward_peak_down_deg,
         DEFAULT_FORWARD_PEAK_DOWN_DEG,
     )?;
+    let forward_peak_target_deg = peak(
+        "forward_peak_target_deg",
+        e.forward_peak_target_deg,
+        DEFAULT_FORWARD_PEAK_TARGET_DEG,
+    )?;
     if let Some(h) = e.boundary_grid_m {
         if !finite_in(h, 0.01, 100.0) {
             return Err(ctx.err(
@@ -255,6 +261,7 @@ pub(super) fn render_settings(
         step_m,
         forward_peak_deg,
         forward_peak_down_deg,
+        forward_peak_target_deg,
         boundary_grid_m: e.boundary_grid_m,
         shape_photons_per_band,
         gather_rays,
