@@ -58,6 +58,7 @@ fn bad_scenes_name_the_key_and_line() {
         (format!("{MINIMAL_SCENE}\n[estimate]\nboundary_grid_m = 0.0\n"), "estimate.boundary_grid_m"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_deg = 95.0\n"), "estimate.forward_peak_deg"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_down_deg = -1.0\n"), "estimate.forward_peak_down_deg"),
+        (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_target_deg = 91.0\n"), "estimate.forward_peak_target_deg"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nk = 10\nk_expanded = 5\n"), "estimate.k_expanded"),
     ];
     for (text, needle) in cases {
