@@ -94,6 +94,16 @@ pub struct MemoryPeaks {
     pub rss_bytes: u64,
 }
 
+impl MemoryPeaks {
+    /// The larger of each peak, this one's or `other`'s (processes that
+    /// ran apart: the peak any one of them reached).
+    pub fn max_with(&mut self, other: &MemoryPeaks) {
+        self.anon_bytes = self.anon_bytes.max(other.anon_bytes);
+        self.file_bytes = self.file_bytes.max(other.file_bytes);
+        self.rss_bytes = self.rss_bytes.max(other.rss_bytes);
+    }
+}
+
 /// Samples this process's RssAnon and RssFile every [`SAMPLE_PERIOD`] on a
 /// thread of its own until [`PeakSampler::finish`], keeping the largest
 /// values. A sample costs a read of `/proc/self/status` (tens of

@@ -489,17 +489,8 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
     let mut peaks = MemoryPeaks::default();
     let mut render_s = 0.0;
     for (_, m) in &parts {
-        let c = &m.cache;
-        cache.hits += c.hits;
-        cache.misses += c.misses;
-        cache.evictions += c.evictions;
-        cache.decodes += c.decodes;
-        cache.decoded_bytes += c.decoded_bytes;
-        cache.resident_bytes = cache.resident_bytes.max(c.resident_bytes);
-        cache.peak_resident_bytes = cache.peak_resident_bytes.max(c.peak_resident_bytes);
-        peaks.anon_bytes = peaks.anon_bytes.max(m.peak_memory.anon_bytes);
-        peaks.file_bytes = peaks.file_bytes.max(m.peak_memory.file_bytes);
-        peaks.rss_bytes = peaks.rss_bytes.max(m.peak_memory.rss_bytes);
+        cache += &m.cache;
+        peaks.max_with(&m.peak_memory);
         render_s += m.timings_s.render;
     }
     rendered.cache = cache;

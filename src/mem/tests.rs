@@ -26,3 +26,56 @@ fn sampler_sees_a_held_allocation() {
     assert!(peaks.anon_bytes <= peaks.rss_bytes, "{peaks:?}");
     assert!(peaks.file_bytes > 0, "{peaks:?}");
 }
+
+/// The statistics of parts rendered apart combine as the assembly reports
+/// them: cache counts add, resident bytes and memory peaks take the larger.
+#[test]
+fn parts_statistics_combine() {
+    use crate::store::cache::CacheStats;
+    let a = CacheStats {
+        hits: 3,
+        misses: 2,
+        evictions: 1,
+        decodes: 2,
+        decoded_bytes: 100,
+        resident_bytes: 50,
+        peak_resident_bytes: 70,
+    };
+    let b = CacheStats {
+        hits: 10,
+        misses: 5,
+        evictions: 4,
+        decodes: 5,
+        decoded_bytes: 400,
+        resident_bytes: 20,
+        peak_resident_bytes: 90,
+    };
+    let mut sum = CacheStats::default();
+    sum += &a;
+    sum += &b;
+    assert_eq!(
+        (
+            sum.hits,
+            sum.misses,
+            sum.evictions,
+            sum.decodes,
+            sum.decoded_bytes
+        ),
+        (13, 7, 5, 7, 500)
+    );
+    assert_eq!((sum.resident_bytes, sum.peak_resident_bytes), (50, 90));
+    let mut peaks = super::MemoryPeaks {
+        anon_bytes: 5,
+        file_bytes: 9,
+        rss_bytes: 12,
+    };
+    peaks.max_with(&super::MemoryPeaks {
+        anon_bytes: 7,
+        file_bytes: 3,
+        rss_bytes: 12,
+    });
+    assert_eq!(
+        (peaks.anon_bytes, peaks.file_bytes, peaks.rss_bytes),
+        (7, 9, 12)
+    );
+}

@@ -67,6 +67,20 @@ pub struct CacheStats {
     pub peak_resident_bytes: u64,
 }
 
+/// Two caches' statistics together (parts of one render, each with its own
+/// cache): counts add, resident bytes take the larger of the two.
+impl std::ops::AddAssign<&CacheStats> for CacheStats {
+    fn add_assign(&mut self, c: &CacheStats) {
+        self.hits += c.hits;
+        self.misses += c.misses;
+        self.evictions += c.evictions;
+        self.decodes += c.decodes;
+        self.decoded_bytes += c.decoded_bytes;
+        self.resident_bytes = self.resident_bytes.max(c.resident_bytes);
+        self.peak_resident_bytes = self.peak_resident_bytes.max(c.peak_resident_bytes);
+    }
+}
+
 /// One tile's place in the cache. Its own lock guards its state, so a hit
 /// touches no lock but this one.
 struct Slot {
