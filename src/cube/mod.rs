@@ -11,6 +11,12 @@
 //! The spectral OpenEXR copy ([`exr::write_spectral_exr`]) is made from the
 //! finished ENVI cube, one tile of all bands at a time.
 //!
+//! Modules: [`envi`] (the cube writer and reader), [`exr`] (the spectral
+//! OpenEXR copy), [`quicklook`] (true colour and PNGs), [`georef`] (map
+//! geometry and CRS for the header), [`ops`] (whole-cube operations that
+//! stream: windows, resampling), [`sensor`] (real sensors' spectral
+//! responses).
+//!
 //! Not for: rendering (the sensor produces the spectra). The reader takes
 //! BSQ, BIL and BIP cubes of 16-bit integers or 32/64-bit floats in either
 //! byte order; anything else is refused with an error rather than guessed.

@@ -3,6 +3,17 @@
 //!
 //! A map is written once by [`build_map`] (or a [`MapWriter`] fed directly)
 //! and never modified; readers map it read-only with [`MapFile::open`].
+//!
+//! Modules: writing — [`build`] (parallel producers, one writer thread),
+//! [`writer`] (the streaming tile sort within a memory budget), [`spill`]
+//! (photons at rest in its scratch file), [`radix`] (its sorts),
+//! [`partition`] (the pilot k-d partition into tiles), [`codec`] (a tile's
+//! compressed records), [`format`] (the file layout), [`shard`] (one
+//! machine's part of a sharded emission); reading — [`reader`] (open and
+//! validate), [`cache`] (decoded tiles under a byte budget), [`tiletree`]
+//! (a tile's k-d tree and the tile-box hierarchy), [`query`] (k-nearest
+//! and fixed-radius searches), [`memory`] (an in-memory map for tests and
+//! small tools).
 
 pub mod build;
 pub mod cache;
