@@ -20,7 +20,13 @@ const SUN_ZENITH_DEG: f64 = 50.0;
 /// Clear water (no scattering) over a black floor, flat surface, a sun
 /// at 50 degrees and a CIE clear sky.
 fn scene(distribution: &str, photons: u64) -> Scene {
-    let text = format!(
+    let text = scene_text(distribution, photons);
+    Scene::parse(&text, Path::new("sky.toml"), &Overrides::default()).unwrap()
+}
+
+/// The TOML of [`scene`].
+fn scene_text(distribution: &str, photons: u64) -> String {
+    format!(
         r#"
 name = "sky"
 [spectral]
@@ -50,8 +56,7 @@ pixels = [3, 3]
 [tally]
 depths_m = [0.0]
 "#
-    );
-    Scene::parse(&text, Path::new("sky.toml"), &Overrides::default()).unwrap()
+    )
 }
 
 /// The Fresnel reflectance integrated over a sky model: (1/pi) integral of
@@ -211,35 +216,15 @@ fn sky_through_a_rough_surface_matches_a_quadrature() {
     use littoral::render::path::PathTracer;
     use littoral::render::Integrator;
     let u = 8.0;
-    let text = format!(
-        r#"
-name = "rough-sky"
-[spectral]
-start_nm = 500.0
-end_nm = 500.0
-bands = 1
-[sun]
-zenith_deg = {SUN_ZENITH_DEG}
-azimuth_deg = 30.0
-irradiance = 0.0
-[sky]
-radiance = {SKY}
-distribution = "cie-clear"
-[surface]
-kind = "cox-munk"
-wind_speed = {u}
-refractive_index = {N_WATER}
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = 0.01, b = 0.0 }}
-[bottom]
-depth_m = 5.0
-reflectance = 0.0
-[photons]
-count = 20000
-"#
-    );
+    // The scene above without the sun, under a Cox–Munk surface, in
+    // almost clear water.
+    let text = scene_text("cie-clear", 20_000)
+        .replace("irradiance = 1.0", "irradiance = 0.0")
+        .replace(
+            "[surface]\n",
+            &format!("[surface]\nkind = \"cox-munk\"\nwind_speed = {u}\n"),
+        )
+        .replace("a = 0.5, b = 0.0", "a = 0.01, b = 0.0");
     let scene = Scene::parse(&text, Path::new("rough-sky.toml"), &Overrides::default()).unwrap();
     let emitter = littoral::emit::Emitter::new(&scene).unwrap();
     let map = littoral::store::InMemoryMap::from_source(&emitter).unwrap();
