@@ -24,6 +24,7 @@ fn emit(c: &mut Criterion) {
     let job = |threads| EmitJob {
         scene: &scene,
         map: bench_dir().join("emit-coastal.map"),
+        report: None,
         threads,
         budget: MemoryBudget::new(256 * MIB),
         scene_seconds: 0.0,

@@ -17,8 +17,10 @@ pub type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
 /// On SIGINT, SIGTERM or SIGHUP, remove the run's temporary files
 /// (`output::remove_temporaries`: partial maps, cubes and scratch maps) and
 /// exit with status 130, so that an interrupted run leaves nothing behind
-/// but what it had finished. (SIGKILL cannot be caught: its temporaries stay,
-/// named `.*.partial` and `.littoral-map.*`.)
+/// but what it had finished; a publication in progress is waited for
+/// (`output::set::Staging::publish`). (SIGKILL cannot be caught: its
+/// temporaries stay until the next run in that directory sweeps them,
+/// `output::set::sweep_stale`.)
 pub fn remove_temporaries_on_signals(program: &'static str) {
     let installed = ctrlc::set_handler(move || {
         let removed = crate::output::remove_temporaries();

@@ -26,15 +26,16 @@
 //!   ([`render::Integrator`]): the photon map's ray marcher
 //!   ([`render::march::RayMarcher`]) and the unbiased reference path tracer
 //!   ([`render::path::PathTracer`]); the image loop, tile by tile
-//!   ([`render::render_tile`], [`render::RenderOutputs`]), and radiometers
-//!   ([`render::render_with`]).
+//!   ([`render::render_tile`]) into a sink ([`render::TileSink`]), and
+//!   radiometers ([`render::render_with`]); it writes no file.
 //! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR), its
 //!   quicklook (PNG), derived cubes ([`cube::ops`]) and real sensors' bands
 //!   ([`cube::sensor::Sensor`]).
 //! - [`job`]: the whole pipeline as one call — scene, map (reused by
 //!   provenance or emitted), render, outputs — with the typed report and the
 //!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]);
-//!   the HTML report ([`job::html`]); renders split into parts and
+//!   the cube set and the run's files, staged and published as one set
+//!   ([`job::outputs`], [`output::set`]); the HTML report ([`job::html`]); renders split into parts and
 //!   assembled, or resumed ([`job::parts`]); Slurm batch scripts
 //!   ([`job::plan`]).
 //!

@@ -7,33 +7,62 @@ use std::sync::Mutex;
 
 pub mod direct;
 
-/// Every temporary file this process created, for [`remove_temporaries`].
-/// Published ones were renamed away and dropped ones deleted, so the list
-/// only grows; removing a path that is gone does nothing.
+pub mod set;
+
+/// Every temporary file and directory this process created, for
+/// [`remove_temporaries`]. Published ones were renamed away and dropped
+/// ones deleted, so the list only grows; removing a path that is gone does
+/// nothing.
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// A temporary file in `dir` named `PREFIX` + random + `SUFFIX`, deleted if
-/// dropped, and recorded so that [`remove_temporaries`] finds it when a
-/// signal ends the process before it is dropped or published.
-pub fn temp_in(dir: &Path, prefix: &str, suffix: &str) -> std::io::Result<tempfile::NamedTempFile> {
-    let tmp = tempfile::Builder::new()
-        .prefix(prefix)
-        .suffix(suffix)
-        .tempfile_in(dir)?;
+/// Held while a run's files are renamed into place ([`set::Staging::publish`]):
+/// [`remove_temporaries`] waits for it, so a signal never leaves half a set
+/// under final names.
+pub(crate) static PUBLISHING: Mutex<()> = Mutex::new(());
+
+/// What names this process's temporaries, `HOST_PID`: the host (letters,
+/// digits and '-' only, at most 40 characters) and the process id, so that
+/// [`set::sweep_stale`] removes only the leftovers of dead processes on this
+/// machine (a directory shared by a cluster's nodes holds other hosts' live
+/// ones).
+pub fn owner_tag() -> &'static str {
+    static TAG: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TAG.get_or_init(|| format!("{}_{}", set::host_name(), std::process::id()))
+}
+
+fn record_temporary(path: &Path) {
     TEMPORARIES
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .push(tmp.path().to_path_buf());
+        .push(path.to_path_buf());
+}
+
+/// A temporary file in `dir` named `PREFIX`, [`owner_tag`], `.`, random
+/// characters and `SUFFIX`, deleted if dropped, and recorded so that
+/// [`remove_temporaries`] finds it when a signal ends the process before
+/// it is dropped or published.
+pub fn temp_in(dir: &Path, prefix: &str, suffix: &str) -> std::io::Result<tempfile::NamedTempFile> {
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!("{prefix}{}.", owner_tag()))
+        .suffix(suffix)
+        .tempfile_in(dir)?;
+    record_temporary(tmp.path());
     Ok(tmp)
 }
 
-/// Remove the temporary files of [`temp_in`] that still exist: what a
-/// SIGINT or SIGTERM handler calls before the process exits without
-/// running destructors. Returns how many it removed.
+/// Remove the temporary files and directories of [`temp_in`] and
+/// [`set::Staging`] that still exist: what a SIGINT or SIGTERM handler
+/// calls before the process exits without running destructors. Waits for
+/// a publication in progress to finish. Returns how many it removed.
 pub fn remove_temporaries() -> usize {
+    let _publishing = PUBLISHING.lock().unwrap_or_else(|e| e.into_inner());
     let list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
     list.iter()
-        .filter(|p| std::fs::remove_file(p).is_ok())
+        .filter(|p| match std::fs::symlink_metadata(p) {
+            Ok(m) if m.is_dir() => std::fs::remove_dir_all(p).is_ok(),
+            Ok(_) => std::fs::remove_file(p).is_ok(),
+            Err(_) => false,
+        })
         .count()
 }
 

@@ -2,10 +2,37 @@
 
 use crate::error::{Error, Result};
 
+/// Most worker threads a run may ask for per core of the machine (and at
+/// least [`MIN_THREAD_CAP`] in all): more only costs memory and time, and
+/// thousands exhaust the process's threads.
+pub const THREADS_PER_CORE_CAP: usize = 8;
+pub const MIN_THREAD_CAP: usize = 64;
+
+/// The largest thread count [`check_threads`] accepts on this machine.
+pub fn thread_cap() -> usize {
+    (workers(0) * THREADS_PER_CORE_CAP).max(MIN_THREAD_CAP)
+}
+
+/// Refuse a thread count beyond [`thread_cap`], with the machine's core count.
+pub fn check_threads(threads: usize) -> Result<usize> {
+    if threads > thread_cap() {
+        return Err(Error::invalid(
+            "--threads",
+            format!(
+                "{threads} threads: at most {} on this machine ({} cores; 0 = one per core)",
+                thread_cap(),
+                workers(0)
+            ),
+        ));
+    }
+    Ok(threads)
+}
+
 /// A rayon pool of `threads` workers (0 = one per core). Stages install
 /// their work in their own pool, so `--threads` holds for every stage and
 /// results never depend on the global pool.
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    check_threads(threads)?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -177,7 +177,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Worker threads (0 = one per core).
-        #[arg(long, default_value_t = 0)]
+        #[arg(long, default_value_t = 0, value_parser = threads)]
         threads: usize,
     },
     /// Write the cube as a spectral OpenEXR file (one channel per band,
@@ -236,6 +236,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             }
             png_only(&out)?;
             let cube = open(&cube)?;
+            not_an_input(&cube, std::slice::from_ref(&out))?;
             let b = cube.band_index_nearest(nm);
             let centre = cube.wavelengths_nm()[b];
             let reach = cube.fwhm_nm().map_or(0.0, |f| f[b]).max(1e-9);
@@ -267,6 +268,7 @@ fn run(cli: Cli) -> AnyResult<()> {
         } => {
             png_only(&out)?;
             let cube = open(&cube)?;
+            not_an_input(&cube, std::slice::from_ref(&out))?;
             let q = Quicklook::for_cube(&cube);
             if !q.has_visible_bands() {
                 return Err(Error::data(
@@ -290,11 +292,8 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
         } => {
             let cube = open(&cube)?;
-            let name = out
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let dir = littoral::output::parent_dir(&out);
+            let (dir, name) = cube_out(&out)?;
+            not_an_input(&cube, &cube_files(dir, &name, &["bsq"]))?;
             let files = littoral::cube::ops::window(&cube, (x, y, w, h), dir, &name)?;
             let summary =
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "samples": w, "lines": h });
@@ -308,6 +307,7 @@ fn run(cli: Cli) -> AnyResult<()> {
         } => {
             let cube = open(&cube)?;
             let (dir, name) = cube_out(&out)?;
+            not_an_input(&cube, &cube_files(dir, &name, &["bsq"]))?;
             let files = littoral::cube::ops::subset(&cube, (from, to), dir, &name)?;
             let summary =
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "bands": to - from + 1 });
@@ -317,6 +317,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             let sensor = littoral::cube::sensor::Sensor::named(&sensor)?;
             let cube = open(&cube)?;
             let (dir, name) = cube_out(&out)?;
+            not_an_input(&cube, &cube_files(dir, &name, &["bsq"]))?;
             let (files, made) = littoral::cube::ops::resample(&cube, &sensor, dir, &name)?;
             let band = |i: usize| {
                 let b = &sensor.bands[i];
@@ -342,6 +343,7 @@ fn run(cli: Cli) -> AnyResult<()> {
         } => {
             let cube = open(&cube)?;
             let (dir, name) = cube_out(&out)?;
+            not_an_input(&cube, &cube_files(dir, &name, &["bsq", "bil", "bip"]))?;
             let files = littoral::cube::ops::convert(&cube, interleave, dir, &name)?;
             let summary = serde_json::json!({
                 "hdr": files.hdr,
@@ -393,8 +395,10 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
             compression,
         } => {
+            let cube = open(&cube)?;
+            not_an_input(&cube, std::slice::from_ref(&out))?;
             littoral::cube::exr::write_spectral_exr_layers_with(
-                &[("radiance", &open(&cube)?)],
+                &[("radiance", &cube)],
                 &out,
                 compression,
             )?;
@@ -416,6 +420,24 @@ fn cube_out(out: &std::path::Path) -> AnyResult<(&std::path::Path, String)> {
         )
         .into()),
     }
+}
+
+/// The files a new cube `dir/NAME` is written as: its header and its data
+/// file under each of `data` (extensions).
+fn cube_files(dir: &std::path::Path, name: &str, data: &[&str]) -> Vec<PathBuf> {
+    std::iter::once(dir.join(format!("{name}.hdr")))
+        .chain(data.iter().map(|e| dir.join(format!("{name}.{e}"))))
+        .collect()
+}
+
+/// Refuse outputs that would overwrite the input cube's header or data.
+fn not_an_input(cube: &EnviCube, outs: &[PathBuf]) -> AnyResult<()> {
+    use littoral::output::set::refuse_input;
+    for o in outs {
+        refuse_input(o, "--out", cube.header_path(), "input cube's header")?;
+        refuse_input(o, "--out", cube.data_path(), "input cube's data file")?;
+    }
+    Ok(())
 }
 
 /// Images are written as PNG only; another extension is refused rather
@@ -474,4 +496,19 @@ fn info(cube: &EnviCube) -> AnyResult<()> {
         "value": { "min": min, "max": max, "mean": mean, "non_finite": non_finite },
     });
     print(&format!("{summary:#}\n"))
+}
+
+/// `--threads`: a count up to the machine's cap (`parallel::check_threads`).
+fn threads(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|e| format!("{text}: not a thread count ({e})"))?;
+    let cap = littoral::parallel::thread_cap();
+    if n > cap {
+        return Err(format!(
+            "at most {cap} threads on this machine ({} cores; 0 = one per core)",
+            littoral::parallel::workers(0)
+        ));
+    }
+    Ok(n)
 }

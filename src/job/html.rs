@@ -61,14 +61,21 @@ struct Axes<'a> {
     depth: bool,
 }
 
-/// Write `NAME.html` for a finished render at `path`.
-pub fn write(scene: &Scene, report: &RunReport, path: &Path) -> Result<()> {
-    let page = page(scene, report)?;
+/// Write `NAME.html` for a finished render at `path`, reading the files
+/// the report lists from `files` (where they are before publication: the
+/// names in the report are the final ones).
+pub fn write(scene: &Scene, report: &RunReport, files: &Path, path: &Path) -> Result<()> {
+    let page = page(scene, report, files)?;
     crate::output::write_atomic(path, page.as_bytes())
 }
 
-/// The page's HTML.
-pub fn page(scene: &Scene, report: &RunReport) -> Result<String> {
+/// The file the report lists as `listed`, in `files`.
+fn listed_in(files: &Path, listed: &str) -> std::path::PathBuf {
+    files.join(Path::new(listed).file_name().unwrap_or_default())
+}
+
+/// The page's HTML (the files the report lists read from `files`).
+pub fn page(scene: &Scene, report: &RunReport, files: &Path) -> Result<String> {
     let nm: Vec<f64> = scene.bands.centers_nm().iter().map(|&c| c as f64).collect();
     let mut h = String::new();
     let title = format!("littoral: {}", scene.name);
@@ -82,8 +89,8 @@ pub fn page(scene: &Scene, report: &RunReport) -> Result<String> {
     );
 
     // The quicklook.
-    let png = std::fs::read(&report.outputs.png)
-        .map_err(|e| Error::io(&report.outputs.png, "read", e))?;
+    let png_path = listed_in(files, &report.outputs.png);
+    let png = std::fs::read(&png_path).map_err(|e| Error::io(&png_path, "read", e))?;
     let _ = write!(
         h,
         "<h2>Quicklook</h2>\n<img alt=\"quicklook of {}\" src=\"data:image/png;base64,{}\">\n\
@@ -101,7 +108,7 @@ pub fn page(scene: &Scene, report: &RunReport) -> Result<String> {
             y_label: "R_rs (sr^-1)",
             depth: false,
         },
-        &pixel_rrs(report, &nm)?,
+        &pixel_rrs(report, files, &nm)?,
     )?);
     if report.radiometers.is_empty() {
         h.push_str("<p class=\"note\">The scene has no radiometers.</p>\n");
@@ -257,16 +264,16 @@ padding:2px 8px;text-align:left;font-size:0.9em}caption{text-align:left;font-wei
 
 /// R_rs at the centre and the quarter points, from the `rrs` product cube,
 /// with the L_t standard-error cube over E_d(0+) as the band.
-fn pixel_rrs(report: &RunReport, nm: &[f64]) -> Result<Vec<Curve>> {
+fn pixel_rrs(report: &RunReport, files: &Path, nm: &[f64]) -> Result<Vec<Curve>> {
     let rrs = report
         .outputs
         .products
         .iter()
         .find(|p| p.product == "rrs")
         .ok_or_else(|| Error::invalid("report", "no rrs product cube"))?;
-    let cube = crate::cube::EnviCube::open(Path::new(&rrs.hdr))?;
+    let cube = crate::cube::EnviCube::open(&listed_in(files, &rrs.hdr))?;
     let stderr = match &report.outputs.stderr_hdr {
-        Some(p) => Some(crate::cube::EnviCube::open(Path::new(p))?),
+        Some(p) => Some(crate::cube::EnviCube::open(&listed_in(files, p))?),
         None => None,
     };
     let (w, l) = (cube.samples(), cube.lines());

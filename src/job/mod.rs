@@ -22,6 +22,7 @@
 
 pub mod budget;
 pub mod html;
+pub mod outputs;
 pub mod parts;
 pub mod plan;
 pub mod report;
@@ -29,14 +30,13 @@ pub mod units;
 
 use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
+use crate::output::set::{RunLock, Staging};
 use crate::progress::Progress;
 use crate::provenance::Provenance;
 use crate::scene::{IntegratorMode, Scene};
 use crate::store::{MapFile, PhotonMap};
 pub use budget::{MemoryBudget, RenderShares};
-use report::{
-    EmitReport, EmitTimings, MapSummary, Outputs, RenderTimings, RunReport, SensorSummary,
-};
+use report::{EmitReport, EmitTimings, MapSummary, RenderTimings, RunReport};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -45,6 +45,10 @@ pub struct EmitJob<'a> {
     pub scene: &'a Scene,
     /// The map to write (under a temporary name until complete).
     pub map: PathBuf,
+    /// Where to write the JSON report too (after the map, under the map's
+    /// lock, so that two runs cannot leave one's map beside the other's
+    /// report).
+    pub report: Option<PathBuf>,
     /// Worker threads (0 = one per core); the map is identical for any number.
     pub threads: usize,
     pub budget: MemoryBudget,
@@ -56,6 +60,14 @@ impl EmitJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
         crate::mem::tune_allocator();
+        let _lock = prepare_map_outputs(self.scene, &self.map, self.report.as_deref(), true)?;
+        let swept = crate::output::set::sweep_stale(crate::output::parent_dir(&self.map));
+        // The report's file is made now, so that an unwritable path fails
+        // before the photons are traced rather than after.
+        let report_file = match &self.report {
+            Some(path) => Some(crate::output::temp_beside(path)?),
+            None => None,
+        };
         let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
@@ -67,7 +79,7 @@ impl EmitJob<'_> {
         )?;
         let emit_s = start.elapsed().as_secs_f64();
         let peaks = sampler.finish();
-        Ok(EmitReport {
+        let report = EmitReport {
             emission: em.report,
             map: MapSummary::written(&em.map, provenance.digest_hex(), Some(&self.map)),
             timings_s: EmitTimings {
@@ -79,8 +91,44 @@ impl EmitJob<'_> {
             mem_budget_bytes: self.budget.total(),
             peak_rss_bytes: peaks.rss_bytes,
             units: units::report_units(),
-        })
+            warnings: crate::output::set::sweep_warning(&swept)
+                .into_iter()
+                .collect(),
+        };
+        if let (Some(mut tmp), Some(path)) = (report_file, &self.report) {
+            use std::io::Write;
+            tmp.write_all(report.json().as_bytes())
+                .map_err(|e| Error::io(path, "write", e))?;
+            crate::output::publish(tmp, path)?;
+        }
+        Ok(report)
     }
+}
+
+/// Before a run writes the map (or shard) file `map` and its JSON report
+/// `report`: refuse names that are links or special files, a `map` that
+/// holds something other than a littoral map (`is_map`), and outputs that
+/// are the scene file or each other; then take the map's lock for
+/// writing (another run writing or reading it fails at once).
+pub fn prepare_map_outputs(
+    scene: &Scene,
+    map: &Path,
+    report: Option<&Path>,
+    is_map: bool,
+) -> Result<RunLock> {
+    use crate::output::set;
+    if is_map {
+        check_map_target(map)?;
+    } else {
+        set::check_target(map)?;
+    }
+    set::refuse_input(map, "--map", &scene.origin.path, "scene file")?;
+    if let Some(r) = report {
+        set::check_target(r)?;
+        set::refuse_input(r, "--report", &scene.origin.path, "scene file")?;
+        set::refuse_input(r, "--report", map, "map (--map)")?;
+    }
+    RunLock::exclusive(map)
 }
 
 /// Merge the shard files of a sharded emission into one map, with the
@@ -98,6 +146,11 @@ impl MergeJob<'_> {
     pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
         let start = Instant::now();
         crate::mem::tune_allocator();
+        check_map_target(&self.map)?;
+        for part in self.parts {
+            crate::output::set::refuse_input(&self.map, "--out", part, "shard file")?;
+        }
+        let _lock = RunLock::exclusive(&self.map)?;
         let sampler = crate::mem::PeakSampler::start();
         let (em, budget) = crate::emit::merge_shards(
             self.parts,
@@ -120,6 +173,7 @@ impl MergeJob<'_> {
             mem_budget_bytes: budget,
             peak_rss_bytes: peaks.rss_bytes,
             units: units::report_units(),
+            warnings: Vec::new(),
         })
     }
 }
@@ -165,24 +219,29 @@ impl RenderJob<'_> {
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.
         let mut shares = self.budget.render(scene, self.threads)?;
-        create_dir(&self.out_dir)?;
-        let integrator = scene.render.integrator;
-        let (rendered, stage, t_emit) = match integrator {
+        let (_lock, staging, warnings) =
+            prepare_outputs(scene, &self.out_dir, self.map.as_deref())?;
+        let sink = outputs::CubeSet::create(scene, staging.dir())?;
+        let (rendered, stage, t_emit) = match scene.render.integrator {
             IntegratorMode::PhotonMap => {
-                let (rendered, stage, t_emit) = self.photon_map(&mut shares, start, progress)?;
+                let (map, stage, t_emit, _scratch, _map_lock) =
+                    self.open_map(&mut shares, start, progress)?;
+                let rendered = crate::render::render(scene, &map, &sink, self.threads, progress)?;
                 (rendered, Some(stage), t_emit)
             }
             IntegratorMode::Path => (
-                crate::render::render_path(scene, &self.out_dir, self.threads, progress)?,
+                crate::render::render_path(scene, &sink, self.threads, progress)?,
                 None,
                 0.0,
             ),
         };
+        let files = sink.finish(scene)?;
         let t_render = start.elapsed().as_secs_f64();
         let peaks = sampler.finish();
-        publish_run(
+        outputs::publish_run(
             scene,
-            &self.out_dir,
+            staging,
+            files,
             rendered,
             stage,
             shares,
@@ -193,32 +252,28 @@ impl RenderJob<'_> {
                 total: self.scene_seconds + t_render,
             },
             peaks,
+            warnings,
         )
-    }
-
-    fn photon_map(
-        &self,
-        shares: &mut RenderShares,
-        start: Instant,
-        progress: &dyn Progress,
-    ) -> Result<(crate::render::Rendered, MapStage, f64)> {
-        let (map, stage, t_emit, scratch) = self.open_map(shares, start, progress)?;
-        let rendered =
-            crate::render::render(self.scene, &map, &self.out_dir, self.threads, progress)?;
-        drop(map);
-        drop(scratch);
-        Ok((rendered, stage, t_emit))
     }
 
     /// The photon map of the render: reused when its provenance matches,
     /// else emitted (into a scratch file in the output directory without
-    /// `map`), with the band-shape grid's share taken from the budget.
+    /// `map`), with the band-shape grid's share taken from the budget. A
+    /// kept map is locked for reading while the render runs, and for
+    /// writing while it is emitted.
+    #[allow(clippy::type_complexity)]
     fn open_map(
         &self,
         shares: &mut RenderShares,
         start: Instant,
         progress: &dyn Progress,
-    ) -> Result<(PhotonMap, MapStage, f64, Option<tempfile::NamedTempFile>)> {
+    ) -> Result<(
+        PhotonMap,
+        MapStage,
+        f64,
+        Option<tempfile::NamedTempFile>,
+        Option<RunLock>,
+    )> {
         let scene = self.scene;
         let provenance = crate::emit::emission_provenance(scene)?;
         let scratch = match &self.map {
@@ -232,6 +287,7 @@ impl RenderJob<'_> {
         let map_path = kept
             .or(scratch.as_ref().map(|s| s.path()))
             .expect("a map path");
+        let lock = kept.map(RunLock::shared).transpose()?;
         let reused = kept.and_then(|p| reusable(p, &provenance));
         let reused_map = reused.is_some();
         let (file, emission, summary) = match reused {
@@ -240,6 +296,9 @@ impl RenderJob<'_> {
                 (file, emission, summary)
             }
             None => {
+                if let Some(l) = &lock {
+                    l.upgrade()?;
+                }
                 let em = crate::emit::emit(
                     scene,
                     &provenance,
@@ -265,48 +324,77 @@ impl RenderJob<'_> {
             summary,
             reused: reused_map,
         };
-        Ok((map, stage, t_emit, scratch))
+        Ok((map, stage, t_emit, scratch, lock))
     }
 }
 
-/// With `[sensor] response`: the radiance and the product cubes integrated
-/// over that sensor's bands (`cube::ops::resample`), as
-/// `NAME[.product].SENSOR.{hdr,bsq}` beside them.
-fn sensor_cubes(
+/// Before a render writes anything into `out_dir`: create it, take the
+/// render's lock there (another run writing the same scene's files fails
+/// at once), remove what killed runs left, and refuse output names that
+/// are links or special files, or that name the scene file or the map
+/// (`map`). Returns the lock, the staging directory of the run's files
+/// and what to warn about.
+pub(crate) fn prepare_outputs(
     scene: &Scene,
     out_dir: &Path,
-    rendered: &crate::render::Rendered,
-) -> Result<Vec<report::ProductFiles>> {
-    let Some(sensor) = &scene.sensor.response else {
-        return Ok(Vec::new());
-    };
-    let tag = Path::new(&sensor.name)
-        .file_stem()
-        .map_or_else(|| sensor.name.clone(), |s| s.to_string_lossy().into_owned());
-    let mut cubes = vec![("radiance", rendered.hdr.clone())];
-    cubes.extend(
-        crate::render::PRODUCTS
-            .iter()
-            .zip(&rendered.products)
-            .map(|(p, f)| (p.suffix, f.hdr.clone())),
-    );
-    let mut out = Vec::with_capacity(cubes.len());
-    for (product, hdr) in cubes {
-        let cube = crate::cube::EnviCube::open(&hdr)?;
-        let stem = hdr
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let (files, _) =
-            crate::cube::ops::resample(&cube, sensor, out_dir, &format!("{stem}.{tag}"))?;
-        out.push(report::ProductFiles {
-            product: product.into(),
-            units: cube.data_units().unwrap_or("unknown").into(),
-            hdr: files.hdr.display().to_string(),
-            bsq: files.bsq.display().to_string(),
-        });
+    map: Option<&Path>,
+) -> Result<(RunLock, Staging, Vec<String>)> {
+    use crate::output::set;
+    create_dir(out_dir)?;
+    let lock = RunLock::exclusive(&out_dir.join(format!("{}.render", scene.name)))?;
+    let mut swept = set::sweep_stale(out_dir);
+    if let Some(m) = map {
+        let dir = crate::output::parent_dir(m);
+        if !set::same_file(dir, out_dir) {
+            swept.extend(set::sweep_stale(dir));
+        }
+        check_map_target(m)?;
+        set::refuse_input(m, "--map", &scene.origin.path, "scene file")?;
     }
-    Ok(out)
+    for name in outputs::run_file_names(scene) {
+        let path = out_dir.join(&name);
+        set::check_target(&path)?;
+        set::refuse_input(&path, "--out", &scene.origin.path, "scene file")?;
+        if let Some(m) = map {
+            set::refuse_input(m, "--map", &path, "render's output")?;
+        }
+    }
+    let staging = Staging::new(out_dir)?;
+    Ok((
+        lock,
+        staging,
+        set::sweep_warning(&swept).into_iter().collect(),
+    ))
+}
+
+/// A map path may be written when it is absent, or a regular file that is
+/// empty or begins as a littoral map does (a corrupt or older map is
+/// replaced; anything else is someone's file, and refused).
+pub(crate) fn check_map_target(path: &Path) -> Result<()> {
+    crate::output::set::check_target(path)?;
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Ok(());
+    };
+    let mut head = [0u8; 8];
+    let mut n = 0;
+    while n < head.len() {
+        match std::io::Read::read(&mut f, &mut head[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) => return Err(Error::io(path, "read", e)),
+        }
+    }
+    if n == 0 || head[..n] == crate::store::format::HEADER_MAGIC[..n] {
+        return Ok(());
+    }
+    Err(Error::io(
+        path,
+        "write the photon map",
+        std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "the file there is not a littoral photon map: refusing to replace it",
+        ),
+    ))
 }
 
 /// Create `dir` (and its parents) and check that it is a directory.
@@ -320,104 +408,4 @@ fn create_dir(dir: &Path) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-/// The files and the report of a finished render in `out_dir`: depth
-/// profiles and Kd as CSV (photon map), the sensor-band cubes, the HTML
-/// page and the JSON report.
-fn publish_run(
-    scene: &Scene,
-    out_dir: &Path,
-    rendered: crate::render::Rendered,
-    stage: Option<MapStage>,
-    shares: RenderShares,
-    timings: RenderTimings,
-    peaks: crate::mem::MemoryPeaks,
-) -> Result<RunReport> {
-    let integrator = scene.render.integrator;
-    let json = out_dir.join(format!("{}.json", scene.name));
-    let html = out_dir.join(format!("{}.html", scene.name));
-    let ed_above = match &stage {
-        Some(s) => s.emission.above_surface.Ed.clone(),
-        None => (0..scene.bands.len())
-            .map(|b| scene.incident_irradiance(b))
-            .collect(),
-    };
-    let (emission, map, reused_map) = match stage {
-        Some(s) => (Some(s.emission), Some(s.summary), s.reused),
-        None => (None, None, false),
-    };
-    // Depth profiles and Kd, as CSV, from the emission's tallies.
-    let mut profiles = None;
-    if let Some(e) = &emission {
-        let p = out_dir.join(format!("{}.profiles.csv", scene.name));
-        let k = out_dir.join(format!("{}.kd.csv", scene.name));
-        crate::output::write_atomic(&p, e.profiles_csv().as_bytes())?;
-        crate::output::write_atomic(&k, e.kd_csv().as_bytes())?;
-        profiles = Some((p.display().to_string(), k.display().to_string()));
-    }
-    let sensor_cubes = sensor_cubes(scene, out_dir, &rendered)?;
-    let report = RunReport {
-        integrator,
-        Ed_above_surface: ed_above,
-        emission,
-        map,
-        reused_map,
-        warnings: report::radiometer_warnings(&rendered.radiometers)
-            .into_iter()
-            .chain(rendered.warnings.iter().cloned())
-            .collect(),
-        radiometers: rendered.radiometers,
-        estimate: scene.estimate.clone(),
-        sensor: SensorSummary {
-            pixels: scene.sensor.pixels,
-            samples_per_pixel: scene.sensor.samples_per_pixel,
-            bands: scene.bands.len(),
-            georef: scene.georef,
-            geotransform: crate::cube::georef::geotransform(scene),
-            sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
-            sun_azimuth_deg: scene.sun.azimuth_rad.to_degrees(),
-        },
-        cache: rendered.cache,
-        memory: shares,
-        outputs: Outputs {
-            hdr: rendered.hdr.display().to_string(),
-            bsq: rendered.bsq.display().to_string(),
-            png: rendered.png.display().to_string(),
-            exr: rendered.exr.display().to_string(),
-            json: json.display().to_string(),
-            html: html.display().to_string(),
-            stderr_hdr: rendered
-                .stderr
-                .as_ref()
-                .map(|c| c.hdr.display().to_string()),
-            stderr_bsq: rendered
-                .stderr
-                .as_ref()
-                .map(|c| c.bsq.display().to_string()),
-            profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
-            kd_csv: profiles.map(|p| p.1),
-            products: crate::render::PRODUCTS
-                .iter()
-                .zip(&rendered.products)
-                .map(|(p, f)| report::ProductFiles {
-                    product: p.suffix.into(),
-                    units: p.units.into(),
-                    hdr: f.hdr.display().to_string(),
-                    bsq: f.bsq.display().to_string(),
-                })
-                .collect(),
-            sensor_cubes,
-        },
-        timings_s: timings,
-        peak_memory: peaks,
-        peak_rss_bytes: peaks.rss_bytes,
-        units: units::report_units(),
-    };
-    let text = serde_json::to_string_pretty(&report)
-        .map_err(|e| Error::invalid("report", e.to_string()))?
-        + "\n";
-    html::write(scene, &report, &html)?;
-    crate::output::write_atomic(&json, text.as_bytes())?;
-    Ok(report)
 }

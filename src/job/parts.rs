@@ -244,7 +244,6 @@ impl RenderPartJob<'_> {
                     && read_tile(&p, &digest, t, tile_size(scene, t), bands, errors).is_ok())
             })
             .collect();
-        let quicklook = crate::cube::quicklook::Quicklook::new(&scene.bands);
         let (stage, t_emit, cache, radiometers) = match scene.render.integrator {
             IntegratorMode::PhotonMap => {
                 let Some(map_path) = &self.map else {
@@ -262,20 +261,20 @@ impl RenderPartJob<'_> {
                         ),
                     ));
                 }
-                let (map, stage, t_emit, _scratch) = job.open_map(&mut shares, start, progress)?;
+                super::check_map_target(map_path)?;
+                let (map, stage, t_emit, _scratch, _map_lock) =
+                    job.open_map(&mut shares, start, progress)?;
                 let light = crate::render::march::RayMarcher::new(
                     scene,
                     crate::estimate::Estimator::new(scene, &map)?,
                 );
-                let radiometers =
-                    self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
+                let radiometers = self.render_tiles(&light, &todo, &digest, progress)?;
                 use crate::store::PhotonQuery;
                 (Some(stage), t_emit, map.cache_stats(), radiometers)
             }
             IntegratorMode::Path => {
                 let light = crate::render::path::PathTracer::new(scene);
-                let radiometers =
-                    self.render_tiles(&light, &todo, &digest, &quicklook, progress)?;
+                let radiometers = self.render_tiles(&light, &todo, &digest, progress)?;
                 (None, 0.0, CacheStats::default(), radiometers)
             }
         };
@@ -317,24 +316,14 @@ impl RenderPartJob<'_> {
         light: &dyn crate::render::Integrator,
         todo: &[(usize, usize)],
         digest: &str,
-        quicklook: &crate::cube::quicklook::Quicklook,
         progress: &dyn Progress,
     ) -> Result<Option<Vec<RadiometerReading>>> {
-        let pool = crate::parallel::pool(self.threads)?;
-        let bands = self.scene.bands.len();
-        progress.stage("render tiles", todo.len() as u64);
-        pool.install(|| {
-            todo.par_iter().try_for_each(|&tile| -> Result<()> {
-                let t = crate::render::render_tile(self.scene, light, tile, quicklook)?;
-                crate::output::write_atomic(
-                    &tile_path(&self.part_dir, tile),
-                    &tile_bytes(&t, digest, bands),
-                )?;
-                progress.advance(1);
-                Ok(())
-            })
-        })?;
-        progress.finish();
+        let sink = TileFiles {
+            dir: &self.part_dir,
+            digest,
+            bands: self.scene.bands.len(),
+        };
+        crate::render::render_tiles(self.scene, light, todo, &sink, self.threads, progress)?;
         if self.tiles.0 == 0 {
             Ok(Some(crate::render::read_radiometers(
                 self.scene,
@@ -344,6 +333,22 @@ impl RenderPartJob<'_> {
         } else {
             Ok(None)
         }
+    }
+}
+
+/// A part's finished tiles, one file each, written whole.
+struct TileFiles<'a> {
+    dir: &'a Path,
+    digest: &'a str,
+    bands: usize,
+}
+
+impl crate::render::TileSink for TileFiles<'_> {
+    fn write(&self, t: &TileResult) -> Result<()> {
+        crate::output::write_atomic(
+            &tile_path(self.dir, (t.i, t.j)),
+            &tile_bytes(t, self.digest, self.bands),
+        )
     }
 }
 
@@ -448,8 +453,8 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
             "the scene does not build as it did",
         ));
     }
-    super::create_dir(out_dir)?;
-    let outputs = crate::render::RenderOutputs::create(&scene, out_dir)?;
+    let (_lock, staging, warnings) = super::prepare_outputs(&scene, out_dir, None)?;
+    let outputs = super::outputs::CubeSet::create(&scene, staging.dir())?;
     let bands = scene.bands.len();
     let errors = crate::render::stderr_description(&scene).is_some();
     let pool = crate::parallel::pool(threads)?;
@@ -480,11 +485,14 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
                 bands,
                 errors,
             )?;
-            outputs.write(&t)
+            crate::render::TileSink::write(&outputs, &t)
         })
     })?;
-    let radiometers = parts[0].1.radiometers.clone().unwrap_or_default();
-    let mut rendered = outputs.finish(&scene, radiometers)?;
+    let files = outputs.finish(&scene)?;
+    let mut rendered = crate::render::Rendered {
+        radiometers: parts[0].1.radiometers.clone().unwrap_or_default(),
+        ..Default::default()
+    };
     let mut cache = CacheStats::default();
     let mut peaks = MemoryPeaks::default();
     let mut render_s = 0.0;
@@ -504,9 +512,10 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
         _ => None,
     };
     let assemble_s = start.elapsed().as_secs_f64();
-    super::publish_run(
+    super::outputs::publish_run(
         &scene,
-        out_dir,
+        staging,
+        files,
         rendered,
         stage,
         p0.shares,
@@ -517,6 +526,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
             total: p0.timings_s.emit + render_s + assemble_s,
         },
         peaks,
+        warnings,
     )
 }
 

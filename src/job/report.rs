@@ -96,6 +96,16 @@ pub struct EmitReport {
     /// The unit of every number above, by field path (`job::units`).
     #[serde(default)]
     pub units: std::collections::BTreeMap<String, String>,
+    /// What the run found to warn about (left out of the JSON when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
+impl EmitReport {
+    /// The report as the JSON `littoral emit` writes.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report serialises") + "\n"
+    }
 }
 
 /// A warning for every radiometer whose samples are dominated by a few

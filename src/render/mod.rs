@@ -5,8 +5,9 @@
 //!
 //! The image is split into 16 x 16 pixel tiles rendered in parallel in
 //! Morton order (neighbouring tiles query neighbouring photons, which keeps
-//! the tile cache warm) and written to the ENVI cube as they finish, so the
-//! whole cube is never in memory. Every pixel sample draws from the random
+//! the tile cache warm) and handed to a [`TileSink`] as they finish (the
+//! job's cube set, or a part's tile files), so the whole cube is never in
+//! memory. Every pixel sample draws from the random
 //! stream (seed, pixel, sample), so the cube is bit-identical for any
 //! thread count.
 //!
@@ -19,7 +20,8 @@
 //! spread over their count); at one sample per pixel the renderer's own
 //! sampling noise (march jitter, rough-surface facets) is not in it.
 //!
-//! Not for: emission (see `emit`) or file formats (see `cube`).
+//! Not for: emission (see `emit`), writing files (the sinks live in
+//! `job::outputs` and `job::parts`) or file formats (see `cube`).
 
 pub mod camera;
 pub mod interface;
@@ -29,8 +31,7 @@ pub mod path;
 pub mod sun;
 pub mod targets;
 
-use crate::cube::envi::{CubeSpec, EnviWriter};
-use crate::cube::quicklook::{write_png, Quicklook};
+use crate::cube::quicklook::Quicklook;
 use crate::error::Result;
 use crate::estimate::estimator::{with_scratch, Estimator};
 use crate::estimate::groups::{CHANNELS, GROUPS};
@@ -46,7 +47,6 @@ use moments::Moments;
 use path::{PathScratch, PathTracer};
 use rayon::prelude::*;
 use std::cell::RefCell;
-use std::path::{Path, PathBuf};
 
 /// Side of an image tile in pixels.
 pub const TILE_PX: usize = 16;
@@ -230,18 +230,9 @@ pub const PRODUCTS: [Product; 3] = [
     },
 ];
 
-/// What a render wrote.
-#[derive(Clone, Debug)]
+/// What a render measured besides its tiles (which went to its sink).
+#[derive(Clone, Debug, Default)]
 pub struct Rendered {
-    pub hdr: PathBuf,
-    pub bsq: PathBuf,
-    pub exr: PathBuf,
-    pub png: PathBuf,
-    /// The standard-error cube, when one was written (path integrator, two
-    /// or more samples per pixel).
-    pub stderr: Option<crate::cube::envi::CubeFiles>,
-    /// The product cubes, in the order of [`PRODUCTS`].
-    pub products: Vec<crate::cube::envi::CubeFiles>,
     pub radiometers: Vec<RadiometerReading>,
     /// Tile-cache counters after the render (zero without a photon map).
     pub cache: crate::store::cache::CacheStats,
@@ -250,32 +241,40 @@ pub struct Rendered {
     pub warnings: Vec<String>,
 }
 
-/// Render `scene` from `map` with the photon-map integrator into
-/// `dir/NAME.{hdr,bsq,exr,png}` with `threads` threads (0 = all cores).
+/// Where finished image tiles go, from any worker thread, in any order.
+pub trait TileSink: Sync {
+    fn write(&self, tile: &TileResult) -> Result<()>;
+}
+
+/// Render `scene` from `map` with the photon-map integrator into `sink`
+/// with `threads` threads (0 = all cores), then read its radiometers.
 pub fn render(
     scene: &Scene,
     map: &dyn PhotonQuery,
-    dir: &Path,
+    sink: &dyn TileSink,
     threads: usize,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let light = RayMarcher::new(scene, Estimator::new(scene, map)?);
-    let mut r = render_with(scene, &light, dir, threads, progress)?;
-    r.cache = map.cache_stats();
-    r.warnings = targets::face_warnings(scene, map)?;
-    Ok(r)
+    Ok(Rendered {
+        radiometers: render_with(scene, &light, sink, threads, progress)?,
+        cache: map.cache_stats(),
+        warnings: targets::face_warnings(scene, map)?,
+    })
 }
 
-/// Render `scene` with the path integrator (no photon map) into
-/// `dir/NAME.{hdr,bsq,exr,png}` and, with two or more samples per pixel,
-/// `dir/NAME.stderr.{hdr,bsq}`.
+/// Render `scene` with the path integrator (no photon map) into `sink`,
+/// then read its radiometers.
 pub fn render_path(
     scene: &Scene,
-    dir: &Path,
+    sink: &dyn TileSink,
     threads: usize,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    render_with(scene, &PathTracer::new(scene), dir, threads, progress)
+    Ok(Rendered {
+        radiometers: render_with(scene, &PathTracer::new(scene), sink, threads, progress)?,
+        ..Default::default()
+    })
 }
 
 /// The rendered values of one image tile (16 x 16 pixels, fewer at the
@@ -401,144 +400,6 @@ pub fn render_tile(
     })
 }
 
-/// The cubes of a render being written tile by tile, and the quicklook's
-/// pixels gathered for the end.
-pub struct RenderOutputs {
-    dir: PathBuf,
-    writer: EnviWriter,
-    products: Vec<EnviWriter>,
-    stderr: Option<EnviWriter>,
-    image: std::sync::Mutex<Vec<f32>>,
-}
-
-impl RenderOutputs {
-    /// Create the cubes of `scene` in `dir` (under temporary names).
-    pub fn create(scene: &Scene, dir: &Path) -> Result<RenderOutputs> {
-        let [w, h] = scene.sensor.pixels;
-        let spec_in = |description: String, units: &str| CubeSpec {
-            samples: w,
-            lines: h,
-            bands: scene.bands.clone(),
-            description,
-            data_units: units.into(),
-        };
-        let spec = |description: String| spec_in(description, RADIANCE_UNITS);
-        let extra = crate::cube::georef::envi_header_lines(scene);
-        let writer = EnviWriter::create_with(
-            dir,
-            &scene.name,
-            spec(format!(
-                "littoral total radiance at the sensor (L_t) of scene '{}'",
-                scene.name
-            )),
-            &extra,
-        )?;
-        // The products: water-leaving radiance, surface-reflected radiance,
-        // remote-sensing reflectance.
-        let products = PRODUCTS
-            .iter()
-            .map(|p| {
-                EnviWriter::create_with(
-                    dir,
-                    &format!("{}.{}", scene.name, p.suffix),
-                    spec_in(
-                        format!("littoral {} of scene '{}'", p.description, scene.name),
-                        p.units,
-                    ),
-                    &extra,
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let stderr = match stderr_description(scene) {
-            Some(what) => Some(EnviWriter::create_with(
-                dir,
-                &format!("{}.stderr", scene.name),
-                spec(format!(
-                    "littoral standard error of the radiance cube of scene '{}' ({what})",
-                    scene.name
-                )),
-                &extra,
-            )?),
-            None => None,
-        };
-        Ok(RenderOutputs {
-            dir: dir.to_path_buf(),
-            writer,
-            products,
-            stderr,
-            image: std::sync::Mutex::new(vec![0f32; w * h * 3]),
-        })
-    }
-
-    /// Write one tile into every cube and the quicklook.
-    pub fn write(&self, t: &TileResult) -> Result<()> {
-        let (x0, y0) = (t.i * TILE_PX, t.j * TILE_PX);
-        self.writer.write_tile(x0, y0, t.w, t.h, &t.values)?;
-        for (pw, v) in self.products.iter().zip(&t.products) {
-            pw.write_tile(x0, y0, t.w, t.h, v)?;
-        }
-        if let Some(se) = &self.stderr {
-            se.write_tile(x0, y0, t.w, t.h, &t.errors)?;
-        }
-        let w = self.writer.spec().samples;
-        let mut image = self.image.lock().unwrap_or_else(|e| e.into_inner());
-        for (row, chunk) in t.rgb.chunks(t.w * 3).enumerate() {
-            let start = ((y0 + row) * w + x0) * 3;
-            image[start..start + chunk.len()].copy_from_slice(chunk);
-        }
-        Ok(())
-    }
-
-    /// Finish the cubes, write the quicklook and the spectral EXR.
-    pub fn finish(self, scene: &Scene, radiometers: Vec<RadiometerReading>) -> Result<Rendered> {
-        let RenderOutputs {
-            dir,
-            writer,
-            products,
-            stderr,
-            image,
-        } = self;
-        let [w, h] = scene.sensor.pixels;
-        let image = image.into_inner().unwrap_or_else(|e| e.into_inner());
-        let png = dir.join(format!("{}.png", scene.name));
-        write_png(&png, w, h, &image, None)?;
-        let crate::cube::envi::CubeFiles { hdr, bsq } = writer.finish()?;
-        let stderr = stderr.map(|s| s.finish()).transpose()?;
-        let products = products
-            .into_iter()
-            .map(|p| p.finish())
-            .collect::<Result<Vec<_>>>()?;
-        // The spectral OpenEXR copy, tile by tile from the finished cubes:
-        // the radiance, its standard error, then the products.
-        let exr = dir.join(format!("{}.exr", scene.name));
-        let mut layers = vec![("radiance", crate::cube::EnviCube::open(&hdr)?)];
-        if let Some(se) = &stderr {
-            layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
-        }
-        for (p, files) in PRODUCTS.iter().zip(&products) {
-            layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
-        }
-        let named: Vec<(&str, &crate::cube::EnviCube)> =
-            layers.iter().map(|(n, c)| (*n, c)).collect();
-        crate::cube::exr::write_spectral_exr_layers_with(
-            &named,
-            &exr,
-            scene.render.exr_compression,
-        )?;
-        Ok(Rendered {
-            hdr,
-            bsq,
-            exr,
-            png,
-            stderr,
-            products,
-            radiometers,
-            cache: Default::default(),
-            warnings: Vec::new(),
-        })
-    }
-}
-
 /// Every radiometer's reading with `light`, in parallel on `threads`.
 pub fn read_radiometers(
     scene: &Scene,
@@ -556,31 +417,42 @@ pub fn read_radiometers(
     })
 }
 
-/// Render `scene` with `light`: the image tiles, the quicklook, the EXR,
-/// the standard-error cube where the samples allow one, the radiometers.
+/// Render `scene`'s image tiles with `light` into `sink`, then read its
+/// radiometers.
 pub fn render_with(
     scene: &Scene,
     light: &dyn Integrator,
-    dir: &Path,
+    sink: &dyn TileSink,
     threads: usize,
     progress: &dyn Progress,
-) -> Result<Rendered> {
+) -> Result<Vec<RadiometerReading>> {
+    render_tiles(scene, light, &image_tiles(scene), sink, threads, progress)?;
+    read_radiometers(scene, light, threads)
+}
+
+/// Render the image tiles `tiles` of `scene` with `light` into `sink`, in
+/// parallel on `threads`.
+pub fn render_tiles(
+    scene: &Scene,
+    light: &dyn Integrator,
+    tiles: &[(usize, usize)],
+    sink: &dyn TileSink,
+    threads: usize,
+    progress: &dyn Progress,
+) -> Result<()> {
     let pool = crate::parallel::pool(threads)?;
-    let outputs = RenderOutputs::create(scene, dir)?;
     let quicklook = Quicklook::new(&scene.bands);
-    let tiles = image_tiles(scene);
     progress.stage("render tiles", tiles.len() as u64);
     pool.install(|| {
         tiles.par_iter().try_for_each(|&tile| -> Result<()> {
             let t = render_tile(scene, light, tile, &quicklook)?;
-            outputs.write(&t)?;
+            sink.write(&t)?;
             progress.advance(1);
             Ok(())
         })
     })?;
     progress.finish();
-    let radiometers = read_radiometers(scene, light, threads)?;
-    outputs.finish(scene, radiometers)
+    Ok(())
 }
 
 /// Radiometer readings only (no image), with the photon-map integrator.

@@ -66,6 +66,7 @@ impl Setup {
         EmitJob {
             scene,
             map: self.map(),
+            report: None,
             threads: 1,
             budget: MemoryBudget::new(64 * MIB),
             scene_seconds: 0.0,

@@ -17,6 +17,7 @@ mod oracle;
 mod path;
 mod physics;
 mod products;
+mod publication;
 mod render;
 mod roundtrip;
 mod scenes;

@@ -106,6 +106,7 @@ fn volume_photons_are_layered_by_direction_and_copies_carry_their_share() {
     EmitJob {
         scene: &scene,
         map: path.clone(),
+        report: None,
         threads: 2,
         budget: MemoryBudget::new(64 << 20),
         scene_seconds: 0.0,

@@ -104,13 +104,8 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
         ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &overrides)?;
-    // The report's file is made now, so that an unwritable path fails
-    // before the photons are traced rather than after.
-    let report_file = match &a.report {
-        Some(path) => Some(littoral::output::temp_beside(path)?),
-        None => None,
-    };
     if let Some(shard) = a.shard {
+        let _lock = littoral::job::prepare_map_outputs(&scene, &a.map, a.report.as_deref(), false)?;
         littoral::mem::tune_allocator();
         let sampler = littoral::mem::PeakSampler::start();
         let provenance = littoral::emit::emission_provenance(&scene)?;
@@ -155,23 +150,20 @@ fn run_emit(a: EmitArgs) -> AnyResult<()> {
     let job = EmitJob {
         scene: &scene,
         map: a.map.clone(),
+        report: a.report.clone(),
         threads: a.threads,
         budget,
         scene_seconds: start.elapsed().as_secs_f64(),
     };
     let r = job.run(&Bars::new(a.quiet))?;
-    let text = serde_json::to_string_pretty(&r)? + "\n";
-    match (report_file, &a.report) {
-        (Some(mut tmp), Some(path)) => {
-            use std::io::Write;
-            tmp.write_all(text.as_bytes())
-                .map_err(|e| littoral::Error::io(path, "write", e))?;
-            littoral::output::publish(tmp, path)?;
-        }
-        _ => cli::print(&text)?,
+    if a.report.is_none() {
+        cli::print(&r.json())?;
     }
     if !a.quiet {
         eprintln!("{}", r.summary());
+    }
+    for w in &r.warnings {
+        eprintln!("littoral: warning: {w}");
     }
     Ok(())
 }

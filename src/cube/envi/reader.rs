@@ -234,13 +234,15 @@ impl EnviCube {
                     format!("{samples} x {lines} x {bands} values overflow a file size"),
                 )
             })?;
-        if len < needed {
+        if len != needed {
+            // Longer is as wrong as shorter: the header describes another
+            // file, or the data was appended to.
             return Err(Error::data(
                 &data_path,
                 None,
                 "size",
                 format!(
-                    "holds {len} bytes but the header's {samples} x {lines} x {bands} values of {} bytes need {needed}",
+                    "holds {len} bytes but the header's {samples} x {lines} x {bands} values of {} bytes (after a {header_offset}-byte offset) are {needed}",
                     data_type.bytes()
                 ),
             ));

@@ -1,0 +1,359 @@
+//! A render's files: the cube set written tile by tile ([`CubeSet`], the
+//! render's [`TileSink`]), then the quicklook, the spectral EXR, the depth
+//! profiles, the sensor-band cubes, the HTML page and the JSON report, all
+//! staged and published as one set ([`publish_run`]).
+//!
+//! Every file is written once, in the staging directory
+//! (`output::set::Staging`); the EXR, the sensor-band cubes and the HTML
+//! read the staged cubes, never a final name, so they always belong to the
+//! same run as the cubes beside them.
+//!
+//! Not for: computing values (`render`), the tile files of a part
+//! (`job::parts`).
+
+use super::report::{self, Outputs, RenderTimings, RunReport, SensorSummary};
+use super::{html, units, MapStage, RenderShares};
+use crate::cube::envi::{CubeFiles, CubeSpec, EnviWriter};
+use crate::cube::quicklook::write_png;
+use crate::error::{Error, Result};
+use crate::output::set::Staging;
+use crate::render::{
+    stderr_description, Rendered, TileResult, TileSink, PRODUCTS, RADIANCE_UNITS, TILE_PX,
+};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// The cubes of a render being written tile by tile into a staging
+/// directory, and the quicklook's pixels gathered for the end.
+pub struct CubeSet {
+    dir: PathBuf,
+    writer: EnviWriter,
+    products: Vec<EnviWriter>,
+    stderr: Option<EnviWriter>,
+    image: std::sync::Mutex<Vec<f32>>,
+}
+
+/// The files of a finished [`CubeSet`], where they were written.
+#[derive(Clone, Debug)]
+pub struct CubeSetFiles {
+    pub radiance: CubeFiles,
+    pub exr: PathBuf,
+    pub png: PathBuf,
+    /// The standard-error cube, when the integrator writes one.
+    pub stderr: Option<CubeFiles>,
+    /// The product cubes, in the order of [`PRODUCTS`].
+    pub products: Vec<CubeFiles>,
+}
+
+impl CubeSet {
+    /// Create the cubes of `scene` in `dir` (under temporary names).
+    pub fn create(scene: &Scene, dir: &Path) -> Result<CubeSet> {
+        let [w, h] = scene.sensor.pixels;
+        let spec_in = |description: String, units: &str| CubeSpec {
+            samples: w,
+            lines: h,
+            bands: scene.bands.clone(),
+            description,
+            data_units: units.into(),
+        };
+        let spec = |description: String| spec_in(description, RADIANCE_UNITS);
+        let extra = crate::cube::georef::envi_header_lines(scene);
+        let writer = EnviWriter::create_with(
+            dir,
+            &scene.name,
+            spec(format!(
+                "littoral total radiance at the sensor (L_t) of scene '{}'",
+                scene.name
+            )),
+            &extra,
+        )?;
+        // The products: water-leaving radiance, surface-reflected radiance,
+        // remote-sensing reflectance.
+        let products = PRODUCTS
+            .iter()
+            .map(|p| {
+                EnviWriter::create_with(
+                    dir,
+                    &format!("{}.{}", scene.name, p.suffix),
+                    spec_in(
+                        format!("littoral {} of scene '{}'", p.description, scene.name),
+                        p.units,
+                    ),
+                    &extra,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let stderr = match stderr_description(scene) {
+            Some(what) => Some(EnviWriter::create_with(
+                dir,
+                &format!("{}.stderr", scene.name),
+                spec(format!(
+                    "littoral standard error of the radiance cube of scene '{}' ({what})",
+                    scene.name
+                )),
+                &extra,
+            )?),
+            None => None,
+        };
+        Ok(CubeSet {
+            dir: dir.to_path_buf(),
+            writer,
+            products,
+            stderr,
+            image: std::sync::Mutex::new(vec![0f32; w * h * 3]),
+        })
+    }
+
+    /// Finish the cubes, write the quicklook and the spectral EXR (from
+    /// the cubes just finished).
+    pub fn finish(self, scene: &Scene) -> Result<CubeSetFiles> {
+        let CubeSet {
+            dir,
+            writer,
+            products,
+            stderr,
+            image,
+        } = self;
+        let [w, h] = scene.sensor.pixels;
+        let image = image.into_inner().unwrap_or_else(|e| e.into_inner());
+        let png = dir.join(format!("{}.png", scene.name));
+        write_png(&png, w, h, &image, None)?;
+        let radiance = writer.finish()?;
+        let stderr = stderr.map(|s| s.finish()).transpose()?;
+        let products = products
+            .into_iter()
+            .map(|p| p.finish())
+            .collect::<Result<Vec<_>>>()?;
+        // The spectral OpenEXR: the radiance, its standard error, then the
+        // products.
+        let exr = dir.join(format!("{}.exr", scene.name));
+        let mut layers = vec![("radiance", crate::cube::EnviCube::open(&radiance.hdr)?)];
+        if let Some(se) = &stderr {
+            layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
+        }
+        for (p, files) in PRODUCTS.iter().zip(&products) {
+            layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
+        }
+        let named: Vec<(&str, &crate::cube::EnviCube)> =
+            layers.iter().map(|(n, c)| (*n, c)).collect();
+        crate::cube::exr::write_spectral_exr_layers_with(
+            &named,
+            &exr,
+            scene.render.exr_compression,
+        )?;
+        Ok(CubeSetFiles {
+            radiance,
+            exr,
+            png,
+            stderr,
+            products,
+        })
+    }
+}
+
+impl TileSink for CubeSet {
+    /// Write one tile into every cube and the quicklook.
+    fn write(&self, t: &TileResult) -> Result<()> {
+        let (x0, y0) = (t.i * TILE_PX, t.j * TILE_PX);
+        self.writer.write_tile(x0, y0, t.w, t.h, &t.values)?;
+        for (pw, v) in self.products.iter().zip(&t.products) {
+            pw.write_tile(x0, y0, t.w, t.h, v)?;
+        }
+        if let Some(se) = &self.stderr {
+            se.write_tile(x0, y0, t.w, t.h, &t.errors)?;
+        }
+        let w = self.writer.spec().samples;
+        let mut image = self.image.lock().unwrap_or_else(|e| e.into_inner());
+        for (row, chunk) in t.rgb.chunks(t.w * 3).enumerate() {
+            let start = ((y0 + row) * w + x0) * 3;
+            image[start..start + chunk.len()].copy_from_slice(chunk);
+        }
+        Ok(())
+    }
+}
+
+/// The names a render of `scene` publishes in its output directory (the
+/// cubes with their GDAL side files, the EXR, PNG, CSVs, HTML and JSON),
+/// for checking before any work that none of them is a link or a special
+/// file, or one of the run's inputs.
+pub fn run_file_names(scene: &Scene) -> Vec<String> {
+    let n = &scene.name;
+    let mut stems = vec![n.clone(), format!("{n}.stderr")];
+    stems.extend(PRODUCTS.iter().map(|p| format!("{n}.{}", p.suffix)));
+    if let Some(sensor) = &scene.sensor.response {
+        let tag = sensor_tag(&sensor.name);
+        stems.push(format!("{n}.{tag}"));
+        stems.extend(PRODUCTS.iter().map(|p| format!("{n}.{}.{tag}", p.suffix)));
+    }
+    let mut names = Vec::new();
+    for s in &stems {
+        names.extend([
+            format!("{s}.hdr"),
+            format!("{s}.bsq"),
+            format!("{s}.bsq.aux.xml"),
+        ]);
+    }
+    for ext in ["exr", "png", "profiles.csv", "kd.csv", "html", "json"] {
+        names.push(format!("{n}.{ext}"));
+    }
+    names
+}
+
+/// With `[sensor] response`: the radiance and the product cubes integrated
+/// over that sensor's bands (`cube::ops::resample`), as
+/// `NAME[.product].SENSOR.{hdr,bsq}` in `staging`.
+fn sensor_cubes(
+    scene: &Scene,
+    staging: &Staging,
+    files: &CubeSetFiles,
+) -> Result<Vec<report::ProductFiles>> {
+    let Some(sensor) = &scene.sensor.response else {
+        return Ok(Vec::new());
+    };
+    let tag = sensor_tag(&sensor.name);
+    let mut cubes = vec![("radiance", files.radiance.hdr.clone())];
+    cubes.extend(
+        PRODUCTS
+            .iter()
+            .zip(&files.products)
+            .map(|(p, f)| (p.suffix, f.hdr.clone())),
+    );
+    let mut out = Vec::with_capacity(cubes.len());
+    for (product, hdr) in cubes {
+        let cube = crate::cube::EnviCube::open(&hdr)?;
+        let stem = hdr
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let (made, _) =
+            crate::cube::ops::resample(&cube, sensor, staging.dir(), &format!("{stem}.{tag}"))?;
+        out.push(report::ProductFiles {
+            product: product.into(),
+            units: cube.data_units().unwrap_or("unknown").into(),
+            hdr: published(staging, &made.hdr),
+            bsq: published(staging, &made.bsq),
+        });
+    }
+    Ok(out)
+}
+
+/// How a sensor's cubes are tagged: its name, or a response file's stem.
+fn sensor_tag(name: &str) -> String {
+    Path::new(name)
+        .file_stem()
+        .map_or_else(|| name.to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// The name a staged file will have once published, as the report shows it.
+fn published(staging: &Staging, staged: &Path) -> String {
+    let name = staged.file_name().unwrap_or_default().to_string_lossy();
+    staging.final_path(&name).display().to_string()
+}
+
+/// The files and the report of a finished render: depth profiles and Kd as
+/// CSV (photon map), the sensor-band cubes, the HTML page and the JSON
+/// report, written beside the cube set in `staging`; then the whole set is
+/// published with the JSON last.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn publish_run(
+    scene: &Scene,
+    staging: Staging,
+    files: CubeSetFiles,
+    rendered: Rendered,
+    stage: Option<MapStage>,
+    shares: RenderShares,
+    timings: RenderTimings,
+    peaks: crate::mem::MemoryPeaks,
+    warnings: Vec<String>,
+) -> Result<RunReport> {
+    let integrator = scene.render.integrator;
+    let json_name = format!("{}.json", scene.name);
+    let html_name = format!("{}.html", scene.name);
+    let ed_above = match &stage {
+        Some(s) => s.emission.above_surface.Ed.clone(),
+        None => (0..scene.bands.len())
+            .map(|b| scene.incident_irradiance(b))
+            .collect(),
+    };
+    let (emission, map, reused_map) = match stage {
+        Some(s) => (Some(s.emission), Some(s.summary), s.reused),
+        None => (None, None, false),
+    };
+    // Depth profiles and Kd, as CSV, from the emission's tallies.
+    let mut profiles = None;
+    if let Some(e) = &emission {
+        let p = format!("{}.profiles.csv", scene.name);
+        let k = format!("{}.kd.csv", scene.name);
+        crate::output::write_atomic(&staging.dir().join(&p), e.profiles_csv().as_bytes())?;
+        crate::output::write_atomic(&staging.dir().join(&k), e.kd_csv().as_bytes())?;
+        profiles = Some((
+            staging.final_path(&p).display().to_string(),
+            staging.final_path(&k).display().to_string(),
+        ));
+    }
+    let sensor_cubes = sensor_cubes(scene, &staging, &files)?;
+    let report = RunReport {
+        integrator,
+        Ed_above_surface: ed_above,
+        emission,
+        map,
+        reused_map,
+        warnings: warnings
+            .into_iter()
+            .chain(report::radiometer_warnings(&rendered.radiometers))
+            .chain(rendered.warnings.iter().cloned())
+            .collect(),
+        radiometers: rendered.radiometers,
+        estimate: scene.estimate.clone(),
+        sensor: SensorSummary {
+            pixels: scene.sensor.pixels,
+            samples_per_pixel: scene.sensor.samples_per_pixel,
+            bands: scene.bands.len(),
+            georef: scene.georef,
+            geotransform: crate::cube::georef::geotransform(scene),
+            sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
+            sun_azimuth_deg: scene.sun.azimuth_rad.to_degrees(),
+        },
+        cache: rendered.cache,
+        memory: shares,
+        outputs: Outputs {
+            hdr: published(&staging, &files.radiance.hdr),
+            bsq: published(&staging, &files.radiance.bsq),
+            png: published(&staging, &files.png),
+            exr: published(&staging, &files.exr),
+            json: staging.final_path(&json_name).display().to_string(),
+            html: staging.final_path(&html_name).display().to_string(),
+            stderr_hdr: files.stderr.as_ref().map(|c| published(&staging, &c.hdr)),
+            stderr_bsq: files.stderr.as_ref().map(|c| published(&staging, &c.bsq)),
+            profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
+            kd_csv: profiles.map(|p| p.1),
+            products: PRODUCTS
+                .iter()
+                .zip(&files.products)
+                .map(|(p, f)| report::ProductFiles {
+                    product: p.suffix.into(),
+                    units: p.units.into(),
+                    hdr: published(&staging, &f.hdr),
+                    bsq: published(&staging, &f.bsq),
+                })
+                .collect(),
+            sensor_cubes,
+        },
+        timings_s: timings,
+        peak_memory: peaks,
+        peak_rss_bytes: peaks.rss_bytes,
+        units: units::report_units(),
+    };
+    let text = serde_json::to_string_pretty(&report)
+        .map_err(|e| Error::invalid("report", e.to_string()))?
+        + "\n";
+    html::write(
+        scene,
+        &report,
+        staging.dir(),
+        &staging.dir().join(&html_name),
+    )?;
+    crate::output::write_atomic(&staging.dir().join(&json_name), text.as_bytes())?;
+    staging.publish(&[&html_name, &json_name])?;
+    Ok(report)
+}
