@@ -13,7 +13,7 @@
 //! - [`geometry`]: floor and targets in one BVH ([`geometry::Geometry`]).
 //! - [`emit`]: photon tracing into the store, tallies, energy, the
 //!   emission report ([`emit::Emitter`]); sharded emission and its merge
-//!   ([`emit::emit_shard`], [`emit::merge_shards`]).
+//!   ([`emit::shard::emit_shard`], [`emit::shard::merge_shards`]).
 //! - [`store`]: the map file — streaming tile sort, codec, format, reader —
 //!   and its read side: the tile cache ([`store::cache::TileCache`]) and exact
 //!   kNN and radius queries behind one interface ([`store::PhotonQuery`]),
@@ -36,8 +36,8 @@
 //!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]);
 //!   the cube set and the run's files, staged and published as one set
 //!   ([`job::outputs`], [`output::set`]); the HTML report ([`job::html`]); renders split into parts and
-//!   assembled, or resumed ([`job::parts`]); Slurm batch scripts
-//!   ([`job::plan`]).
+//!   assembled, or resumed ([`job::distributed::parts`]); Slurm batch scripts
+//!   ([`job::distributed::plan`]).
 //!
 //! Data types every stage shares: [`spectral`] (the band grid every photon
 //! indexes, [`BandGrid`]), [`photon`] (the stored photon and its quantised

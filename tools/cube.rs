@@ -361,7 +361,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             out,
             threads,
         } => {
-            let r = littoral::job::parts::assemble(&parts, &out, threads)?;
+            let r = littoral::job::distributed::parts::assemble(&parts, &out, threads)?;
             eprintln!("assembled {} parts: {}", parts.len(), r.summary());
             Ok(())
         }

@@ -1,3 +1,4 @@
+use super::shard::{shard_payload, ShardEmission};
 use super::*;
 
 /// The guided pick is the binary search it replaced: for random u, for u

@@ -21,10 +21,9 @@
 //! Not for: argument parsing, progress bars or exit codes (`main`).
 
 pub mod budget;
+pub mod distributed;
 pub mod html;
 pub mod outputs;
-pub mod parts;
-pub mod plan;
 pub mod report;
 pub mod units;
 
@@ -129,53 +128,6 @@ pub fn prepare_map_outputs(
         set::refuse_input(r, "--report", map, "map (--map)")?;
     }
     RunLock::exclusive(map)
-}
-
-/// Merge the shard files of a sharded emission into one map, with the
-/// emission report of the whole (byte-identical to a single [`EmitJob`]'s
-/// map and report with the same budget).
-pub struct MergeJob<'a> {
-    pub parts: &'a [PathBuf],
-    pub map: PathBuf,
-    /// The budget; `None` takes the one the shards were emitted with (so
-    /// the map is the single run's; see [`crate::emit::merge_shards`]).
-    pub budget: Option<MemoryBudget>,
-}
-
-impl MergeJob<'_> {
-    pub fn run(&self, progress: &dyn Progress) -> Result<EmitReport> {
-        let start = Instant::now();
-        crate::mem::tune_allocator();
-        check_map_target(&self.map)?;
-        for part in self.parts {
-            crate::output::set::refuse_input(&self.map, "--out", part, "shard file")?;
-        }
-        let _lock = RunLock::exclusive(&self.map)?;
-        let sampler = crate::mem::PeakSampler::start();
-        let (em, budget) = crate::emit::merge_shards(
-            self.parts,
-            &self.map,
-            self.budget.map(|b| b.total()),
-            progress,
-        )?;
-        let provenance = MapFile::open(&self.map)?.header().provenance.digest_hex();
-        let seconds = start.elapsed().as_secs_f64();
-        let peaks = sampler.finish();
-        Ok(EmitReport {
-            emission: em.report,
-            map: MapSummary::written(&em.map, provenance, Some(&self.map)),
-            timings_s: EmitTimings {
-                scene: 0.0,
-                emit_and_store: seconds,
-                total: seconds,
-            },
-            peak_memory: peaks,
-            mem_budget_bytes: budget,
-            peak_rss_bytes: peaks.rss_bytes,
-            units: units::report_units(),
-            warnings: Vec::new(),
-        })
-    }
 }
 
 /// Render a scene: photon map (reused or emitted), cube, quicklook, EXR and

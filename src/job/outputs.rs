@@ -9,7 +9,7 @@
 //! same run as the cubes beside them.
 //!
 //! Not for: computing values (`render`), the tile files of a part
-//! (`job::parts`).
+//! (`job::distributed::parts`).
 
 use super::report::{self, Outputs, RenderTimings, RunReport, SensorSummary};
 use super::{html, units, MapStage, RenderShares};

@@ -271,7 +271,8 @@ fn sharded_stages_within_64mib() {
             "64MiB",
             "--quiet",
         ]);
-        let m: littoral::job::parts::PartManifest = report_of(&run, &out.join("part.json"));
+        let m: littoral::job::distributed::parts::PartManifest =
+            report_of(&run, &out.join("part.json"));
         assert_peak_within_64mib(&format!("render part {i}"), m.peak_memory);
     }
 }

@@ -251,7 +251,7 @@ fn same_outputs(a: &Path, b: &Path) {
     assert!(b.join("shards.html").exists());
 }
 
-/// `render --tiles I/N` parts assembled by `littoral-cube assemble` write
+/// `render --tiles I/N` parts assembled by `littoral assemble` write
 /// the whole render's cubes, EXR, quicklook and CSVs byte for byte, with
 /// the photon map and with the path integrator; a part started again
 /// keeps the tiles it finished; bad part sets are refused.
@@ -297,7 +297,13 @@ fn assembled_parts_are_the_whole_render_byte_for_byte() {
             })
             .collect();
         let out = dir.path().join(format!("{tag}-assembled"));
-        let cube = std::process::Command::new(env!("CARGO_BIN_EXE_littoral-cube"))
+        // `littoral assemble`, and its alias `littoral-cube assemble`.
+        let program = if tag == "pm" {
+            env!("CARGO_BIN_EXE_littoral")
+        } else {
+            env!("CARGO_BIN_EXE_littoral-cube")
+        };
+        let cube = std::process::Command::new(program)
             .args([
                 "assemble",
                 p(&parts[2]),

@@ -32,6 +32,51 @@ pub enum Command {
     /// Write Slurm batch scripts for a sharded run: an emit job array, the
     /// merge, a render job array and the assembly, chained by submit.sh.
     Plan(PlanArgs),
+    /// Assemble the part directories of a render split with `littoral
+    /// render --tiles I/N` into the files a whole render writes (cubes
+    /// byte-identical to it); the scene is built again from what the parts
+    /// recorded, so its files must be where they were. (`littoral-cube
+    /// assemble` does the same.)
+    Assemble(AssembleArgs),
+}
+
+#[derive(Args)]
+pub struct AssembleArgs {
+    /// Every part directory of the render, any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0, value_parser = threads)]
+    pub threads: usize,
+}
+
+impl RenderArgs {
+    /// The scene overrides the flags give.
+    pub fn overrides(&self) -> littoral::scene::Overrides {
+        littoral::scene::Overrides {
+            photons: self.photons,
+            bands: self.bands.map(usize::from),
+            seed: self.seed,
+            boundary: self.boundary,
+            spectral: self.spectral,
+            integrator: self.integrator,
+            samples_per_pixel: self.spp,
+        }
+    }
+}
+
+impl EmitArgs {
+    /// The scene overrides the flags give.
+    pub fn overrides(&self) -> littoral::scene::Overrides {
+        littoral::scene::Overrides {
+            photons: self.photons,
+            seed: self.seed,
+            ..Default::default()
+        }
+    }
 }
 
 #[derive(Args)]
@@ -241,6 +286,28 @@ pub struct QueryArgs {
     pub mem_budget: String,
 }
 
+impl QueryArgs {
+    /// The search the flags ask for (radii finite and >= 0).
+    pub fn search(&self) -> Result<littoral::store::Search, littoral::Error> {
+        for (name, v) in [("--radius", self.radius), ("--max-radius", self.max_radius)] {
+            if v.is_some_and(|r| !(r.is_finite() && r >= 0.0)) {
+                return Err(littoral::Error::invalid(
+                    name,
+                    "must be a finite radius >= 0",
+                ));
+            }
+        }
+        Ok(match (self.k, self.radius) {
+            (Some(k), None) => littoral::store::Search::Nearest {
+                k,
+                max_radius: self.max_radius,
+            },
+            (None, Some(radius)) => littoral::store::Search::Radius { radius },
+            _ => unreachable!("clap enforces exactly one of --k and --radius"),
+        })
+    }
+}
+
 /// Photon map layers.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum Layer {
@@ -250,6 +317,17 @@ pub enum Layer {
     VolumeUp,
     /// Photons stored on the floor and targets.
     Surface,
+}
+
+impl Layer {
+    /// The map's index of the layer.
+    pub fn index(self) -> u16 {
+        match self {
+            Layer::Volume => littoral::photon::LAYER_VOLUME,
+            Layer::VolumeUp => littoral::photon::LAYER_VOLUME_UP,
+            Layer::Surface => littoral::photon::LAYER_SURFACE,
+        }
+    }
 }
 
 #[derive(Args)]

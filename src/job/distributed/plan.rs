@@ -6,7 +6,7 @@
 //! 2. `merge.sbatch`: `littoral map merge` of the N shards into `map.map`;
 //! 3. `render.sbatch`, a job array of N tasks: `littoral render --tiles
 //!    I/N`, each task a part directory in `parts/`;
-//! 4. `assemble.sbatch`: `littoral-cube assemble` of the parts into the
+//! 4. `assemble.sbatch`: `littoral assemble` of the parts into the
 //!    results directory.
 //!
 //! With the path integrator there is no map: only the render array and the
@@ -53,8 +53,102 @@ pub struct Plan<'a> {
     /// Slurm partition, time limit and extra `#SBATCH` lines.
     pub partition: Option<String>,
     pub time: Option<String>,
-    /// Directory of the `littoral` and `littoral-cube` binaries.
+    /// Directory of the `littoral` binary.
     pub bin_dir: PathBuf,
+}
+
+/// A plan as `littoral plan` asks for it: a scene file (or none, for the
+/// built-in scene, which is then written into the plan directory as
+/// `scene.toml` so that every task reads the same text) and the overrides
+/// of the run.
+pub struct PlanRequest {
+    pub scene: Option<PathBuf>,
+    pub photons: Option<u64>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorMode>,
+    pub samples_per_pixel: Option<u32>,
+    pub shards: u64,
+    pub dir: PathBuf,
+    /// Where the assembled outputs go (default `DIR/results`).
+    pub results: Option<PathBuf>,
+    pub mem_budget: u64,
+    pub cpus: u32,
+    pub partition: Option<String>,
+    pub time: Option<String>,
+    pub bin_dir: PathBuf,
+}
+
+/// What [`PlanRequest::write`] wrote.
+pub struct Planned {
+    /// The scripts, `submit.sh` last.
+    pub scripts: Vec<PathBuf>,
+    /// Memory (MiB) each task asks Slurm for.
+    pub task_mem_mib: u64,
+}
+
+impl PlanRequest {
+    /// Check the scene with its overrides and write the plan's scripts.
+    pub fn write(&self) -> Result<Planned> {
+        std::fs::create_dir_all(&self.dir)
+            .map_err(|e| Error::io(&self.dir, "create directory", e))?;
+        let scene_path = match &self.scene {
+            Some(p) => std::path::absolute(p).map_err(|e| Error::io(p, "resolve", e))?,
+            None => {
+                let p = std::path::absolute(self.dir.join("scene.toml"))
+                    .map_err(|e| Error::io(&self.dir, "resolve", e))?;
+                crate::output::write_atomic(&p, crate::scene::COASTAL_TOML.as_bytes())?;
+                p
+            }
+        };
+        let overrides = crate::scene::Overrides {
+            photons: self.photons,
+            seed: self.seed,
+            integrator: self.integrator,
+            samples_per_pixel: self.samples_per_pixel,
+            ..Default::default()
+        };
+        let scene = Scene::load(&scene_path, &overrides)?;
+        // Emit and render both take the scene's overrides; the render alone
+        // takes the integrator and the samples per pixel.
+        let mut scene_args = vec![scene_path.display().to_string()];
+        for (flag, v) in [("--photons", self.photons), ("--seed", self.seed)] {
+            if let Some(v) = v {
+                scene_args.extend([flag.to_string(), v.to_string()]);
+            }
+        }
+        let mut render_args = Vec::new();
+        if let Some(i) = self.integrator {
+            use clap::ValueEnum;
+            let name = i
+                .to_possible_value()
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default();
+            render_args.extend(["--integrator".to_string(), name]);
+        }
+        if let Some(spp) = self.samples_per_pixel {
+            render_args.extend(["--spp".to_string(), spp.to_string()]);
+        }
+        let plan = Plan {
+            scene: &scene,
+            scene_args,
+            render_args,
+            shards: self.shards,
+            dir: self.dir.clone(),
+            results: self
+                .results
+                .clone()
+                .unwrap_or_else(|| self.dir.join("results")),
+            mem_budget: self.mem_budget,
+            cpus: self.cpus,
+            partition: self.partition.clone(),
+            time: self.time.clone(),
+            bin_dir: self.bin_dir.clone(),
+        };
+        Ok(Planned {
+            scripts: plan.write()?,
+            task_mem_mib: plan.task_mem_mib(),
+        })
+    }
 }
 
 /// Quote `s` for a POSIX shell.
@@ -151,7 +245,6 @@ impl Plan<'_> {
                 .map_err(|e| Error::io(dir.join(sub), "create directory", e))?;
         }
         let littoral = sh(&plan.bin_dir.join("littoral").display().to_string());
-        let cube = sh(&plan.bin_dir.join("littoral-cube").display().to_string());
         let scene = plan
             .scene_args
             .iter()
@@ -225,7 +318,7 @@ impl Plan<'_> {
             "assemble.sbatch",
             plan.header("assemble", false)
                 + &format!(
-                    "exec {cube} assemble {} --out {} {threads}\n",
+                    "exec {littoral} assemble {} --out {} {threads}\n",
                     parts.join(" "),
                     sh(&results.display().to_string())
                 ),

@@ -24,10 +24,10 @@
 //!
 //! Not for: the whole render in one process (`RenderJob`).
 
-use super::report::{MapSummary, RenderTimings, RunReport};
-use super::{MapStage, MemoryBudget, RenderJob, RenderShares};
 use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
+use crate::job::report::{MapSummary, RenderTimings, RunReport};
+use crate::job::{MapStage, MemoryBudget, RenderJob, RenderShares};
 use crate::mem::MemoryPeaks;
 use crate::progress::Progress;
 use crate::render::{RadiometerReading, TileResult};
@@ -230,7 +230,7 @@ impl RenderPartJob<'_> {
             scene_seconds: 0.0,
         };
         let mut shares = self.budget.render(scene, self.threads)?;
-        super::create_dir(&self.part_dir.join(TILES_DIR))?;
+        crate::job::create_dir(&self.part_dir.join(TILES_DIR))?;
         let mine = part_tiles(scene, part, parts);
         let bands = scene.bands.len();
         let errors = crate::render::stderr_description(scene).is_some();
@@ -252,7 +252,7 @@ impl RenderPartJob<'_> {
                         "a part of a render reads an emitted photon map: give --map FILE (littoral emit, or emit --shard and map merge)",
                     ));
                 };
-                if !self.emit_map && super::reusable(map_path, &provenance).is_none() {
+                if !self.emit_map && crate::job::reusable(map_path, &provenance).is_none() {
                     return Err(Error::invalid(
                         "--map",
                         format!(
@@ -261,7 +261,7 @@ impl RenderPartJob<'_> {
                         ),
                     ));
                 }
-                super::check_map_target(map_path)?;
+                crate::job::check_map_target(map_path)?;
                 let (map, stage, t_emit, _scratch, _map_lock) =
                     job.open_map(&mut shares, start, progress)?;
                 let light = crate::render::march::RayMarcher::new(
@@ -453,8 +453,8 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
             "the scene does not build as it did",
         ));
     }
-    let (_lock, staging, warnings) = super::prepare_outputs(&scene, out_dir, None)?;
-    let outputs = super::outputs::CubeSet::create(&scene, staging.dir())?;
+    let (_lock, staging, warnings) = crate::job::prepare_outputs(&scene, out_dir, None)?;
+    let outputs = crate::job::outputs::CubeSet::create(&scene, staging.dir())?;
     let bands = scene.bands.len();
     let errors = crate::render::stderr_description(&scene).is_some();
     let pool = crate::parallel::pool(threads)?;
@@ -512,7 +512,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
         _ => None,
     };
     let assemble_s = start.elapsed().as_secs_f64();
-    super::outputs::publish_run(
+    crate::job::outputs::publish_run(
         &scene,
         staging,
         files,
@@ -535,7 +535,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
 /// directory is removed once the outputs are written.
 pub fn render_resumable(job: &RenderJob, progress: &dyn Progress) -> Result<RunReport> {
     let scene = job.scene;
-    super::create_dir(&job.out_dir)?;
+    crate::job::create_dir(&job.out_dir)?;
     let parts_dir = job.out_dir.join(format!(".{}.parts", scene.name));
     let map = job.map.clone().or_else(|| {
         (scene.render.integrator == IntegratorMode::PhotonMap).then(|| parts_dir.join("map.map"))
@@ -549,7 +549,7 @@ pub fn render_resumable(job: &RenderJob, progress: &dyn Progress) -> Result<RunR
         threads: job.threads,
         budget: job.budget,
     };
-    super::create_dir(&parts_dir)?;
+    crate::job::create_dir(&parts_dir)?;
     part.run(progress)?;
     let report = assemble(std::slice::from_ref(&parts_dir), &job.out_dir, job.threads)?;
     std::fs::remove_dir_all(&parts_dir).map_err(|e| Error::io(&parts_dir, "remove", e))?;
