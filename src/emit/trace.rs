@@ -30,7 +30,9 @@
 //! scene asks for it, since the renderer adds that single scattering
 //! directly.
 
-use super::tally::{in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EU, LD, LU, MIN_ABS_MU};
+use super::tally::{
+    in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EO_HALF_WIDTH_M, EU, LD, LU, MIN_ABS_MU,
+};
 use crate::optics::majorant::{Collision, MajorantGrid};
 use crate::optics::phase::{cosine_hemisphere, scatter};
 use crate::photon::{volume_layer, Photon, LAYER_SURFACE};
@@ -303,27 +305,51 @@ fn cross_surface_down(scene: &Scene, tally: &mut PhotonTally, dir: Vec3, w: f64)
     }
 }
 
-/// Tally crossings of the depths strictly below the surface by the segment
-/// from `a` to `b` along `dir`, of weight `w`.
+/// Tally the segment from `a` to `b` along `dir`, of weight `w`, at the
+/// depths strictly below the surface: its crossing of each depth (E_d,
+/// E_u and the radiance cones), and its track length within
+/// [`EO_HALF_WIDTH_M`] of each depth (scalar irradiance).
+///
+/// Scalar irradiance is the track length per unit volume (photon power per
+/// area times path length over the layer's thickness): a segment that
+/// crosses the layer scores 1 / |mu| as a crossing estimate would, but a
+/// grazing one scores its length in the layer over the thickness, bounded
+/// by its free path, where the crossing estimate's 1 / |mu| has no useful
+/// bound (its variance diverges logarithmically and a rare grazing photon
+/// made the standard error itself unreliable).
 fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir: Vec3, w: f64) {
-    let w_mu = w / (dir.z as f64).abs().max(MIN_ABS_MU);
+    let (za, zb) = (a.z as f64, b.z as f64);
+    let (lo, hi) = (za.min(zb), za.max(zb));
     for (i, &depth) in depths.iter().enumerate() {
         if depth == 0.0 {
             continue;
         }
-        let z = -depth as f32;
-        if a.z > z && b.z <= z {
+        let z = -depth;
+        if lo - EO_HALF_WIDTH_M >= z || hi + EO_HALF_WIDTH_M <= z {
+            continue;
+        }
+        let zf = z as f32;
+        if a.z > zf && b.z <= zf {
             tally.add(i, ED, w);
-            tally.add(i, EOD, w_mu);
             if in_lu_cone(-dir.z as f64) {
                 tally.add(i, LD, w);
             }
-        } else if a.z < z && b.z >= z {
+        } else if a.z < zf && b.z >= zf {
             tally.add(i, EU, w);
-            tally.add(i, EOU, w_mu);
             if in_lu_cone(dir.z as f64) {
                 tally.add(i, LU, w);
             }
+        }
+        let inside = hi.min(z + EO_HALF_WIDTH_M) - lo.max(z - EO_HALF_WIDTH_M);
+        if inside > 0.0 {
+            let length = (b - a).length() as f64;
+            let track = if hi > lo {
+                length * (inside / (hi - lo)).min(1.0)
+            } else {
+                length
+            };
+            let q = if dir.z > 0.0 { EOU } else { EOD };
+            tally.add(i, q, w * track / (2.0 * EO_HALF_WIDTH_M));
         }
     }
 }
