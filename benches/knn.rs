@@ -10,7 +10,7 @@ use common::*;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use littoral::store::cache::DecodedTile;
 use littoral::store::codec::TileDecoder;
-use littoral::store::memory::InMemoryMap;
+use littoral::store::in_memory::InMemoryMap;
 use littoral::store::tiletree::TileTree;
 use littoral::store::MapFile;
 use littoral::store::{Neighbour, PhotonMap, PhotonQuery, Search};

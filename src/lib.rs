@@ -29,8 +29,8 @@
 //!   ([`render::render_tile`]) into a sink ([`render::TileSink`]), and
 //!   radiometers ([`render::render_with`]); it writes no file.
 //! - [`cube`]: the radiance cube on disk (ENVI, spectral OpenEXR), its
-//!   quicklook (PNG), derived cubes ([`cube::ops`]) and real sensors' bands
-//!   ([`cube::sensor::Sensor`]).
+//!   quicklook (PNG) and derived cubes ([`cube::ops`], e.g. resampled into
+//!   a real sensor's bands, [`spectral::response::SpectralResponse`]).
 //! - [`job`]: the whole pipeline as one call — scene, map (reused by
 //!   provenance or emitted), render, outputs — with the typed report and the
 //!   memory budget ([`job::RenderJob`], [`job::EmitJob`], [`job::MemoryBudget`]);
@@ -45,7 +45,7 @@
 //! (what a map was made from).
 //!
 //! Support: [`error`] (typed errors naming file, tile and field), [`csv`]
-//! (the one reader of numeric tables), [`json`] (reports read back),
+//! (the one reader of numeric tables), [`nan_json`] (reports read back),
 //! [`morton`] (Z-order codes), [`parallel`] (worker pools), [`rng`]
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
 //! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory),
@@ -53,8 +53,10 @@
 //! (synthetic photon sources for tests and benchmarks), [`cli`] (what the
 //! command-line programs share).
 //!
-//! Layering: `scene`, `optics`, `geometry` and `store` import neither
-//! `estimate` nor `render`; only `job` and the programs know every stage.
+//! Layering: `scene`, `optics`, `geometry`, `store` and `spectral` import
+//! none of `job`, `render`, `estimate`, `emit` and `cube` (the stages build
+//! on them, never the other way); `render` writes no file; only `job` and
+//! the programs know every stage.
 
 pub mod bounds;
 pub mod cli;
@@ -65,9 +67,9 @@ pub mod error;
 pub mod estimate;
 pub mod geometry;
 pub mod job;
-pub mod json;
 pub mod mem;
 pub mod morton;
+pub mod nan_json;
 pub mod optics;
 pub mod output;
 pub mod parallel;
@@ -77,6 +79,7 @@ pub mod provenance;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod simd;
 pub mod size;
 pub mod spectral;
 pub mod store;

@@ -102,5 +102,7 @@ impl BandGrid {
     }
 }
 
+pub mod response;
+
 #[cfg(test)]
 mod tests;

@@ -228,60 +228,14 @@ fn run(cli: Cli) -> AnyResult<()> {
             }
             print(&text)
         }
-        Command::Band { cube, nm, out } => {
-            if !nm.is_finite() {
-                return Err(
-                    Error::invalid("NM", format!("'{nm}' is not a wavelength in nm")).into(),
-                );
-            }
-            png_only(&out)?;
-            let cube = open(&cube)?;
-            not_an_input(&cube, std::slice::from_ref(&out))?;
-            let b = cube.band_index_nearest(nm);
-            let centre = cube.wavelengths_nm()[b];
-            let reach = cube.fwhm_nm().map_or(0.0, |f| f[b]).max(1e-9);
-            if (nm - centre).abs() > reach {
-                return Err(Error::invalid(
-                    "NM",
-                    format!(
-                        "{nm} nm is {:.1} nm from the nearest band ({centre} nm, FWHM {reach} nm): no band covers it",
-                        (nm - centre).abs()
-                    ),
-                )
-                .into());
-            }
-            let values = cube.band(b)?;
-            let range = write_grey_png(&out, cube.samples(), cube.lines(), &values)?;
-            let summary = serde_json::json!({
-                "band": b,
-                "wavelength_nm": cube.wavelengths_nm()[b],
-                "min": range.map(|r| r.0),
-                "max": range.map(|r| r.1),
-                "out": out,
-            });
-            print(&format!("{summary}\n"))
-        }
+        Command::Band { cube, nm, out } => band(&open, &cube, nm, &out),
         Command::Quicklook {
             cube,
             out,
             exposure,
         } => {
             png_only(&out)?;
-            let cube = open(&cube)?;
-            not_an_input(&cube, std::slice::from_ref(&out))?;
-            let q = Quicklook::for_cube(&cube);
-            if !q.has_visible_bands() {
-                return Err(Error::data(
-                    cube.header_path(),
-                    None,
-                    "wavelength",
-                    "no band lies within 360-830 nm: nothing to see",
-                )
-                .into());
-            }
-            let rgb = q.cube_rgb(&cube)?;
-            write_png(&out, cube.samples(), cube.lines(), &rgb, exposure)?;
-            Ok(())
+            quicklook(&open(&cube)?, &out, exposure)
         }
         Command::Window {
             cube,
@@ -313,29 +267,7 @@ fn run(cli: Cli) -> AnyResult<()> {
                 serde_json::json!({ "hdr": files.hdr, "bsq": files.bsq, "bands": to - from + 1 });
             print(&format!("{summary}\n"))
         }
-        Command::Resample { cube, sensor, out } => {
-            let sensor = littoral::cube::sensor::Sensor::named(&sensor)?;
-            let cube = open(&cube)?;
-            let (dir, name) = cube_out(&out)?;
-            not_an_input(&cube, &cube_files(dir, &name, &["bsq"]))?;
-            let (files, made) = littoral::cube::ops::resample(&cube, &sensor, dir, &name)?;
-            let band = |i: usize| {
-                let b = &sensor.bands[i];
-                serde_json::json!({ "name": b.name, "centre_nm": b.centre_nm, "fwhm_nm": b.fwhm_nm })
-            };
-            let left_out: Vec<&str> = (0..sensor.bands.len())
-                .filter(|i| !made.iter().any(|m| m.band == *i))
-                .map(|i| sensor.bands[i].name.as_str())
-                .collect();
-            let summary = serde_json::json!({
-                "hdr": files.hdr,
-                "bsq": files.bsq,
-                "sensor": sensor.name,
-                "bands": made.iter().map(|m| band(m.band)).collect::<Vec<_>>(),
-                "left_out": left_out,
-            });
-            print(&format!("{}\n", serde_json::to_string_pretty(&summary)?))
-        }
+        Command::Resample { cube, sensor, out } => resample(&open, &cube, &sensor, &out),
         Command::Convert {
             cube,
             interleave,
@@ -405,6 +337,92 @@ fn run(cli: Cli) -> AnyResult<()> {
             Ok(())
         }
     }
+}
+
+/// `band`: the band nearest `nm` as a grey PNG at `out`.
+fn band(
+    open: &dyn Fn(&PathBuf) -> littoral::Result<EnviCube>,
+    cube: &PathBuf,
+    nm: f64,
+    out: &std::path::Path,
+) -> AnyResult<()> {
+    if !nm.is_finite() {
+        return Err(Error::invalid("NM", format!("'{nm}' is not a wavelength in nm")).into());
+    }
+    png_only(out)?;
+    let cube = &open(cube)?;
+    not_an_input(cube, &[out.to_path_buf()])?;
+    let b = cube.band_index_nearest(nm);
+    let centre = cube.wavelengths_nm()[b];
+    let reach = cube.fwhm_nm().map_or(0.0, |f| f[b]).max(1e-9);
+    if (nm - centre).abs() > reach {
+        return Err(Error::invalid(
+            "NM",
+            format!(
+                "{nm} nm is {:.1} nm from the nearest band ({centre} nm, FWHM {reach} nm): no band covers it",
+                (nm - centre).abs()
+            ),
+        )
+        .into());
+    }
+    let values = cube.band(b)?;
+    let range = write_grey_png(out, cube.samples(), cube.lines(), &values)?;
+    let summary = serde_json::json!({
+        "band": b,
+        "wavelength_nm": cube.wavelengths_nm()[b],
+        "min": range.map(|r| r.0),
+        "max": range.map(|r| r.1),
+        "out": out,
+    });
+    print(&format!("{summary}\n"))
+}
+
+/// `quicklook`: the true-colour PNG at `out`.
+fn quicklook(cube: &EnviCube, out: &std::path::Path, exposure: Option<f32>) -> AnyResult<()> {
+    not_an_input(cube, &[out.to_path_buf()])?;
+    let q = Quicklook::for_cube(cube);
+    if !q.has_visible_bands() {
+        return Err(Error::data(
+            cube.header_path(),
+            None,
+            "wavelength",
+            "no band lies within 360-830 nm: nothing to see",
+        )
+        .into());
+    }
+    let rgb = q.cube_rgb(cube)?;
+    write_png(out, cube.samples(), cube.lines(), &rgb, exposure)?;
+    Ok(())
+}
+
+/// `resample`: the cube in the bands of `sensor`, at `out` (NAME.hdr).
+fn resample(
+    open: &dyn Fn(&PathBuf) -> littoral::Result<EnviCube>,
+    cube: &PathBuf,
+    sensor: &str,
+    out: &std::path::Path,
+) -> AnyResult<()> {
+    let sensor = littoral::spectral::response::SpectralResponse::named(sensor)?;
+    let cube = &open(cube)?;
+    let (dir, name) = cube_out(out)?;
+    not_an_input(cube, &cube_files(dir, &name, &["bsq"]))?;
+    let (files, made) = littoral::cube::ops::resample(cube, &sensor, dir, &name)?;
+    let band = |i: usize| {
+        let b = &sensor.bands[i];
+        serde_json::json!({ "name": b.name, "centre_nm": b.centre_nm, "fwhm_nm": b.fwhm_nm })
+    };
+    let left_out: Vec<&str> = (0..sensor.bands.len())
+        .filter(|i| !made.iter().any(|m| m.band == *i))
+        .map(|i| sensor.bands[i].name.as_str())
+        .collect();
+    let summary = serde_json::json!({
+        "hdr": files.hdr,
+        "bsq": files.bsq,
+        "sensor": sensor.name,
+        "bands": made.iter().map(|m| band(m.band)).collect::<Vec<_>>(),
+        "left_out": left_out,
+    });
+    print(&format!("{}\n", serde_json::to_string_pretty(&summary)?))
 }
 
 /// The directory and cube name of an `--out NAME.hdr` (a `.hdr` file name).

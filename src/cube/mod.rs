@@ -14,8 +14,8 @@
 //! Modules: [`envi`] (the cube writer and reader), [`exr`] (the spectral
 //! OpenEXR copy), [`quicklook`] (true colour and PNGs), [`georef`] (map
 //! geometry and CRS for the header), [`ops`] (whole-cube operations that
-//! stream: windows, resampling), [`sensor`] (real sensors' spectral
-//! responses).
+//! stream: windows, resampling into a real sensor's bands, whose spectral
+//! responses are `spectral::response`).
 //!
 //! Not for: rendering (the sensor produces the spectra). The reader takes
 //! BSQ, BIL and BIP cubes of 16-bit integers or 32/64-bit floats in either
@@ -26,7 +26,6 @@ pub mod exr;
 pub mod georef;
 pub mod ops;
 pub mod quicklook;
-pub mod sensor;
 
 pub use envi::{CubeSpec, EnviCube, EnviWriter};
 pub use quicklook::Quicklook;

@@ -254,15 +254,15 @@ pub fn subset(
 /// error.
 pub fn resample(
     cube: &EnviCube,
-    sensor: &super::sensor::Sensor,
+    sensor: &crate::spectral::response::SpectralResponse,
     dir: &Path,
     name: &str,
-) -> Result<(CubeFiles, Vec<super::sensor::BandWeights>)> {
+) -> Result<(CubeFiles, Vec<crate::spectral::response::BandWeights>)> {
     let grid = band_grid(cube)?;
     let mut made = sensor.weights(&grid);
     // The cube's bands rise in wavelength (a panchromatic band is listed last).
     made.sort_by(|a, b| {
-        let c = |m: &super::sensor::BandWeights| sensor.bands[m.band].centre_nm;
+        let c = |m: &crate::spectral::response::BandWeights| sensor.bands[m.band].centre_nm;
         c(a).total_cmp(&c(b))
     });
     if made.is_empty() {
@@ -275,7 +275,7 @@ pub fn resample(
                 grid.centers_nm()[0],
                 grid.centers_nm()[grid.len() - 1],
                 sensor.name,
-                super::sensor::MIN_COVERAGE * 100.0
+                crate::spectral::response::MIN_COVERAGE * 100.0
             ),
         ));
     }

@@ -10,38 +10,38 @@ use serde::{Deserialize, Serialize};
 #[allow(non_snake_case)]
 pub struct DepthTally {
     pub depth_m: f64,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eu: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eod: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eou: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed_stderr: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eu_stderr: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eod_stderr: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eou_stderr: Vec<f64>,
     /// Upwelling radiance travelling within `emit::tally::LU_CONE_DEG` of
     /// straight up (what a radiometer looking at nadir measures),
     /// W m^-2 sr^-1 nm^-1.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Lu: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Lu_stderr: Vec<f64>,
     /// Downwelling radiance travelling within the same cone of straight
     /// down (what a radiometer looking at the zenith measures; direct sun
     /// within the cone included), W m^-2 sr^-1 nm^-1.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ld: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ld_stderr: Vec<f64>,
     /// Irradiance reflectance Eu / Ed.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub R: Vec<f64>,
 }
 
@@ -49,13 +49,13 @@ pub struct DepthTally {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct AboveSurface {
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eu: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed_stderr: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Eu_stderr: Vec<f64>,
 }
 
@@ -65,7 +65,7 @@ pub struct AboveSurface {
 pub struct KdLayer {
     pub from_m: f64,
     pub to_m: f64,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Kd: Vec<f64>,
 }
 
@@ -73,24 +73,24 @@ pub struct KdLayer {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Energy {
     pub units: String,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub emitted: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub escaped: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub absorbed_water: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub absorbed_surfaces: Vec<f64>,
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub lost_edges: Vec<f64>,
     /// emitted - (escaped + absorbed + lost), per band.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub residual: Vec<f64>,
     /// residual / its standard error, per band.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub closure_sigma_per_band: Vec<f64>,
     /// The largest |residual / standard error| over the bands.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    #[serde(deserialize_with = "crate::nan_json::f64_or_nan")]
     pub closure_sigma: f64,
 }
 
@@ -112,10 +112,10 @@ pub struct ReportInputs {
     pub area_m2: f64,
     pub tally_depths_m: Vec<f64>,
     /// E_d(0+) per band (W m^-2 nm^-1).
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub incident_irradiance: Vec<f64>,
     /// Power per photon of each band (W nm^-1).
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub photon_power: Vec<f64>,
 }
 
@@ -147,7 +147,7 @@ pub struct EmissionReport {
     pub energy: Energy,
     pub photons: PhotonCounts,
     /// Power carried by one photon of each band (W nm^-1).
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub photon_power: Vec<f64>,
 }
 

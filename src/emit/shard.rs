@@ -113,30 +113,25 @@ pub(super) fn shard_payload(payload: &ShardEmission) -> Result<Box<serde_json::v
 /// The merge's budget for shards that do not say what theirs was.
 pub const DEFAULT_MERGE_BUDGET: u64 = 256 << 20;
 
-/// Merge the shard files of one sharded emission into the map at `out`:
-/// byte-identical to the map a single `emit` of the scene writes with the
-/// same budget. The shards must be all of one emission (same provenance,
-/// pilot, budget and shard count, each shard once), in any order; the
-/// merge reads them one after another, within `budget` bytes, or when
-/// `None` the budget the shards were emitted with (so the map is the
-/// single run's; [`DEFAULT_MERGE_BUDGET`] for shards that did not record
-/// it). Returns the map and the budget it was written within.
-pub fn merge_shards(
+/// The shard files at `paths`, each checked against the first (one
+/// emission: provenance, pilot, budget, shard count) and all of its shards
+/// once, sorted by shard; with the first's header and the summed totals
+/// and shard 0's report inputs.
+#[allow(clippy::type_complexity)]
+fn open_shards(
     paths: &[std::path::PathBuf],
-    out: &Path,
-    budget: Option<u64>,
-    progress: &dyn Progress,
-) -> Result<(Emission, u64)> {
+) -> Result<(
+    Vec<crate::store::shard::ShardFile>,
+    crate::store::shard::ShardHeader,
+    Totals,
+    report::ReportInputs,
+)> {
     use crate::store::shard::{shard_range, ShardFile};
     let Some(first_path) = paths.first() else {
         return Err(crate::Error::invalid("map merge", "no shard files given"));
     };
     let first = ShardFile::open(first_path)?;
     let head = first.header().clone();
-    let budget = budget.unwrap_or(match head.mem_budget {
-        0 => DEFAULT_MERGE_BUDGET,
-        recorded => recorded,
-    });
     let n = head.shards;
     let mismatch = |s: &ShardFile, what: &str| {
         crate::Error::data(
@@ -246,7 +241,36 @@ pub fn merge_shards(
             format!("{} shard files given, the emission has {n}", shards.len()),
         ));
     }
-    let (totals, inputs) = (totals.expect("one shard"), inputs.expect("one shard"));
+    Ok((
+        shards,
+        head,
+        totals.expect("one shard"),
+        inputs.expect("one shard"),
+    ))
+}
+
+/// Merge the shard files of one sharded emission into the map at `out`:
+/// byte-identical to the map a single `emit` of the scene writes with the
+/// same budget. The shards must be all of one emission (same provenance,
+/// pilot, budget and shard count, each shard once), in any order; the
+/// merge reads them one after another, within `budget` bytes, or when
+/// `None` the budget the shards were emitted with (so the map is the
+/// single run's; [`DEFAULT_MERGE_BUDGET`] for shards that did not record
+/// it). Returns the map and the budget it was written within.
+pub fn merge_shards(
+    paths: &[std::path::PathBuf],
+    out: &Path,
+    budget: Option<u64>,
+    progress: &dyn Progress,
+) -> Result<(Emission, u64)> {
+    let Some(first_path) = paths.first() else {
+        return Err(crate::Error::invalid("map merge", "no shard files given"));
+    };
+    let (shards, head, totals, inputs) = open_shards(paths)?;
+    let budget = budget.unwrap_or(match head.mem_budget {
+        0 => DEFAULT_MERGE_BUDGET,
+        recorded => recorded,
+    });
     let report = report::EmissionReport::from_inputs(&inputs, &totals);
     let metadata = serde_json::to_vec(&report).expect("the report serialises");
     let description = head.description(first_path)?;

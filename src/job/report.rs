@@ -238,7 +238,7 @@ pub struct RunReport {
     /// Downwelling irradiance just above the surface per band (W m^-2
     /// nm^-1), for Rrs = L / Ed: the emission's tally for the photon map,
     /// the scene's sun and sky for the path integrator.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed_above_surface: Vec<f64>,
     pub estimate: EstimateSettings,
     pub sensor: SensorSummary,

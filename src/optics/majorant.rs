@@ -288,7 +288,7 @@ impl MajorantGrid {
                 // The collision test reads the cell's bounds next, after the
                 // geometry's own work: ask for their line now (it was a
                 // cache miss in 7.7 % of the transport loop's samples).
-                crate::store::prefetch(self.bounds.as_ptr().wrapping_add(band * self.cells + cell));
+                crate::simd::prefetch(self.bounds.as_ptr().wrapping_add(band * self.cells + cell));
                 return Some((t + tau / m, cell));
             }
             if exit >= t_max {

@@ -26,7 +26,7 @@
 //! meets another facet. Smith's function is exactly the one for which the
 //! projected-area normalisation of the facet sampler is cos(theta) (1 +
 //! Lambda) (tested), so a beam's single-facet reflection is the Cox–Munk
-//! glint times G1(sun) G1(view), what `render::interface::add_glint` adds.
+//! glint times G1(sun) G1(view), what `render::air_sea::add_glint` adds.
 //!
 //! Refractive index per band: a `SeaSurface` has one index. Emission
 //! gives each photon its band's surface (`Scene::surface_in`); the

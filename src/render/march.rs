@@ -13,15 +13,15 @@
 //! boundary: four midpoint samples read a 2 m layer seen from 6 m below
 //! as 3 m) and by the midpoint rule at most 0.5 m apart in smoothly
 //! varying water; the surface seen from the air is
-//! `interface::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
+//! `air_sea::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! ray looking up at the surface sees the sky through it and, marching on
 //! down, the light from below that it reflects (a rough surface's event
 //! drawn as the path integrator draws it); a target's face
 //! is read by final gathering (`RayMarcher::gather`), the floor by its
 //! surface photon estimate.
 
+use super::air_sea::{from_air_parts, sky_radiance};
 use super::camera::CameraRay;
-use super::interface::{from_air_parts, sky_radiance};
 use super::sun::SunBeam;
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
@@ -652,7 +652,7 @@ impl<'a> RayMarcher<'a> {
     }
 
     /// Radiance per band reaching a sensor along `ray` (in air, toward the
-    /// water): the surface as `interface::from_air` treats it, the march
+    /// water): the surface as `air_sea::from_air` treats it, the march
     /// below it; the water-leaving part into `water`.
     pub fn camera(
         &self,

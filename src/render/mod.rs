@@ -23,8 +23,8 @@
 //! Not for: emission (see `emit`), writing files (the sinks live in
 //! `job::outputs` and `job::distributed::parts`) or file formats (see `cube`).
 
+pub mod air_sea;
 pub mod camera;
-pub mod interface;
 pub mod march;
 mod moments;
 pub mod path;
@@ -64,22 +64,22 @@ pub struct RadiometerReading {
     pub view: String,
     pub position_m: [f64; 2],
     /// Radiance per band (W m^-2 sr^-1 nm^-1).
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub L: Vec<f64>,
     /// Standard error per band: for the path integrator the spread of its
     /// independent paths; for the photon map the photon noise from
     /// independent photon groups (`estimate::groups`) together with the
     /// spread of the jittered samples given the map.
-    #[serde(deserialize_with = "crate::json::f64s")]
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub stderr: Vec<f64>,
     /// Relative variance of the variance per band over the reading's
     /// samples (MCNP's VOV: sum (x - m)^4 / (sum (x - m)^2)^2 - 1/N). Below
     /// 0.1 the standard error can be trusted; above it a few samples
     /// dominate and `stderr` understates the error (a heavy tail).
-    #[serde(default, deserialize_with = "crate::json::f64s")]
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
     pub vov: Vec<f64>,
     /// Per band, the largest single sample's share of the samples' sum.
-    #[serde(default, deserialize_with = "crate::json::f64s")]
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
     pub largest_share: Vec<f64>,
     /// Standard error of the mean of `L` over all bands, from the samples'
     /// own band means (and the photon groups' band means): the bands of

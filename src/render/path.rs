@@ -60,7 +60,7 @@
 //! toward the emission tally. Paths stop after `MAX_EVENTS` events, like
 //! photons do.
 //!
-//! Above the water, sensor rays meet the surface as `interface::from_air`
+//! Above the water, sensor rays meet the surface as `air_sea::from_air`
 //! has them, with the photon-map integrator.
 //!
 //! **Known limits.** With a forward-peaked phase function the estimate is
@@ -72,8 +72,8 @@
 //!
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
+use super::air_sea::{from_air_parts, sky_radiance};
 use super::camera::CameraRay;
-use super::interface::{from_air_parts, sky_radiance};
 use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
 use crate::error::Result;

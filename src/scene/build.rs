@@ -10,12 +10,11 @@ use crate::Error;
 use std::path::PathBuf;
 use Step::{Index as I, Key as K};
 
+mod estimate;
 mod floor;
 mod light;
 mod sensor;
 mod water;
-
-use sensor::render_settings;
 
 struct Ctx<'t> {
     src: Source<'t>,
@@ -163,11 +162,12 @@ pub const MAX_PHOTONS: u64 = 1_000_000_000_000;
 /// `NAME.profiles.csv` and so on, and a file name has at most 255 bytes.
 pub const MAX_NAME_BYTES: usize = 200;
 
-pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
-    let src = Source::new(text, path);
-    // Type errors (a wrong type, an unknown variant with the allowed ones
-    // listed, an unknown or missing key) are named by the key whose value
-    // the error points into; text that is not TOML at all is "syntax".
+/// The scene file's text as typed values, with the command line's
+/// overrides applied. Type errors (a wrong type, an unknown variant with
+/// the allowed ones listed, an unknown or missing key) are named by the key
+/// whose value the error points into; text that is not TOML at all is
+/// "syntax".
+fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneFile> {
     let mut f: SceneFile = toml::from_str(text).map_err(|e| {
         let at = e.span().map(|s| s.start);
         Error::Scene {
@@ -192,12 +192,12 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         f.spectral.start_nm.get_or_insert(400.0);
         f.spectral.end_nm.get_or_insert(700.0);
     }
-    let dir = path
-        .parent()
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    Ok(f)
+}
 
-    // Spectral grid.
-    let sp = &f.spectral;
+/// The band grid of `[spectral]`: even from start, end and count, or
+/// explicit centres and widths.
+fn band_grid(src: &Source, sp: &SpectralFile) -> Result<BandGrid> {
     let spk = |k| [K("spectral"), K(k)];
     let bands = match (&sp.centers_nm, sp.bands) {
         (Some(c), None) => {
@@ -225,21 +225,11 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
             ))
         }
     };
-    let policy = sp.out_of_range.unwrap_or_default();
-    let ctx = Ctx {
-        src,
-        dir,
-        bands,
-        policy,
-        inputs: Default::default(),
-    };
+    Ok(bands)
+}
 
-    let sun = light::sun(&ctx, &f.sun)?;
-    let sky = light::sky(&ctx, &f.sky, &sun)?;
-    light::check_emits(&ctx, &f, &sun, &sky)?;
-    let (surface, water_index) = light::surface(&ctx, &f.surface)?;
-
-    // Domain.
+/// `[domain]`: its size and edges.
+fn domain(ctx: &Ctx, f: &SceneFile) -> Result<Domain> {
     let size = f.domain.size_m;
     for v in size {
         ctx.within(
@@ -256,22 +246,11 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         size_m: size,
         periodic,
     };
+    Ok(domain)
+}
 
-    let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
-        .expect("the pure-water q is valid");
-    let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
-
-    // Geometry: floor and targets.
-    let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
-    let (bottom, deepest_floor_m) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)? {
-        Some((b, deepest)) => (Some(b), Some(deepest)),
-        None => (None, None),
-    };
-    let (target_reflectance, extents) = floor::targets(&ctx, &f.target, &mut geo)?;
-    let geometry = geo.build();
-    floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;
-    let (sensor, radiometers, estimate, render) =
-        render_settings(&ctx, &f, &domain, &geometry, ov)?;
+/// `[georef]`: where the scene's frame sits on a map.
+fn georef(ctx: &Ctx, f: &SceneFile) -> Result<Georef> {
     let georef = Georef {
         origin_m: f.georef.origin_m.unwrap_or([0.0, 0.0]),
         epsg: f.georef.epsg,
@@ -285,10 +264,12 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
             "must be a WGS 84 / UTM zone, 32601-32660 (north) or 32701-32760 (south); leave it out for a local metric frame",
         ));
     }
-    let mut inputs = ctx.inputs.take();
-    inputs.sort();
-    inputs.dedup();
+    Ok(georef)
+}
 
+/// `[photons]` (count and upward splitting) and `[tally]`: the tally
+/// depths, sorted, each above the floor's deepest point.
+fn photons_and_tallies(ctx: &Ctx, f: &SceneFile, deepest_floor_m: Option<f64>) -> Result<Vec<f64>> {
     if f.photons.count == 0 {
         return Err(ctx.err(&[K("photons"), K("count")], "must be at least 1"));
     }
@@ -328,6 +309,55 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     }
     tally_depths.sort_by(f64::total_cmp);
     tally_depths.dedup();
+    Ok(tally_depths)
+}
+
+pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
+    let src = Source::new(text, path);
+    let f = parse(&src, text, path, ov)?;
+    let dir = path
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+
+    let bands = band_grid(&src, &f.spectral)?;
+    let policy = f.spectral.out_of_range.unwrap_or_default();
+    let ctx = Ctx {
+        src,
+        dir,
+        bands,
+        policy,
+        inputs: Default::default(),
+    };
+
+    let sun = light::sun(&ctx, &f.sun)?;
+    let sky = light::sky(&ctx, &f.sky, &sun)?;
+    light::check_emits(&ctx, &f, &sun, &sky)?;
+    let (surface, water_index) = light::surface(&ctx, &f.surface)?;
+
+    let domain = domain(&ctx, &f)?;
+    let size = domain.size_m;
+
+    let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
+        .expect("the pure-water q is valid");
+    let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
+
+    // Geometry: floor and targets.
+    let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
+    let (bottom, deepest_floor_m) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)? {
+        Some((b, deepest)) => (Some(b), Some(deepest)),
+        None => (None, None),
+    };
+    let (target_reflectance, extents) = floor::targets(&ctx, &f.target, &mut geo)?;
+    let geometry = geo.build();
+    floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;
+    let (sensor, radiometers) = sensor::sensor_and_radiometers(&ctx, &f, &domain, &geometry, ov)?;
+    let (estimate, render) = estimate::estimate_and_render(&ctx, &f, ov)?;
+    let georef = georef(&ctx, &f)?;
+    let mut inputs = ctx.inputs.take();
+    inputs.sort();
+    inputs.dedup();
+
+    let tally_depths = photons_and_tallies(&ctx, &f, deepest_floor_m)?;
     if f.name.trim().is_empty()
         || f.name.contains(['/', '\\'])
         || f.name.chars().any(char::is_control)

@@ -77,7 +77,7 @@ pub struct SensorFile {
     pub look_at_m: Option<[f64; 3]>,
     pub fov_deg: Option<f64>,
     /// A real sensor's bands to write the cubes in as well
-    /// (`cube::sensor::Sensor::named`).
+    /// (`spectral::response::SpectralResponse::named`).
     pub response: Option<String>,
 }
 

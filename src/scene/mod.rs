@@ -13,9 +13,9 @@
 //! Not for: tracing light (see `emit`).
 
 mod build;
+mod emission_inputs;
 pub mod file;
 pub mod locate;
-mod provenance;
 pub mod settings;
 
 pub use settings::{BoundaryMode, EstimateSettings, IntegratorMode, RenderSettings, SpectralMode};
@@ -177,7 +177,7 @@ pub struct Sensor {
     pub samples_per_pixel: u32,
     /// A real sensor whose bands the cubes are also written in
     /// (`[sensor] response`).
-    pub response: Option<crate::cube::sensor::Sensor>,
+    pub response: Option<crate::spectral::response::SpectralResponse>,
 }
 
 /// An in-water (or above-water, at negative depth) radiance meter.

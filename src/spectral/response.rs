@@ -22,7 +22,8 @@
 //! (linear between samples), or Gaussian centres and FWHMs. `csv:FILE`
 //! reads either format from a file of the user's.
 //!
-//! Not for: writing cubes (`cube::ops::resample` does that).
+//! Not for: writing cubes (`cube::ops::resample` does that), or the
+//! camera's geometry (`scene::Sensor`).
 
 use crate::csv::{self, CsvTable};
 use crate::error::{Error, Result};
@@ -135,7 +136,7 @@ impl Response {
 
 /// One band of a sensor.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SensorBand {
+pub struct ResponseBand {
     pub name: String,
     /// Response-weighted mean wavelength (nm).
     pub centre_nm: f64,
@@ -146,37 +147,37 @@ pub struct SensorBand {
 
 /// A sensor's bands.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Sensor {
+pub struct SpectralResponse {
     pub name: String,
-    pub bands: Vec<SensorBand>,
+    pub bands: Vec<ResponseBand>,
 }
 
 /// How a sensor band is made from a cube's bands.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandWeights {
-    /// Index into [`Sensor::bands`].
+    /// Index into [`SpectralResponse::bands`].
     pub band: usize,
     /// (cube band, weight), weights summing to 1.
     pub weights: Vec<(usize, f64)>,
 }
 
-impl Sensor {
+impl SpectralResponse {
     /// The names `named` accepts, for help texts.
     pub fn names() -> Vec<&'static str> {
         SHIPPED.iter().map(|(n, _)| *n).collect()
     }
 
     /// A shipped sensor by name, or `csv:FILE`.
-    pub fn named(name: &str) -> Result<Sensor> {
+    pub fn named(name: &str) -> Result<SpectralResponse> {
         if let Some(file) = name.strip_prefix("csv:") {
             let path = Path::new(file);
             let table = csv::read(path, "sensor")?;
-            return Sensor::from_table(&table, path.display().to_string());
+            return SpectralResponse::from_table(&table, path.display().to_string());
         }
         if let Some((n, text)) = SHIPPED.iter().find(|(n, _)| *n == name) {
             let path = Path::new("data/srf").join(format!("{n}.csv"));
             let table = csv::parse(text, &path, "sensor")?;
-            return Sensor::from_table(&table, n.to_string());
+            return SpectralResponse::from_table(&table, n.to_string());
         }
         let why = if NOT_SHIPPED.contains(&name) {
             "no response table for it is published in a package littoral can ship (see data/srf/README.md); give one as csv:FILE"
@@ -187,14 +188,14 @@ impl Sensor {
             "--sensor",
             format!(
                 "{name}: {why}; the shipped sensors are {}, or csv:FILE",
-                Sensor::names().join(", ")
+                SpectralResponse::names().join(", ")
             ),
         ))
     }
 
     /// A sensor from a table: either `wavelength_nm,<band>,...` (responses
     /// on an even wavelength grid) or `band,center_nm,fwhm_nm` (Gaussians).
-    pub fn from_table(t: &CsvTable, name: String) -> Result<Sensor> {
+    pub fn from_table(t: &CsvTable, name: String) -> Result<SpectralResponse> {
         let header = t.header.as_ref().map(|(_, h)| h.clone()).ok_or_else(|| {
             t.error(
                 None,
@@ -216,10 +217,10 @@ impl Sensor {
                 ),
             ));
         };
-        Ok(Sensor { name, bands })
+        Ok(SpectralResponse { name, bands })
     }
 
-    fn tabulated(t: &CsvTable, header: &[String]) -> Result<Vec<SensorBand>> {
+    fn tabulated(t: &CsvTable, header: &[String]) -> Result<Vec<ResponseBand>> {
         let nm: Vec<f64> = t
             .rows
             .iter()
@@ -260,7 +261,7 @@ impl Sensor {
                 .filter(|(_, v)| **v >= 0.5 * peak)
                 .map(|(l, _)| *l)
                 .collect();
-            bands.push(SensorBand {
+            bands.push(ResponseBand {
                 name: name.clone(),
                 centre_nm: moment / sum,
                 fwhm_nm: half.last().unwrap_or(&0.0) - half.first().unwrap_or(&0.0) + step,
@@ -274,7 +275,7 @@ impl Sensor {
         Ok(bands)
     }
 
-    fn gaussians(t: &CsvTable) -> Result<Vec<SensorBand>> {
+    fn gaussians(t: &CsvTable) -> Result<Vec<ResponseBand>> {
         t.rows
             .iter()
             .map(|r| {
@@ -282,7 +283,7 @@ impl Sensor {
                 if !(centre_nm > 0.0 && fwhm_nm > 0.0) {
                     return Err(t.error(Some(r.line), "centre and FWHM must be positive"));
                 }
-                Ok(SensorBand {
+                Ok(ResponseBand {
                     name: r.fields[0].clone(),
                     centre_nm,
                     fwhm_nm,

@@ -102,43 +102,18 @@ const MORTON_MASK: u64 = (1 << 48) - 1;
 
 /// The records of the 16 photons from `base` on, out of the byte planes
 /// of `raw` (plane `k` is `raw[k n..(k + 1) n]`): record `j`'s byte `k` is
-/// `raw[k n + base + j]`, a 16 × 16 byte transpose. On x86-64 it is four
-/// rounds of interleaving row `i` with row `i + 8` (each round rotates a
-/// byte's 8-bit row-and-column address by one bit: four make the
-/// transpose), 64 SSE2 unpacks instead of 256 byte moves.
+/// `raw[k n + base + j]`, a 16 × 16 byte transpose
+/// ([`crate::simd::transpose16`]: SSE2 unpacks on x86-64).
 #[inline]
 fn unshuffle16(raw: &[u8], n: usize, base: usize, out: &mut [[u8; RECORD_BYTES]]) {
     const _: () = assert!(RECORD_BYTES == 16);
     let out: &mut [[u8; 16]; 16] = out.try_into().expect("16 records");
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{
-            __m128i, _mm_loadu_si128, _mm_storeu_si128, _mm_unpackhi_epi8, _mm_unpacklo_epi8,
-        };
-        let mut r: [__m128i; 16] = std::array::from_fn(|k| {
-            let src: &[u8; 16] = raw[k * n + base..k * n + base + 16]
-                .try_into()
-                .expect("16 bytes");
-            // SAFETY: `src` is 16 readable bytes; an unaligned load.
-            unsafe { _mm_loadu_si128(src.as_ptr().cast()) }
-        });
-        for _ in 0..4 {
-            let t = r;
-            for k in 0..8 {
-                // SAFETY: SSE2 is part of every x86-64 target.
-                unsafe {
-                    r[2 * k] = _mm_unpacklo_epi8(t[k], t[k + 8]);
-                    r[2 * k + 1] = _mm_unpackhi_epi8(t[k], t[k + 8]);
-                }
-            }
-        }
-        for (o, v) in out.iter_mut().zip(&r) {
-            // SAFETY: `o` is 16 writable bytes; an unaligned store.
-            unsafe { _mm_storeu_si128(o.as_mut_ptr().cast(), *v) }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    unshuffle(raw, n, base, out);
+    let rows: [&[u8; 16]; 16] = std::array::from_fn(|k| {
+        raw[k * n + base..k * n + base + 16]
+            .try_into()
+            .expect("16 bytes")
+    });
+    crate::simd::transpose16(rows, out);
 }
 
 /// The records of the `out.len()` photons from `base` on, out of the byte

@@ -15,11 +15,12 @@
 //! and fixed-radius searches), [`memory`] (an in-memory map for tests and
 //! small tools).
 
+pub mod boxtree;
 pub mod build;
 pub mod cache;
 pub mod codec;
 pub mod format;
-pub mod memory;
+pub mod in_memory;
 pub mod partition;
 pub mod query;
 pub mod radix;
@@ -32,7 +33,7 @@ pub mod writer;
 pub use build::{build_map, BuildOptions, PhotonSource};
 pub use codec::{StagedPhoton, ENCODE_BYTES_PER_PHOTON};
 pub use format::{Header, TileEntry};
-pub use memory::InMemoryMap;
+pub use in_memory::InMemoryMap;
 pub use partition::Partition;
 pub use query::{Neighbour, PhotonMap, PhotonQuery, Search};
 pub use reader::MapFile;
@@ -40,17 +41,3 @@ pub use writer::{
     MapWriter, WriteSummary, WriterPlan, EXTRA_ENCODER_BYTES, FETCH_BUFFER_BYTES, MAX_FETCHERS,
     MIN_FETCHERS,
 };
-
-/// Ask for the cache line holding `p`, without waiting for it. `p` need not
-/// point at anything valid (the spare capacity of a buffer, say).
-#[inline(always)]
-pub(crate) fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is only a hint; it reads nothing and cannot fault.
-    unsafe {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch::<_MM_HINT_T0>(p.cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
-}

@@ -10,7 +10,7 @@
 //! tile at a time, which is what lets the cache stay inside its budget.
 //!
 //! [`PhotonQuery`] is the interface the estimator sees; [`PhotonMap`] (a
-//! map file with its tile cache) and [`super::memory::InMemoryMap`] (a
+//! map file with its tile cache) and [`super::in_memory::InMemoryMap`] (a
 //! plain vector with one k-d tree per layer) implement it, and the oracle
 //! tests check that they give the same answers.
 //!
@@ -21,8 +21,9 @@ use crate::error::Result;
 use crate::morton::morton3;
 use crate::photon::{PackedPhoton, Photon};
 use crate::spectral::BandGrid;
+use crate::store::boxtree::BoxTree;
 use crate::store::cache::{CacheStats, TileCache};
-use crate::store::tiletree::{BoxTree, Nearest};
+use crate::store::tiletree::Nearest;
 use crate::store::MapFile;
 use glam::Vec3;
 use rayon::prelude::*;

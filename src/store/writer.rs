@@ -256,15 +256,15 @@ impl MapWriter {
             self.partition.cells_of(&positions[..n], &mut cell[..n]);
             for (p, c) in snapped[..n].iter().zip(&mut cell[..n]) {
                 *c += p.photon.layer as u32 * cells as u32;
-                super::prefetch(&self.cells[*c as usize]);
+                crate::simd::prefetch(&self.cells[*c as usize]);
             }
             for &c in &cell[..n] {
                 let chunks = &self.cells[c as usize].chunks;
-                super::prefetch(chunks.as_ptr().wrapping_add(chunks.len().saturating_sub(1)));
+                crate::simd::prefetch(chunks.as_ptr().wrapping_add(chunks.len().saturating_sub(1)));
             }
             for &c in &cell[..n] {
                 if let Some(chunk) = self.cells[c as usize].chunks.last() {
-                    super::prefetch(chunk.as_ptr().wrapping_add(chunk.len()));
+                    crate::simd::prefetch(chunk.as_ptr().wrapping_add(chunk.len()));
                 }
             }
             for (p, &index) in snapped[..n].iter().zip(&cell[..n]) {

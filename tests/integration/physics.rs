@@ -424,8 +424,8 @@ fn fresnel_by_angles(theta_i: f64, n: f64) -> f64 {
 #[test]
 fn flat_surface_transfers_water_radiance_as_t_over_n_squared() {
     use glam::Vec3;
+    use littoral::render::air_sea::from_air;
     use littoral::render::camera::CameraRay;
-    use littoral::render::interface::from_air;
     use littoral::rng::Pcg32;
     assert!((fresnel_by_angles(0.0, 1.34) - 0.0211).abs() < 5e-5);
     assert!((fresnel_by_angles(60f64.to_radians(), 1.34) - 0.0610).abs() < 5e-4);
@@ -594,7 +594,7 @@ fn glint_by_angles(
 /// dbeta. The tolerance is ten times that bound plus 1e-6 relative.
 #[test]
 fn add_glint_is_the_cox_munk_formula() {
-    use littoral::render::interface::add_glint;
+    use littoral::render::air_sea::add_glint;
     let (mut checked, mut worst) = (0, 0.0f64);
     for (zenith, azimuth, wind) in [
         (30.0f64, 0.0f64, 5.0f64),
@@ -665,7 +665,7 @@ fn add_glint_is_the_cox_munk_formula() {
 #[test]
 fn glint_integrates_to_the_reflected_irradiance() {
     use glam::DVec3;
-    use littoral::render::interface::add_glint;
+    use littoral::render::air_sea::add_glint;
     use std::f64::consts::PI;
     for (zenith, wind) in [(30.0f64, 3.0f64), (50.0, 8.0)] {
         let s = glint_scene(zenith, 0.0, wind);

@@ -129,63 +129,15 @@ impl EnviCube {
             None => 0,
             Some(_) => h.whole("header offset")? as u64,
         };
-        let data_type = match h.required("data type")? {
-            ("2", _) => DataType::I16,
-            ("12", _) => DataType::U16,
-            ("4", _) => DataType::F32,
-            ("5", _) => DataType::F64,
-            (v, line) => {
-                return Err(Error::data(
-                    &header_path,
-                    Some(line),
-                    "data type",
-                    format!(
-                    "is '{v}': supported are 2 (int16), 12 (uint16), 4 (float32) and 5 (float64)"
-                ),
-                ))
-            }
-        };
-        let (v, line) = h.required("interleave")?;
-        let interleave = Interleave::parse(v).ok_or_else(|| {
-            Error::data(
-                &header_path,
-                Some(line),
-                "interleave",
-                format!("is '{v}': bsq, bil or bip"),
-            )
-        })?;
-        let big_endian = match h.get("byte order") {
-            None | Some(("0", _)) => false,
-            Some(("1", _)) => true,
-            Some((v, line)) => {
-                return Err(Error::data(
-                    &header_path,
-                    Some(line),
-                    "byte order",
-                    format!("is '{v}': 0 (little-endian) or 1 (big-endian)"),
-                ))
-            }
-        };
+        let data_type = h.data_type()?;
+        let interleave = h.interleave()?;
+        let big_endian = h.big_endian()?;
         let data_path = if is_hdr {
             find_data_file(&header_path, interleave)?
         } else {
             data_path
         };
-        let scale = match h.get("wavelength units") {
-            None => 1.0,
-            Some((v, line)) => match v.to_ascii_lowercase().as_str() {
-                "nanometers" | "nm" => 1.0,
-                "micrometers" | "microns" | "um" => 1000.0,
-                _ => {
-                    return Err(Error::data(
-                        &header_path,
-                        Some(line),
-                        "wavelength units",
-                        format!("'{v}' is not Nanometers or Micrometers"),
-                    ))
-                }
-            },
-        };
+        let scale = h.wavelength_scale()?;
         let wavelengths_nm: Vec<f64> = match wavelengths_nm {
             Some(given) if given.len() != bands => {
                 return Err(Error::invalid(
@@ -242,7 +194,7 @@ impl EnviCube {
                 None,
                 "size",
                 format!(
-                    "holds {len} bytes but the header's {samples} x {lines} x {bands} values of {} bytes (after a {header_offset}-byte offset) are {needed}",
+                    "holds {len} bytes but the header's {samples} x {lines} x {bands} values of {} bytes need {needed}",
                     data_type.bytes()
                 ),
             ));
@@ -607,6 +559,73 @@ struct Header<'a> {
 }
 
 impl Header<'_> {
+    /// `data type`: the four ENVI codes the reader takes.
+    fn data_type(&self) -> Result<DataType> {
+        Ok(match self.required("data type")? {
+            ("2", _) => DataType::I16,
+            ("12", _) => DataType::U16,
+            ("4", _) => DataType::F32,
+            ("5", _) => DataType::F64,
+            (v, line) => {
+                return Err(Error::data(
+                    self.path,
+                    Some(line),
+                    "data type",
+                    format!(
+                "is '{v}': supported are 2 (int16), 12 (uint16), 4 (float32) and 5 (float64)"
+            ),
+                ))
+            }
+        })
+    }
+
+    /// `interleave`: bsq, bil or bip.
+    fn interleave(&self) -> Result<Interleave> {
+        let (v, line) = self.required("interleave")?;
+        Interleave::parse(v).ok_or_else(|| {
+            Error::data(
+                self.path,
+                Some(line),
+                "interleave",
+                format!("is '{v}': bsq, bil or bip"),
+            )
+        })
+    }
+
+    /// `byte order`: 0 (little-endian, the default) or 1.
+    fn big_endian(&self) -> Result<bool> {
+        Ok(match self.get("byte order") {
+            None | Some(("0", _)) => false,
+            Some(("1", _)) => true,
+            Some((v, line)) => {
+                return Err(Error::data(
+                    self.path,
+                    Some(line),
+                    "byte order",
+                    format!("is '{v}': 0 (little-endian) or 1 (big-endian)"),
+                ))
+            }
+        })
+    }
+
+    /// `wavelength units`: the factor to nanometres.
+    fn wavelength_scale(&self) -> Result<f64> {
+        Ok(match self.get("wavelength units") {
+            None => 1.0,
+            Some((v, line)) => match v.to_ascii_lowercase().as_str() {
+                "nanometers" | "nm" => 1.0,
+                "micrometers" | "microns" | "um" => 1000.0,
+                _ => {
+                    return Err(Error::data(
+                        self.path,
+                        Some(line),
+                        "wavelength units",
+                        format!("'{v}' is not Nanometers or Micrometers"),
+                    ))
+                }
+            },
+        })
+    }
     fn get(&self, key: &str) -> Option<(&str, usize)> {
         self.fields
             .iter()

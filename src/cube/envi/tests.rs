@@ -374,7 +374,7 @@ fn bad_headers_name_the_file_and_the_field() {
 }
 
 #[test]
-fn short_or_missing_data_files_are_refused() {
+fn short_long_or_missing_data_files_are_refused() {
     let (dir, result) = open_edited(|t| t, 3 * 2 * 2 * 4 - 1);
     let e = result.unwrap_err().to_string();
     assert!(
@@ -388,6 +388,12 @@ fn short_or_missing_data_files_are_refused() {
 
     let (_dir, result) = open_edited(|t| t.replace("header offset = 0", "header offset = 4"), 48);
     assert!(result.unwrap_err().to_string().contains("need 52"));
+
+    // Longer than the header says is as wrong: another file's header, or
+    // data appended.
+    let (_dir, result) = open_edited(|t| t, 3 * 2 * 2 * 4 + 1);
+    let e = result.unwrap_err().to_string();
+    assert!(e.contains("holds 49 bytes") && e.contains("need 48"), "{e}");
 
     let (_dir, result) = open_edited(
         |t| t.replace("samples = 3", &format!("samples = {}", usize::MAX)),

@@ -381,10 +381,9 @@ pub fn read_manifest(part_dir: &Path) -> Result<PartManifest> {
 /// (they are listed as missing); more is a damaged manifest.
 const MAX_MISSING_LISTED: u64 = 1 << 16;
 
-/// Assemble the parts of one render into `out_dir`: the files a whole
-/// render writes, the cubes byte-identical to its.
-pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result<RunReport> {
-    let start = Instant::now();
+/// The manifests of `part_dirs`, checked to be every part of one render,
+/// each once, sorted by part.
+fn parts_of_one_render(part_dirs: &[PathBuf]) -> Result<Vec<(PathBuf, PartManifest)>> {
     let mut parts = part_dirs
         .iter()
         .map(|d| read_manifest(d).map(|m| (d.clone(), m)))
@@ -445,6 +444,15 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
             format!("parts missing: {} of {}", missing.join(", "), first.parts),
         ));
     }
+    Ok(parts)
+}
+
+/// Assemble the parts of one render into `out_dir`: the files a whole
+/// render writes, the cubes byte-identical to its.
+pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result<RunReport> {
+    let start = Instant::now();
+    let parts = parts_of_one_render(part_dirs)?;
+    let first = &parts[0].1;
     let scene = first.origin.build()?;
     let provenance = crate::emit::emission_provenance(&scene)?;
     if scene_digest(&scene, &provenance)? != first.scene_digest {

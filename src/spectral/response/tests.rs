@@ -1,8 +1,8 @@
 use super::*;
 
-fn parse(text: &str) -> Result<Sensor> {
+fn parse(text: &str) -> Result<SpectralResponse> {
     let t = csv::parse(text, Path::new("test.csv"), "sensor")?;
-    Sensor::from_table(&t, "test".into())
+    SpectralResponse::from_table(&t, "test".into())
 }
 
 /// 1 nm bands from `from` to `to` nm (centres at the half nanometres).
@@ -17,26 +17,29 @@ fn grid(from: u32, to: u32) -> BandGrid {
 /// within 1 nm) and Landsat 8 OLI's at USGS's (482, 561.5 and 654.5 nm).
 #[test]
 fn shipped_sensors_have_their_published_band_centres() {
-    for name in Sensor::names() {
-        let s = Sensor::named(name).unwrap();
+    for name in SpectralResponse::names() {
+        let s = SpectralResponse::named(name).unwrap();
         assert!(!s.bands.is_empty(), "{name}");
     }
-    let s2 = Sensor::named("sentinel2a-msi").unwrap();
+    let s2 = SpectralResponse::named("sentinel2a-msi").unwrap();
     for (band, nm) in [("B2", 492.4), ("B3", 559.8), ("B4", 664.6)] {
         let b = s2.bands.iter().find(|b| b.name == band).unwrap();
         assert!((b.centre_nm - nm).abs() < 1.0, "{band}: {}", b.centre_nm);
     }
-    let l8 = Sensor::named("landsat8-oli").unwrap();
+    let l8 = SpectralResponse::named("landsat8-oli").unwrap();
     for (band, nm) in [("B2", 482.0), ("B3", 561.5), ("B4", 654.5)] {
         let b = l8.bands.iter().find(|b| b.name == band).unwrap();
         assert!((b.centre_nm - nm).abs() < 1.5, "{band}: {}", b.centre_nm);
     }
-    assert_eq!(Sensor::named("aviris-ng").unwrap().bands.len(), 425);
+    assert_eq!(
+        SpectralResponse::named("aviris-ng").unwrap().bands.len(),
+        425
+    );
     // hGRS's EnMAP (pre-launch, VNIR then SWIR) and PRISMA channels.
-    let enmap = Sensor::named("enmap").unwrap();
+    let enmap = SpectralResponse::named("enmap").unwrap();
     assert_eq!(enmap.bands.len(), 242);
     assert!((enmap.bands[0].centre_nm - 423.03).abs() < 0.01);
-    let prisma = Sensor::named("prisma").unwrap();
+    let prisma = SpectralResponse::named("prisma").unwrap();
     assert_eq!(prisma.bands.len(), 232);
     assert!((prisma.bands[0].centre_nm - 406.99).abs() < 0.01);
 }
@@ -99,9 +102,9 @@ fn bands_outside_the_cube_are_left_out() {
 /// what is wrong.
 #[test]
 fn bad_sensors_are_named_errors() {
-    let e = Sensor::named("pace-oci").unwrap_err().to_string();
+    let e = SpectralResponse::named("pace-oci").unwrap_err().to_string();
     assert!(e.contains("pace-oci") && e.contains("csv:FILE"), "{e}");
-    let e = Sensor::named("nosuch").unwrap_err().to_string();
+    let e = SpectralResponse::named("nosuch").unwrap_err().to_string();
     assert!(
         e.contains("unknown sensor") && e.contains("sentinel2a-msi"),
         "{e}"
@@ -116,7 +119,7 @@ fn bad_sensors_are_named_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("even steps"), "{e}");
-    let e = Sensor::named("csv:/nonexistent/srf.csv")
+    let e = SpectralResponse::named("csv:/nonexistent/srf.csv")
         .unwrap_err()
         .to_string();
     assert!(e.contains("/nonexistent/srf.csv"), "{e}");

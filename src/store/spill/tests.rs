@@ -1,5 +1,8 @@
+use super::frame::{body_crc, JOINED_BELOW};
 use super::*;
+use crate::bounds::Aabb;
 use crate::photon::Photon;
+use crate::photon::LAYERS;
 use crate::rng::Pcg32;
 use glam::Vec3;
 
