@@ -1,4 +1,5 @@
 use super::*;
+use crate::testing::chi_square;
 
 #[test]
 fn streams_are_pure_functions_of_seed_and_index() {
@@ -33,19 +34,6 @@ fn below_is_uniform() {
     let e = n as f64 / 10.0;
     let chi2: f64 = counts.iter().map(|&c| (c as f64 - e).powi(2) / e).sum();
     assert!(chi2 < 27.9, "chi2 {chi2}");
-}
-
-/// Pearson's chi-square of `counts` against probabilities `p` (summing to 1).
-fn chi_square(counts: &[u64], p: &[f64]) -> f64 {
-    let n: u64 = counts.iter().sum();
-    counts
-        .iter()
-        .zip(p)
-        .map(|(&c, &p)| {
-            let e = p * n as f64;
-            (c as f64 - e).powi(2) / e
-        })
-        .sum()
 }
 
 /// Exp(1) by the ziggurat: 2 M draws in 20 bins of equal probability

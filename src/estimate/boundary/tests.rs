@@ -2,6 +2,7 @@
 use super::*;
 use crate::rng::Pcg32;
 use crate::scene::Overrides;
+use crate::testing::{rel, simpson};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -18,33 +19,6 @@ fn segment_area(r: f64, d: f64) -> f64 {
     r * r * (d / r).acos() - d * (r * r - d * d).sqrt()
 }
 
-/// Adaptive Simpson to an absolute tolerance (an independent quadrature).
-fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
-    /// One panel [a, b] with f at a, the midpoint and b, and its Simpson estimate.
-    fn step(
-        f: &dyn Fn(f64) -> f64,
-        [a, b]: [f64; 2],
-        [fa, fm, fb]: [f64; 3],
-        whole: f64,
-        tol: f64,
-        depth: u32,
-    ) -> f64 {
-        let m = 0.5 * (a + b);
-        let (flm, frm) = (f(0.5 * (a + m)), f(0.5 * (m + b)));
-        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-        let diff = left + right - whole;
-        if depth == 0 || diff.abs() <= 15.0 * tol {
-            return left + right + diff / 15.0;
-        }
-        step(f, [a, m], [fa, flm, fm], left, 0.5 * tol, depth - 1)
-            + step(f, [m, b], [fm, frm, fb], right, 0.5 * tol, depth - 1)
-    }
-    let (fa, fm, fb) = (f(a), f(0.5 * (a + b)), f(b));
-    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-    step(f, [a, b], [fa, fm, fb], whole, tol, 40)
-}
-
 /// Volume of {x > a, y > b} within the ball of radius r, as the integral
 /// over x of the circular segment {y > b} of the slice — an independent
 /// route (acos segment formula, adaptive Simpson) to the overlap of two
@@ -56,10 +30,6 @@ fn two_cap_overlap(r: f64, a: f64, b: f64) -> f64 {
     }
     let f = |x: f64| segment_area((r * r - x * x).max(0.0).sqrt(), b);
     simpson(&f, a, end, 1e-15)
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
 }
 
 /// Gauss-Legendre nodes integrate polynomials up to degree 2n - 1 exactly.

@@ -1,5 +1,6 @@
 use super::*;
 use crate::rng::Pcg32;
+use crate::testing::{chi_square_critical, simpson};
 use std::f64::consts::FRAC_PI_2;
 use std::sync::OnceLock;
 
@@ -48,38 +49,6 @@ fn cases() -> Vec<(&'static str, PhaseFunction)> {
             PhaseFunction::tabulated(&[10.0, 45.0, 170.0], &[5.0, 1.0, 2.0], "t").unwrap(),
         ),
     ]
-}
-
-/// Adaptive Simpson on [a, b] to absolute tolerance `tol`.
-fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
-    #[allow(clippy::too_many_arguments)]
-    fn step(
-        f: &dyn Fn(f64) -> f64,
-        a: f64,
-        b: f64,
-        fa: f64,
-        fm: f64,
-        fb: f64,
-        whole: f64,
-        tol: f64,
-        depth: u32,
-    ) -> f64 {
-        let m = 0.5 * (a + b);
-        let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-        let (flm, frm) = (f(lm), f(rm));
-        let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
-        let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
-        let delta = left + right - whole;
-        if depth == 0 || delta.abs() <= 15.0 * tol {
-            left + right + delta / 15.0
-        } else {
-            step(f, a, m, fa, flm, fm, left, 0.5 * tol, depth - 1)
-                + step(f, m, b, fm, frm, fb, right, 0.5 * tol, depth - 1)
-        }
-    }
-    let (fa, fm, fb) = (f(a), f(0.5 * (a + b)), f(b));
-    let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-    step(f, a, b, fa, fm, fb, whole, tol, 40)
 }
 
 /// The density integrated independently of the samplers: over the grid
@@ -151,14 +120,6 @@ fn profiles() -> &'static [(&'static str, PhaseFunction, Profile)] {
             })
             .collect()
     })
-}
-
-/// Upper-tail chi-square quantile at p = 0.001 (Wilson–Hilferty).
-fn chi_square_critical(dof: usize) -> f64 {
-    const Z_999: f64 = 3.090_232_306_167_813;
-    let k = dof as f64;
-    let c = 2.0 / (9.0 * k);
-    k * (1.0 - c + Z_999 * c.sqrt()).powi(3)
 }
 
 /// Pearson chi-square of SAMPLES draws of `sample_cos` against the density.

@@ -1,9 +1,6 @@
 //! Tests of the parent module.
 use super::*;
-
-fn rel(a: f64, b: f64) -> f64 {
-    ((a - b) / b).abs()
-}
+use crate::testing::rel;
 
 /// A table sampling `f` on an irregular grid (so breakpoints never sit
 /// symmetrically about a band centre).
