@@ -516,6 +516,74 @@ impl<'a> Estimator<'a> {
         )
     }
 
+    /// The searches of an estimate into `found`: the local search is
+    /// `found[..n_local]`, of radius `r_local`; the expanded search, of
+    /// radius `r_big`, is all of `found` (one search) or `found[n_local..]`
+    /// (two layers). Returns (n_local, r_local, r_big).
+    fn searches(
+        &self,
+        x: Vec3,
+        classes: Classes,
+        two_sizes: bool,
+        found: &mut Vec<Neighbour>,
+        part: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
+    ) -> Result<(usize, f32, f32)> {
+        let k = self.scene.estimate.k;
+        let k_big = if two_sizes {
+            self.scene.estimate.k_expanded.max(k)
+        } else {
+            k
+        };
+        found.clear();
+        Ok(match classes {
+            Classes::Union(layers) => {
+                self.find(x, layers, k_big, found, part, extra)?;
+                let r_big = self.region_radius(found, k_big);
+                let n_local = if two_sizes {
+                    self.take_local(found, k)
+                } else {
+                    found.len()
+                };
+                let r_local = if two_sizes {
+                    self.region_radius(&found[..n_local], k)
+                } else {
+                    r_big
+                };
+                (n_local, r_local, r_big)
+            }
+            Classes::Split { light, heavy } => {
+                self.find(x, &[light], k, found, part, extra)?;
+                let n_local = found.len();
+                let r_local = self.region_radius(found, k);
+                self.find(x, &[heavy], k_big, found, part, extra)?;
+                (
+                    n_local,
+                    r_local,
+                    self.region_radius(&found[n_local..], k_big),
+                )
+            }
+        })
+    }
+
+    /// The search region around `x` out to `r_outer`, cut by the boundaries
+    /// as the compensation mode says: a volume's axial distances, or on a
+    /// surface the disc's.
+    fn region(&self, x: Vec3, surface: Option<(Vec3, SurfaceId)>, r_outer: f32) -> Region {
+        let mode = self.boundary;
+        match surface {
+            None => Region::Volume(match (mode, &self.grid) {
+                (BoundaryMode::None, _) => AxialDistances::unbounded(r_outer),
+                (_, Some(grid)) => grid.distances(x, r_outer),
+                (_, None) => boundary::axial_distances_traced(self.scene, x, r_outer),
+            }),
+            Some((normal, id)) => Region::Disc(match mode {
+                BoundaryMode::None => DiscDistances::unbounded(r_outer, normal),
+                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_outer),
+            }),
+        }
+    }
+
     /// The searches of one estimate and its sums. With [`Classes::Union`]
     /// one search serves both sizes: the expanded search (or the local one
     /// alone when only one size is needed) is found, its nearest photons
@@ -562,61 +630,14 @@ impl<'a> Estimator<'a> {
         let split = surface.is_none();
         let by_layer = matches!(classes, Classes::Split { .. });
         let two_sizes = compensated || split;
-        let k = self.scene.estimate.k;
-        let k_big = if two_sizes {
-            self.scene.estimate.k_expanded.max(k)
-        } else {
-            k
-        };
-        found.clear();
-        // The local search is found[..n_local], of radius r_local; the
-        // expanded search of radius r_big is all of `found` (one search) or
-        // found[n_local..] (two layers).
-        let (n_local, r_local, r_big) = match classes {
-            Classes::Union(layers) => {
-                self.find(x, layers, k_big, found, part, extra)?;
-                let r_big = self.region_radius(found, k_big);
-                let n_local = if two_sizes {
-                    self.take_local(found, k)
-                } else {
-                    found.len()
-                };
-                let r_local = if two_sizes {
-                    self.region_radius(&found[..n_local], k)
-                } else {
-                    r_big
-                };
-                (n_local, r_local, r_big)
-            }
-            Classes::Split { light, heavy } => {
-                self.find(x, &[light], k, found, part, extra)?;
-                let n_local = found.len();
-                let r_local = self.region_radius(found, k);
-                self.find(x, &[heavy], k_big, found, part, extra)?;
-                (
-                    n_local,
-                    r_local,
-                    self.region_radius(&found[n_local..], k_big),
-                )
-            }
-        };
+        let (n_local, r_local, r_big) = self.searches(x, classes, two_sizes, found, part, extra)?;
         if found.is_empty() {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
         }
         let mode = self.boundary;
         let r_outer = r_local.max(r_big);
-        let outer = match surface {
-            None => Region::Volume(match (mode, &self.grid) {
-                (BoundaryMode::None, _) => AxialDistances::unbounded(r_outer),
-                (_, Some(grid)) => grid.distances(x, r_outer),
-                (_, None) => boundary::axial_distances_traced(self.scene, x, r_outer),
-            }),
-            Some((normal, id)) => Region::Disc(match mode {
-                BoundaryMode::None => DiscDistances::unbounded(r_outer, normal),
-                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_outer),
-            }),
-        };
+        let outer = self.region(x, surface, r_outer);
         let small = outer.capped(r_local);
         let big = outer.capped(r_big);
         // The band shape from the grid, where the grid mode has one here.
