@@ -32,6 +32,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::spectral::BandGrid;
 
+mod header;
 mod reader;
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,384 @@
+//! The searches of an estimate and its sums: the photons found around a
+//! point (k nearest, wrapped at periodic edges), the region the boundaries
+//! leave of the search, and the local, expanded and coarse band sums
+//! combined by the spectral mode.
+
+use super::*;
+
+impl Estimator<'_> {
+    pub(super) fn search(&self, k: usize) -> Search {
+        match self.scene.estimate.radius_m {
+            Some(r) => Search::Radius {
+                radius: r as f32 * (k as f32 / self.scene.estimate.k as f32).cbrt(),
+            },
+            None => Search::Nearest {
+                k,
+                max_radius: Some(self.scene.estimate.max_radius_m as f32),
+            },
+        }
+    }
+
+    /// The radius of the search region of `k` photons of which `found` were
+    /// found: the fixed radius, or the farthest photon — or the maximum
+    /// radius when fewer than k photons lie within it.
+    pub(super) fn region_radius(&self, found: &[Neighbour], k: usize) -> f32 {
+        match self.search(k) {
+            Search::Radius { radius } => radius,
+            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
+            Search::Nearest { .. } => found
+                .iter()
+                .fold(0.0f32, |m, n| m.max(n.distance_sq))
+                .sqrt()
+                .max(1e-6),
+        }
+    }
+
+    /// Photons of `layers` for a search of `k` around `x`, in any order,
+    /// continued across periodic edges, appended to `found`: with several
+    /// layers, the search over their union.
+    pub(super) fn find(
+        &self,
+        x: Vec3,
+        layers: &[u16],
+        k: usize,
+        found: &mut Vec<Neighbour>,
+        part: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        let start = found.len();
+        let search = self.search(k);
+        for &layer in layers {
+            self.map
+                .query_any_order_into(x, Some(layer), search, part)?;
+            if self.scene.domain.periodic {
+                self.wrap_search(x, layer, k, search, part, extra)?;
+            }
+            found.extend_from_slice(part);
+        }
+        let ours = &mut found[start..];
+        if let (Search::Nearest { k, .. }, true) = (search, layers.len() > 1) {
+            if ours.len() > k {
+                ours.select_nth_unstable_by(k - 1, |a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                found.truncate(start + k);
+            }
+        }
+        Ok(())
+    }
+
+    /// Move the photons of the local search (`k` nearest, or within the
+    /// local fixed radius) to the front of `found`; returns their count.
+    pub(super) fn take_local(&self, found: &mut [Neighbour], k: usize) -> usize {
+        match self.search(k) {
+            Search::Radius { radius } => {
+                let r_sq = radius * radius;
+                let mut n = 0;
+                for i in 0..found.len() {
+                    if found[i].distance_sq <= r_sq {
+                        found.swap(i, n);
+                        n += 1;
+                    }
+                }
+                n
+            }
+            Search::Nearest { .. } => {
+                if found.len() > k {
+                    found.select_nth_unstable_by(k - 1, |a, b| {
+                        a.distance_sq.total_cmp(&b.distance_sq)
+                    });
+                }
+                found.len().min(k)
+            }
+        }
+    }
+
+    /// With periodic domain edges a search sphere that crosses an edge
+    /// continues on the far side: the periodic images of `x` are searched
+    /// too and their photons merged, moved by the period so that offsets
+    /// stay relative to x.
+    pub(super) fn wrap_search(
+        &self,
+        x: Vec3,
+        layer: u16,
+        k: usize,
+        search: Search,
+        found: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
+    ) -> Result<()> {
+        let r = self.region_radius(found, k);
+        let [lx, ly] = self.scene.domain.size_m.map(|v| v as f32);
+        let shift = |c: f32, l: f32| -> f32 {
+            if c < r {
+                l
+            } else if c > l - r {
+                -l
+            } else {
+                0.0
+            }
+        };
+        let (ox, oy) = (shift(x.x, lx), shift(x.y, ly));
+        let mut offsets = Vec::with_capacity(3);
+        if ox != 0.0 {
+            offsets.push(Vec3::new(ox, 0.0, 0.0));
+        }
+        if oy != 0.0 {
+            offsets.push(Vec3::new(0.0, oy, 0.0));
+        }
+        if ox != 0.0 && oy != 0.0 {
+            offsets.push(Vec3::new(ox, oy, 0.0));
+        }
+        if offsets.is_empty() {
+            return Ok(());
+        }
+        for offset in offsets {
+            self.map
+                .query_any_order_into(x + offset, Some(layer), search, extra)?;
+            found.extend(extra.iter().map(|n| {
+                let mut n = *n;
+                n.photon.position -= offset;
+                n
+            }));
+        }
+        if let Search::Nearest { k, .. } = search {
+            if found.len() > k {
+                found.select_nth_unstable_by(k - 1, |a, b| a.distance_sq.total_cmp(&b.distance_sq));
+                found.truncate(k);
+            }
+        }
+        Ok(())
+    }
+
+    /// The searches of an estimate into `found`: the local search is
+    /// `found[..n_local]`, of radius `r_local`; the expanded search, of
+    /// radius `r_big`, is all of `found` (one search) or `found[n_local..]`
+    /// (two layers). Returns (n_local, r_local, r_big).
+    pub(super) fn searches(
+        &self,
+        x: Vec3,
+        classes: Classes,
+        two_sizes: bool,
+        found: &mut Vec<Neighbour>,
+        part: &mut Vec<Neighbour>,
+        extra: &mut Vec<Neighbour>,
+    ) -> Result<(usize, f32, f32)> {
+        let k = self.scene.estimate.k;
+        let k_big = if two_sizes {
+            self.scene.estimate.k_expanded.max(k)
+        } else {
+            k
+        };
+        found.clear();
+        Ok(match classes {
+            Classes::Union(layers) => {
+                self.find(x, layers, k_big, found, part, extra)?;
+                let r_big = self.region_radius(found, k_big);
+                let n_local = if two_sizes {
+                    self.take_local(found, k)
+                } else {
+                    found.len()
+                };
+                let r_local = if two_sizes {
+                    self.region_radius(&found[..n_local], k)
+                } else {
+                    r_big
+                };
+                (n_local, r_local, r_big)
+            }
+            Classes::Split { light, heavy } => {
+                self.find(x, &[light], k, found, part, extra)?;
+                let n_local = found.len();
+                let r_local = self.region_radius(found, k);
+                self.find(x, &[heavy], k_big, found, part, extra)?;
+                (
+                    n_local,
+                    r_local,
+                    self.region_radius(&found[n_local..], k_big),
+                )
+            }
+        })
+    }
+
+    /// The search region around `x` out to `r_outer`, cut by the boundaries
+    /// as the compensation mode says: a volume's axial distances, or on a
+    /// surface the disc's.
+    pub(super) fn region(
+        &self,
+        x: Vec3,
+        surface: Option<(Vec3, SurfaceId)>,
+        r_outer: f32,
+    ) -> Region {
+        let mode = self.boundary;
+        match surface {
+            None => Region::Volume(match (mode, &self.grid) {
+                (BoundaryMode::None, _) => AxialDistances::unbounded(r_outer),
+                (_, Some(grid)) => grid.distances(x, r_outer),
+                (_, None) => boundary::axial_distances_traced(self.scene, x, r_outer),
+            }),
+            Some((normal, id)) => Region::Disc(match mode {
+                BoundaryMode::None => DiscDistances::unbounded(r_outer, normal),
+                _ => boundary::disc_distances_traced(self.scene, x, normal, id, r_outer),
+            }),
+        }
+    }
+
+    /// The searches of one estimate and its sums. With [`Classes::Union`]
+    /// one search serves both sizes: the expanded search (or the local one
+    /// alone when only one size is needed) is found, its nearest photons
+    /// are the local search, and volume estimates count the photons
+    /// travelling toward the viewer's hemisphere (`weight` returns them as
+    /// heavy) at the expanded scale. With [`Classes::Split`] the two
+    /// classes are two layers, each searched for its own count. Either way
+    /// the boundaries are traced once, at the larger radius: through the
+    /// phase function's forward lobe a few photons travelling toward the
+    /// viewer carry most of the in-scatter (upwelling light seen looking
+    /// down rests on the few photons travelling up), and a local search of
+    /// k holds too few of them for a steady estimate.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn estimate(
+        &self,
+        x: Vec3,
+        classes: Classes,
+        weight: &dyn Fn(&Neighbour) -> (f64, bool),
+        surface: Option<(Vec3, SurfaceId)>,
+        view_up: Option<bool>,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let Scratch {
+            found,
+            part,
+            extra,
+            local,
+            expanded,
+            coarse,
+            shape,
+            group_local,
+            group_coarse,
+            group_expanded,
+            shape_groups,
+            ..
+        } = scratch;
+        let nb = self.scene.bands.len();
+        debug_assert!(out.len() == nb || out.len() == CHANNELS * nb);
+        let with_groups = out.len() == CHANNELS * nb;
+        let (out, out_groups) = out.split_at_mut(nb);
+        out_groups.iter_mut().for_each(|o| *o = 0.0);
+        let compensated = self.spectral != SpectralMode::Naive;
+        let split = surface.is_none();
+        let by_layer = matches!(classes, Classes::Split { .. });
+        let two_sizes = compensated || split;
+        let (n_local, r_local, r_big) = self.searches(x, classes, two_sizes, found, part, extra)?;
+        if found.is_empty() {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            return Ok(());
+        }
+        let mode = self.boundary;
+        let r_outer = r_local.max(r_big);
+        let outer = self.region(x, surface, r_outer);
+        let small = outer.capped(r_local);
+        let big = outer.capped(r_big);
+        // The band shape from the grid, where the grid mode has one here.
+        let has_shape = match (&self.shapes, view_up) {
+            (Some(grid), Some(up)) => {
+                grid.shape_and_groups_at(x, up, shape, with_groups.then_some(&mut shape_groups[..]))
+            }
+            _ => false,
+        };
+        // Group sums: totals always, per band where the combination reads
+        // bands (naive: local and coarse; compensated: expanded).
+        if with_groups {
+            group_local.clear(!compensated);
+            group_coarse.clear(!compensated);
+            group_expanded.clear(compensated && !has_shape);
+        }
+        // Photons on other surfaces (a target's side, the far side of a thin
+        // panel) are not on this one; they still bound the search, whose
+        // radius comes from every photon found.
+        let plane = surface.map(|(normal, _)| (normal, PLANE_TOLERANCE * r_outer + 0.005));
+        local.clear();
+        expanded.clear();
+        coarse.clear();
+        for (i, n) in found.iter().enumerate() {
+            let offset = n.photon.position - x;
+            if plane.is_some_and(|(normal, tol)| offset.dot(normal).abs() > tol) {
+                continue;
+            }
+            let is_local = i < n_local;
+            let in_local = is_local && small.accepts(mode, offset, r_local);
+            let in_big = if by_layer {
+                !is_local && big.accepts(mode, offset, r_big)
+            } else {
+                two_sizes && big.accepts(mode, offset, r_big)
+            };
+            if !(in_local || in_big) {
+                continue;
+            }
+            let (w, toward) = weight(n);
+            // Counted at the expanded scale: the heavy layer's photons, or
+            // in one search those travelling toward the viewer.
+            let heavy = if by_layer { !is_local } else { split && toward };
+            let (band, group) = (n.photon.band, n.photon.group);
+            if in_local && !heavy {
+                local.add(band, w);
+                if with_groups {
+                    group_local.add(group, band, w);
+                }
+            }
+            // Two layers: the expanded band sums (a shape where the grid
+            // has none) take every photon counted.
+            if in_big || by_layer {
+                expanded.add(band, w);
+                if with_groups {
+                    group_expanded.add(group, band, w);
+                }
+            }
+            if in_big && heavy {
+                coarse.add(band, w);
+                if with_groups {
+                    group_coarse.add(group, band, w);
+                }
+            }
+        }
+        let v_local = small.size(mode, r_local);
+        if v_local <= 0.0 {
+            out.iter_mut().for_each(|o| *o = 0.0);
+            return Ok(());
+        }
+        let v_big = if two_sizes {
+            big.size(mode, r_big)
+        } else {
+            0.0
+        };
+        let groups = with_groups.then_some(Groups {
+            local: group_local,
+            coarse: group_coarse,
+            expanded: group_expanded,
+            out: out_groups,
+        });
+        if has_shape {
+            combine_with_shape(
+                local,
+                v_local,
+                coarse,
+                expanded,
+                v_big,
+                Some(&shape[..]),
+                out,
+            );
+            if let Some(g) = groups {
+                g.shape(v_local, v_big, shape, shape_groups, out);
+            }
+        } else if split {
+            // Without a grid shape here, `grid` combines as `compensated`.
+            combine_with_coarse(self.spectral, local, v_local, coarse, expanded, v_big, out);
+            if let Some(g) = groups {
+                g.ratio(self.spectral, v_local, v_big, true, expanded, out);
+            }
+        } else {
+            combine(self.spectral, local, v_local, expanded, v_big, out);
+            if let Some(g) = groups {
+                g.ratio(self.spectral, v_local, v_big, false, expanded, out);
+            }
+        }
+        Ok(())
+    }
+}
