@@ -191,86 +191,8 @@ pub(super) fn water(
     };
     let field = match (&w.gradient, w.layer.is_empty(), &w.grid) {
         (None, true, None) => ConstituentField::Uniform(base),
-        (Some(g), true, None) => {
-            let gk = |k| [K("water"), K("gradient"), K(k)];
-            let axis = match g.axis {
-                Axis::X => 0,
-                Axis::Y => 1,
-            };
-            let pair = |k: &'static str, v: Option<[f64; 2]>, d: f64| -> Result<[f64; 2]> {
-                let v = v.unwrap_or([d, d]);
-                for x in v {
-                    ctx.within(&gk(k), x, 0.0, 1e4, "values must be >= 0", "")?;
-                }
-                Ok(v)
-            };
-            let chl = pair("chl", g.chl, base.chl)?;
-            let cdom = pair("cdom_440", g.cdom_440, base.cdom_440)?;
-            let nap = pair("nap_440", g.nap_440, base.nap_440)?;
-            ConstituentField::Gradient {
-                axis,
-                size_m: domain.size_m[axis],
-                from: Constituents {
-                    chl: chl[0],
-                    cdom_440: cdom[0],
-                    nap_440: nap[0],
-                },
-                to: Constituents {
-                    chl: chl[1],
-                    cdom_440: cdom[1],
-                    nap_440: nap[1],
-                },
-            }
-        }
-        (None, false, None) => {
-            let mut layers = Vec::new();
-            for (i, l) in w.layer.iter().enumerate() {
-                let lk = |k| [K("water"), K("layer"), I(i), K(k)];
-                ctx.within(&lk("top_m"), l.top_m, 0.0, 1e5, "must be a depth >= 0", "m")?;
-                ctx.within(
-                    &lk("bottom_m"),
-                    l.bottom_m,
-                    0.0,
-                    1e5,
-                    "must be a depth >= 0",
-                    "m",
-                )?;
-                if l.bottom_m <= l.top_m {
-                    return Err(ctx.err(&lk("bottom_m"), "need top_m < bottom_m (m)"));
-                }
-                for (k, v) in [
-                    ("chl", l.chl),
-                    ("cdom_440", l.cdom_440),
-                    ("nap_440", l.nap_440),
-                ] {
-                    if let Some(v) = v {
-                        ctx.within(&lk(k), v, 0.0, 1e4, "concentrations must be >= 0", "")?;
-                    }
-                }
-                let c = Constituents {
-                    chl: l.chl.unwrap_or(base.chl),
-                    cdom_440: l.cdom_440.unwrap_or(base.cdom_440),
-                    nap_440: l.nap_440.unwrap_or(base.nap_440),
-                };
-                // Layers may not overlap: which one would hold the water
-                // between?
-                if let Some((j, (top, bottom, _))) = layers
-                    .iter()
-                    .enumerate()
-                    .find(|(_, (t, b, _))| l.top_m < *b && *t < l.bottom_m)
-                {
-                    return Err(ctx.err(
-                        &lk("top_m"),
-                        format!(
-                            "water.layer[{i}] ({} to {} m) overlaps water.layer[{j}] ({top} to {bottom} m)",
-                            l.top_m, l.bottom_m
-                        ),
-                    ));
-                }
-                layers.push((l.top_m, l.bottom_m, c));
-            }
-            ConstituentField::Layers { base, layers }
-        }
+        (Some(g), true, None) => gradient(ctx, g, &base, domain)?,
+        (None, false, None) => layers(ctx, &w.layer, base)?,
         (None, true, Some(g)) => ConstituentField::Grid(read_grid(&ctx.file(g, &wk("grid"))?)?),
         _ => {
             return Err(ctx.err(
@@ -279,6 +201,113 @@ pub(super) fn water(
             ))
         }
     };
+    let spectra = band_spectra(ctx, w)?;
+    Ok((
+        WaterModel::Constituents {
+            spectra: Box::new(spectra),
+            field,
+            bp_550: w.bp_550,
+        },
+        particle_phase,
+    ))
+}
+
+/// `[water.gradient]`: the constituents varying linearly along x or y
+/// (each end defaulting to the water's own values).
+fn gradient(
+    ctx: &Ctx,
+    g: &GradientFile,
+    base: &Constituents,
+    domain: &Domain,
+) -> Result<ConstituentField> {
+    let gk = |k| [K("water"), K("gradient"), K(k)];
+    let axis = match g.axis {
+        Axis::X => 0,
+        Axis::Y => 1,
+    };
+    let pair = |k: &'static str, v: Option<[f64; 2]>, d: f64| -> Result<[f64; 2]> {
+        let v = v.unwrap_or([d, d]);
+        for x in v {
+            ctx.within(&gk(k), x, 0.0, 1e4, "values must be >= 0", "")?;
+        }
+        Ok(v)
+    };
+    let chl = pair("chl", g.chl, base.chl)?;
+    let cdom = pair("cdom_440", g.cdom_440, base.cdom_440)?;
+    let nap = pair("nap_440", g.nap_440, base.nap_440)?;
+    Ok(ConstituentField::Gradient {
+        axis,
+        size_m: domain.size_m[axis],
+        from: Constituents {
+            chl: chl[0],
+            cdom_440: cdom[0],
+            nap_440: nap[0],
+        },
+        to: Constituents {
+            chl: chl[1],
+            cdom_440: cdom[1],
+            nap_440: nap[1],
+        },
+    })
+}
+
+/// `[[water.layer]]`: depth layers of their own constituents over `base`,
+/// not overlapping.
+fn layers(ctx: &Ctx, file: &[LayerFile], base: Constituents) -> Result<ConstituentField> {
+    let mut layers = Vec::new();
+    for (i, l) in file.iter().enumerate() {
+        let lk = |k| [K("water"), K("layer"), I(i), K(k)];
+        ctx.within(&lk("top_m"), l.top_m, 0.0, 1e5, "must be a depth >= 0", "m")?;
+        ctx.within(
+            &lk("bottom_m"),
+            l.bottom_m,
+            0.0,
+            1e5,
+            "must be a depth >= 0",
+            "m",
+        )?;
+        if l.bottom_m <= l.top_m {
+            return Err(ctx.err(&lk("bottom_m"), "need top_m < bottom_m (m)"));
+        }
+        for (k, v) in [
+            ("chl", l.chl),
+            ("cdom_440", l.cdom_440),
+            ("nap_440", l.nap_440),
+        ] {
+            if let Some(v) = v {
+                ctx.within(&lk(k), v, 0.0, 1e4, "concentrations must be >= 0", "")?;
+            }
+        }
+        let c = Constituents {
+            chl: l.chl.unwrap_or(base.chl),
+            cdom_440: l.cdom_440.unwrap_or(base.cdom_440),
+            nap_440: l.nap_440.unwrap_or(base.nap_440),
+        };
+        // Layers may not overlap: which one would hold the water
+        // between?
+        if let Some((j, (top, bottom, _))) = layers
+            .iter()
+            .enumerate()
+            .find(|(_, (t, b, _))| l.top_m < *b && *t < l.bottom_m)
+        {
+            return Err(ctx.err(
+                &lk("top_m"),
+                format!(
+                    "water.layer[{i}] ({} to {} m) overlaps water.layer[{j}] ({top} to {bottom} m)",
+                    l.top_m, l.bottom_m
+                ),
+            ));
+        }
+        layers.push((l.top_m, l.bottom_m, c));
+    }
+    Ok(ConstituentField::Layers { base, layers })
+}
+
+/// The constituents' spectra on the band grid: pure water's absorption and
+/// scattering, Bricaud's phytoplankton absorption, and the CDOM, NAP and
+/// particle-scattering shapes.
+fn band_spectra(ctx: &Ctx, w: &WaterFile) -> Result<BandSpectra> {
+    let wk = |k| [K("water"), K(k)];
     let centers: Vec<f64> = ctx.bands.centers_nm().iter().map(|&c| c as f64).collect();
     let (a_phi_a, a_phi_e) = tables::bricaud_a_phi();
     let s_g = w.cdom_slope.unwrap_or(0.015);
@@ -296,14 +325,7 @@ pub(super) fn water(
             .collect(),
         bp_shape: centers.iter().map(|l| (550.0 / l).powf(n_bp)).collect(),
     };
-    Ok((
-        WaterModel::Constituents {
-            spectra: Box::new(spectra),
-            field,
-            bp_550: w.bp_550,
-        },
-        particle_phase,
-    ))
+    Ok(spectra)
 }
 
 /// A constituent grid CSV: header `x_m,y_m,depth_m,chl,cdom_440,nap_440`,
