@@ -299,9 +299,9 @@ impl<'a> RayMarcher<'a> {
         let MarchBuffers {
             est,
             sun_t,
-            beam,
             iops,
             tmp,
+            ..
         } = buf;
         let t_surface = if dir.z > 0.0 {
             -p0.z / dir.z
@@ -400,39 +400,67 @@ impl<'a> RayMarcher<'a> {
             t0 += len;
         }
         if let Some(h) = hit {
-            // Floor or target: direct sun plus the surface photon estimate.
-            let n = h.normal;
-            let x = h.position + n * 1e-3;
-            scene.water.iops(x, iops);
-            // The direct sun's irradiance on the face per band, into sun_t.
-            if self.sun.rough_norm.is_some() {
-                self.rough_direct(x, n, iops, tmp, beam, rng, sun_t);
-            } else {
-                let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
-                self.sun_transmittance(x, iops, tmp, sun_t);
-                for (e, w) in sun_t.iter_mut().zip(&self.e_w) {
-                    *e = *w * *e * cos_n;
-                }
-            }
-            let rays = scene.estimate.gather_rays;
-            if gather && rays > 0 && h.surface != FLOOR {
-                self.gather(h.position, n, h.surface, rays, rng, scratch, est)?;
-            } else {
-                self.est.surface(h.position, n, h.surface, scratch, est)?;
-            }
-            for b in 0..nb {
-                let r = scene.reflectance(h.surface, h.position, b);
-                let direct = sun_t[b] * r / std::f64::consts::PI;
-                out[b] += tr[b] * (direct + est[b]);
-                for k in (nb + b..out.len()).step_by(nb) {
-                    out[k] += tr[b] * est[k];
-                }
-            }
+            self.at_floor(&h, rng, scratch, buf, out, tr, gather)?;
         } else if t_surface <= limit {
             let at = p0 + dir * t_surface;
             return Ok(self.under_surface(Vec3::new(at.x, at.y, 0.0), dir, rng, out, tr));
         }
         Ok(Segment::Ended)
+    }
+
+    /// A marched ray meeting the floor or a target (`h`) with transmittance
+    /// `tr`: the direct sun on the face (through a rough surface's facets
+    /// or the flat one) and the face's photon estimate (gathered from the
+    /// volume map on targets, when `gather`), reflected toward the viewer.
+    #[allow(clippy::too_many_arguments)]
+    fn at_floor(
+        &self,
+        h: &crate::geometry::Hit,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        buf: &mut MarchBuffers,
+        out: &mut [f64],
+        tr: &[f64],
+        gather: bool,
+    ) -> Result<()> {
+        let nb = self.bands();
+        let scene = self.scene;
+        let MarchBuffers {
+            est,
+            sun_t,
+            beam,
+            iops,
+            tmp,
+        } = buf;
+        // Floor or target: direct sun plus the surface photon estimate.
+        let n = h.normal;
+        let x = h.position + n * 1e-3;
+        scene.water.iops(x, iops);
+        // The direct sun's irradiance on the face per band, into sun_t.
+        if self.sun.rough_norm.is_some() {
+            self.rough_direct(x, n, iops, tmp, beam, rng, sun_t);
+        } else {
+            let cos_n = (-self.sun_w).dot(n).max(0.0) as f64;
+            self.sun_transmittance(x, iops, tmp, sun_t);
+            for (e, w) in sun_t.iter_mut().zip(&self.e_w) {
+                *e = *w * *e * cos_n;
+            }
+        }
+        let rays = scene.estimate.gather_rays;
+        if gather && rays > 0 && h.surface != FLOOR {
+            self.gather(h.position, n, h.surface, rays, rng, scratch, est)?;
+        } else {
+            self.est.surface(h.position, n, h.surface, scratch, est)?;
+        }
+        for b in 0..nb {
+            let r = scene.reflectance(h.surface, h.position, b);
+            let direct = sun_t[b] * r / std::f64::consts::PI;
+            out[b] += tr[b] * (direct + est[b]);
+            for k in (nb + b..out.len()).step_by(nb) {
+                out[k] += tr[b] * est[k];
+            }
+        }
+        Ok(())
     }
 
     /// A ray looking up meets the surface at `at`: the sky it sees through
