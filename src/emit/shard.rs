@@ -113,6 +113,32 @@ pub(super) fn shard_payload(payload: &ShardEmission) -> Result<Box<serde_json::v
 /// The merge's budget for shards that do not say what theirs was.
 pub const DEFAULT_MERGE_BUDGET: u64 = 256 << 20;
 
+/// What in shard header `h` differs from the first shard's `head`, if
+/// anything: then they are not shards of one emission.
+fn differs(
+    head: &crate::store::shard::ShardHeader,
+    h: &crate::store::shard::ShardHeader,
+) -> Option<&'static str> {
+    if h.shards != head.shards {
+        Some("the shard count")
+    } else if h.provenance_digest != head.provenance_digest || h.total_indices != head.total_indices
+    {
+        Some("the scene (provenance)")
+    } else if h.mem_budget != head.mem_budget {
+        Some("the --mem-budget it was emitted with")
+    } else if h.pilot_indices != head.pilot_indices || h.pilot != head.pilot {
+        Some("the pilot sample (was it emitted with another --mem-budget?)")
+    } else {
+        None
+    }
+}
+
+/// Whether a shard's index range is the one its shard number gives.
+fn range_matches(h: &crate::store::shard::ShardHeader) -> bool {
+    let r = crate::store::shard::shard_range(h.total_indices, h.shard, h.shards);
+    h.indices == [r.start, r.end]
+}
+
 /// The shard files at `paths`, each checked against the first (one
 /// emission: provenance, pilot, budget, shard count) and all of its shards
 /// once, sorted by shard; with the first's header and the summed totals
@@ -126,7 +152,7 @@ fn open_shards(
     Totals,
     report::ReportInputs,
 )> {
-    use crate::store::shard::{shard_range, ShardFile};
+    use crate::store::shard::ShardFile;
     let Some(first_path) = paths.first() else {
         return Err(crate::Error::invalid("map merge", "no shard files given"));
     };
@@ -152,26 +178,10 @@ fn open_shards(
     let rest = paths[1..].iter().map(|p| ShardFile::open(p));
     for s in std::iter::once(Ok(first)).chain(rest) {
         let mut s = s?;
-        let h = s.header();
-        if h.shards != n {
-            return Err(mismatch(&s, "the shard count"));
+        if let Some(what) = differs(&head, s.header()) {
+            return Err(mismatch(&s, what));
         }
-        if h.provenance_digest != head.provenance_digest || h.total_indices != head.total_indices {
-            return Err(mismatch(&s, "the scene (provenance)"));
-        }
-        if h.mem_budget != head.mem_budget {
-            return Err(mismatch(&s, "the --mem-budget it was emitted with"));
-        }
-        if h.pilot_indices != head.pilot_indices || h.pilot != head.pilot {
-            return Err(mismatch(
-                &s,
-                "the pilot sample (was it emitted with another --mem-budget?)",
-            ));
-        }
-        if h.indices != {
-            let r = shard_range(h.total_indices, h.shard, n);
-            [r.start, r.end]
-        } {
+        if !range_matches(s.header()) {
             return Err(crate::Error::data(
                 s.path(),
                 None,
