@@ -45,6 +45,22 @@ pub fn exit(program: &str, result: AnyResult<()>) -> ExitCode {
     }
 }
 
+/// `--threads`: a count up to the machine's cap
+/// (`parallel::check_threads`), as a command-line value parser.
+pub fn threads_arg(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|e| format!("{text}: not a thread count ({e})"))?;
+    let cap = crate::parallel::thread_cap();
+    if n > cap {
+        return Err(format!(
+            "at most {cap} threads on this machine ({} cores; 0 = one per core)",
+            crate::parallel::workers(0)
+        ));
+    }
+    Ok(n)
+}
+
 /// Write `text` to stdout; a closed pipe (`| head`) ends quietly, other
 /// failures are errors rather than the panic `print!` gives.
 pub fn print(text: &str) -> AnyResult<()> {

@@ -102,6 +102,34 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     publish(tmp, path)
 }
 
+/// A file written whole after a run's work but made before it, so that an
+/// unwritable path fails before the work rather than after (a run's JSON
+/// report); with no path, nothing.
+pub struct LateFile {
+    tmp: Option<(tempfile::NamedTempFile, PathBuf)>,
+}
+
+impl LateFile {
+    /// The temporary file beside `path`, when there is one.
+    pub fn create(path: Option<&Path>) -> Result<LateFile> {
+        let tmp = match path {
+            Some(p) => Some((temp_beside(p)?, p.to_path_buf())),
+            None => None,
+        };
+        Ok(LateFile { tmp })
+    }
+
+    /// Write `text` and publish it under its name.
+    pub fn write(self, text: &str) -> Result<()> {
+        let Some((mut tmp, path)) = self.tmp else {
+            return Ok(());
+        };
+        tmp.write_all(text.as_bytes())
+            .map_err(|e| Error::io(&path, "write", e))?;
+        publish(tmp, &path)
+    }
+}
+
 /// Sync a fully written temporary file from [`temp_beside`], make it
 /// readable like a normal output file, and rename it to `path`.
 pub fn publish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {

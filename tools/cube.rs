@@ -177,7 +177,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Worker threads (0 = one per core).
-        #[arg(long, default_value_t = 0, value_parser = threads)]
+        #[arg(long, default_value_t = 0, value_parser = littoral::cli::threads_arg)]
         threads: usize,
     },
     /// Write the cube as a spectral OpenEXR file (one channel per band,
@@ -514,19 +514,4 @@ fn info(cube: &EnviCube) -> AnyResult<()> {
         "value": { "min": min, "max": max, "mean": mean, "non_finite": non_finite },
     });
     print(&format!("{summary:#}\n"))
-}
-
-/// `--threads`: a count up to the machine's cap (`parallel::check_threads`).
-fn threads(text: &str) -> Result<usize, String> {
-    let n: usize = text
-        .parse()
-        .map_err(|e| format!("{text}: not a thread count ({e})"))?;
-    let cap = littoral::parallel::thread_cap();
-    if n > cap {
-        return Err(format!(
-            "at most {cap} threads on this machine ({} cores; 0 = one per core)",
-            littoral::parallel::workers(0)
-        ));
-    }
-    Ok(n)
 }

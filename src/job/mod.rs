@@ -63,10 +63,7 @@ impl EmitJob<'_> {
         let swept = crate::output::set::sweep_stale(crate::output::parent_dir(&self.map));
         // The report's file is made now, so that an unwritable path fails
         // before the photons are traced rather than after.
-        let report_file = match &self.report {
-            Some(path) => Some(crate::output::temp_beside(path)?),
-            None => None,
-        };
+        let report_file = crate::output::LateFile::create(self.report.as_deref())?;
         let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let em = crate::emit::emit(
@@ -94,12 +91,7 @@ impl EmitJob<'_> {
                 .into_iter()
                 .collect(),
         };
-        if let (Some(mut tmp), Some(path)) = (report_file, &self.report) {
-            use std::io::Write;
-            tmp.write_all(report.json().as_bytes())
-                .map_err(|e| Error::io(path, "write", e))?;
-            crate::output::publish(tmp, path)?;
-        }
+        report_file.write(&report.json())?;
         Ok(report)
     }
 }

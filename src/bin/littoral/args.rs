@@ -49,7 +49,7 @@ pub struct AssembleArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0, value_parser = threads)]
+    #[arg(long, default_value_t = 0, value_parser = littoral::cli::threads_arg)]
     pub threads: usize,
 }
 
@@ -97,7 +97,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..), allow_hyphen_values = true)]
     pub bands: Option<u16>,
     /// Worker threads (0 = one per core); outputs are identical for any number.
-    #[arg(long, default_value_t = 0, value_parser = threads)]
+    #[arg(long, default_value_t = 0, value_parser = littoral::cli::threads_arg)]
     pub threads: usize,
     /// Random seed (overrides the scene).
     #[arg(long)]
@@ -155,7 +155,7 @@ pub struct EmitArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
     pub photons: Option<u64>,
     /// Worker threads (0 = one per core); the map is identical for any number.
-    #[arg(long, default_value_t = 0, value_parser = threads)]
+    #[arg(long, default_value_t = 0, value_parser = littoral::cli::threads_arg)]
     pub threads: usize,
     /// Random seed (overrides the scene).
     #[arg(long)]
@@ -252,7 +252,7 @@ pub struct SynthArgs {
     #[arg(long, default_value = "256MiB")]
     pub mem_budget: String,
     /// Producer threads (0 = one per core); the map is identical for any number.
-    #[arg(long, default_value_t = 0, value_parser = threads)]
+    #[arg(long, default_value_t = 0, value_parser = littoral::cli::threads_arg)]
     pub threads: usize,
     /// The map file to write.
     #[arg(long)]
@@ -374,19 +374,4 @@ pub struct PlanArgs {
     /// (default: this binary's).
     #[arg(long)]
     pub bin_dir: Option<PathBuf>,
-}
-
-/// `--threads`: a count up to the machine's cap (`parallel::check_threads`).
-fn threads(text: &str) -> Result<usize, String> {
-    let n: usize = text
-        .parse()
-        .map_err(|e| format!("{text}: not a thread count ({e})"))?;
-    let cap = littoral::parallel::thread_cap();
-    if n > cap {
-        return Err(format!(
-            "at most {cap} threads on this machine ({} cores; 0 = one per core)",
-            littoral::parallel::workers(0)
-        ));
-    }
-    Ok(n)
 }

@@ -15,7 +15,7 @@ pub mod plan;
 
 use super::report::{EmitReport, EmitTimings, MapSummary};
 use super::{check_map_target, units, MemoryBudget};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::mem::MemoryPeaks;
 use crate::output::set::RunLock;
 use crate::progress::Progress;
@@ -76,11 +76,7 @@ impl ShardJob<'_> {
         crate::mem::tune_allocator();
         let _lock =
             super::prepare_map_outputs(self.scene, &self.path, self.report.as_deref(), false)?;
-        let report_file = self
-            .report
-            .as_deref()
-            .map(crate::output::temp_beside)
-            .transpose()?;
+        let report_file = crate::output::LateFile::create(self.report.as_deref())?;
         let sampler = crate::mem::PeakSampler::start();
         let provenance = crate::emit::emission_provenance(self.scene)?;
         let h = crate::emit::shard::emit_shard(
@@ -102,23 +98,9 @@ impl ShardJob<'_> {
             shard: h.shard,
             shards: h.shards,
         };
-        if let (Some(tmp), Some(path)) = (report_file, &self.report) {
-            write_report(tmp, path, &report.json())?;
-        }
+        report_file.write(&report.json())?;
         Ok(report)
     }
-}
-
-/// Write a report's `text` through its temporary file `tmp` to `path`.
-fn write_report(
-    mut tmp: tempfile::NamedTempFile,
-    path: &std::path::Path,
-    text: &str,
-) -> Result<()> {
-    use std::io::Write;
-    tmp.write_all(text.as_bytes())
-        .map_err(|e| Error::io(path, "write", e))?;
-    crate::output::publish(tmp, path)
 }
 
 /// Merge the shard files of a sharded emission into one map, with the
@@ -151,11 +133,7 @@ impl MergeJob<'_> {
             }
         }
         let _lock = RunLock::exclusive(&self.map)?;
-        let report_file = self
-            .report
-            .as_deref()
-            .map(crate::output::temp_beside)
-            .transpose()?;
+        let report_file = crate::output::LateFile::create(self.report.as_deref())?;
         let sampler = crate::mem::PeakSampler::start();
         let (em, budget) = crate::emit::shard::merge_shards(
             self.parts,
@@ -180,9 +158,7 @@ impl MergeJob<'_> {
             units: units::report_units(),
             warnings: Vec::new(),
         };
-        if let (Some(tmp), Some(path)) = (report_file, &self.report) {
-            write_report(tmp, path, &report.json())?;
-        }
+        report_file.write(&report.json())?;
         Ok(report)
     }
 }
