@@ -8,6 +8,10 @@
 //!   JSON report), returning the typed [`report::RunReport`].
 //! - [`budget::MemoryBudget`]: one `--mem-budget` shared out between the
 //!   sort writer, the tile cache, the boundary grid and a reserve.
+//! - [`outputs`]: the render's files, staged and published as one set
+//!   (`output::set`); [`html`] the page, [`report`] and [`units`] the JSON.
+//! - [`distributed`]: emission in shards and their merge, a render in parts
+//!   and their assembly, and the Slurm plan that chains them.
 //!
 //! **Map reuse.** A map records the SHA-256 of exactly the emission inputs
 //! of the scene it was traced from (`Scene::emission_inputs`, plus the map

@@ -1,7 +1,7 @@
 //! A render's files: the cube set written tile by tile ([`CubeSet`], the
 //! render's [`TileSink`]), then the quicklook, the spectral EXR, the depth
 //! profiles, the sensor-band cubes, the HTML page and the JSON report, all
-//! staged and published as one set ([`publish_run`]).
+//! staged and published as one set (`publish_run`).
 //!
 //! Every file is written once, in the staging directory
 //! (`output::set::Staging`); the EXR, the sensor-band cubes and the HTML

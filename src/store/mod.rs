@@ -8,12 +8,12 @@
 //! [`writer`] (the streaming tile sort within a memory budget), [`spill`]
 //! (photons at rest in its scratch file), [`radix`] (its sorts),
 //! [`partition`] (the pilot k-d partition into tiles), [`codec`] (a tile's
-//! compressed records), [`format`] (the file layout), [`shard`] (one
+//! compressed records), [`format`](mod@format) (the file layout), [`shard`] (one
 //! machine's part of a sharded emission); reading — [`reader`] (open and
 //! validate), [`cache`] (decoded tiles under a byte budget), [`tiletree`]
-//! (a tile's k-d tree and the tile-box hierarchy), [`query`] (k-nearest
-//! and fixed-radius searches), [`memory`] (an in-memory map for tests and
-//! small tools).
+//! (a tile's k-d tree), [`boxtree`] (the hierarchy over the tile boxes),
+//! [`query`] (k-nearest and fixed-radius searches), [`in_memory`] (an
+//! in-memory map for tests and small tools).
 
 pub mod boxtree;
 pub mod build;
