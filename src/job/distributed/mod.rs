@@ -12,6 +12,7 @@
 
 pub mod parts;
 pub mod plan;
+mod tile_file;
 
 use super::report::{EmitReport, EmitTimings, MapSummary};
 use super::{check_map_target, units, MemoryBudget};

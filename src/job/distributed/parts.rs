@@ -24,13 +24,14 @@
 //!
 //! Not for: the whole render in one process (`RenderJob`).
 
+use super::tile_file::{read_tile, tile_path, tile_size, TileFiles, TILES_DIR};
 use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
 use crate::job::report::{MapSummary, RenderTimings, RunReport};
 use crate::job::{MapStage, MemoryBudget, RenderJob, RenderShares};
 use crate::mem::MemoryPeaks;
 use crate::progress::Progress;
-use crate::render::{RadiometerReading, TileResult};
+use crate::render::RadiometerReading;
 use crate::scene::{IntegratorMode, Scene, SceneOrigin};
 use crate::store::cache::CacheStats;
 use rayon::prelude::*;
@@ -38,9 +39,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-const TILE_MAGIC: &[u8; 8] = b"LTTILE01";
 const MANIFEST: &str = "part.json";
-const TILES_DIR: &str = "tiles";
 
 /// What a finished part recorded (`PARTDIR/part.json`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -85,111 +84,6 @@ pub fn part_tiles(scene: &Scene, part: u64, parts: u64) -> Vec<(usize, usize)> {
     let all = crate::render::image_tiles(scene);
     let r = crate::store::shard::shard_range(all.len() as u64, part, parts);
     all[r.start as usize..r.end as usize].to_vec()
-}
-
-fn tile_path(dir: &Path, (i, j): (usize, usize)) -> PathBuf {
-    dir.join(TILES_DIR).join(format!("{i:05}-{j:05}.tile"))
-}
-
-/// A tile's file: magic, scene digest (64 hex bytes), i, j, w, h, bands,
-/// error flag (u32 LE each), the f32 LE arrays, CRC-32 of all before it.
-fn tile_bytes(t: &TileResult, digest: &str, bands: usize) -> Vec<u8> {
-    let arrays = 2 + t.products.len();
-    let mut b = Vec::with_capacity(128 + 4 * (t.values.len() * arrays + t.rgb.len()));
-    b.extend_from_slice(TILE_MAGIC);
-    b.extend_from_slice(digest.as_bytes());
-    for v in [t.i, t.j, t.w, t.h, bands, !t.errors.is_empty() as usize] {
-        b.extend_from_slice(&(v as u32).to_le_bytes());
-    }
-    let arrays = std::iter::once(&t.values)
-        .chain(std::iter::once(&t.errors))
-        .chain(t.products.iter())
-        .chain(std::iter::once(&t.rgb));
-    for a in arrays {
-        for v in a {
-            b.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    let crc = crc32fast::hash(&b);
-    b.extend_from_slice(&crc.to_le_bytes());
-    b
-}
-
-/// Read the tile file at `path`, which must be tile `(i, j)` of the scene
-/// with `digest`, `bands` bands and the error flag `errors`.
-fn read_tile(
-    path: &Path,
-    digest: &str,
-    (i, j): (usize, usize),
-    (w, h): (usize, usize),
-    bands: usize,
-    errors: bool,
-) -> Result<TileResult> {
-    let bad = |what: &str| Error::data(path, None, "tile", what.to_string());
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
-    let head = 8 + 64 + 6 * 4;
-    if bytes.len() < head + 4 || &bytes[..8] != TILE_MAGIC {
-        return Err(bad("not a littoral tile file (or truncated)"));
-    }
-    let (body, crc) = bytes.split_at(bytes.len() - 4);
-    if crc32fast::hash(body) != u32::from_le_bytes(crc.try_into().expect("4 bytes")) {
-        return Err(bad("corrupt tile (CRC mismatch)"));
-    }
-    if &body[8..72] != digest.as_bytes() {
-        return Err(bad("a tile of another render (scene digest differs)"));
-    }
-    let u = |k: usize| {
-        let o = 72 + 4 * k;
-        u32::from_le_bytes(body[o..o + 4].try_into().expect("4 bytes")) as usize
-    };
-    if [u(0), u(1), u(2), u(3), u(4), u(5)] != [i, j, w, h, bands, errors as usize] {
-        return Err(bad("tile position, size or bands do not match the scene"));
-    }
-    // The radiance, its standard error (or nothing), each product, the
-    // quicklook's RGB: sized from the product list, so a tile of another
-    // product count is refused by its length.
-    let n = w * h * bands;
-    let products = crate::render::PRODUCTS.len();
-    let sizes: Vec<usize> = [n, if errors { n } else { 0 }]
-        .into_iter()
-        .chain(std::iter::repeat_n(n, products))
-        .chain([w * h * 3])
-        .collect();
-    if body.len() != head + 4 * sizes.iter().sum::<usize>() {
-        return Err(bad("tile length does not match its size"));
-    }
-    let mut at = head;
-    let mut arrays = sizes.iter().map(|&len| {
-        let a: Vec<f32> = body[at..at + 4 * len]
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
-            .collect();
-        at += 4 * len;
-        a
-    });
-    let values = arrays.next().expect("values");
-    let errors = arrays.next().expect("errors");
-    let products = (0..products)
-        .map(|_| arrays.next().expect("product"))
-        .collect();
-    let rgb = arrays.next().expect("rgb");
-    Ok(TileResult {
-        i,
-        j,
-        w,
-        h,
-        values,
-        errors,
-        products,
-        rgb,
-    })
-}
-
-/// Width and height of tile `(i, j)`.
-fn tile_size(scene: &Scene, (i, j): (usize, usize)) -> (usize, usize) {
-    let t = crate::render::TILE_PX;
-    let [w, h] = scene.sensor.pixels;
-    (t.min(w - i * t), t.min(h - j * t))
 }
 
 /// Render part `tiles.0` of `tiles.1` of a scene's image tiles into
@@ -333,22 +227,6 @@ impl RenderPartJob<'_> {
         } else {
             Ok(None)
         }
-    }
-}
-
-/// A part's finished tiles, one file each, written whole.
-struct TileFiles<'a> {
-    dir: &'a Path,
-    digest: &'a str,
-    bands: usize,
-}
-
-impl crate::render::TileSink for TileFiles<'_> {
-    fn write(&self, t: &TileResult) -> Result<()> {
-        crate::output::write_atomic(
-            &tile_path(self.dir, (t.i, t.j)),
-            &tile_bytes(t, self.digest, self.bands),
-        )
     }
 }
 
