@@ -247,7 +247,7 @@ pub fn subset(
     writer.finish()
 }
 
-/// `cube` integrated over the bands of `sensor` (`cube::sensor`) as a new
+/// `cube` integrated over the bands of `sensor` (`spectral::response`) as a new
 /// cube `dir/NAME.{hdr,bsq}`, one 64 x 64 tile at a time; returns its
 /// files and the sensor bands made, by wavelength. Bands whose response the
 /// cube's spectral range does not cover are left out; none covered is an
