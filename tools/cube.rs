@@ -301,27 +301,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             let stats = littoral::cube::ops::stats(&open(&cube)?)?;
             print(&format!("{}\n", serde_json::to_string_pretty(&stats)?))
         }
-        Command::Diff { a, b, tol } => {
-            if tol.is_some_and(|t| t.is_nan() || t < 0.0) {
-                return Err(Error::invalid("--tol", "must be a number >= 0").into());
-            }
-            let d = littoral::cube::ops::diff(&open(&a)?, &open(&b)?)?;
-            print(&format!("{}\n", serde_json::to_string_pretty(&d)?))?;
-            match tol {
-                Some(t) if !d.within(t) => Err(Error::invalid(
-                    "--tol",
-                    format!(
-                        "{} differs from {}: largest difference {:e}, {} non-finite values differ (tolerance {t:e})",
-                        b.display(),
-                        a.display(),
-                        d.max_abs,
-                        d.non_finite_differ
-                    ),
-                )
-                .into()),
-                _ => Ok(()),
-            }
-        }
+        Command::Diff { a, b, tol } => diff(&open, &a, &b, tol),
         Command::Exr {
             cube,
             out,
@@ -336,6 +316,35 @@ fn run(cli: Cli) -> AnyResult<()> {
             )?;
             Ok(())
         }
+    }
+}
+
+/// `diff`: how cube `b` differs from cube `a`, as JSON; with `tol`, an
+/// error when a value differs by more.
+fn diff(
+    open: &dyn Fn(&PathBuf) -> littoral::Result<EnviCube>,
+    a: &PathBuf,
+    b: &PathBuf,
+    tol: Option<f64>,
+) -> AnyResult<()> {
+    if tol.is_some_and(|t| t.is_nan() || t < 0.0) {
+        return Err(Error::invalid("--tol", "must be a number >= 0").into());
+    }
+    let d = littoral::cube::ops::diff(&open(a)?, &open(b)?)?;
+    print(&format!("{}\n", serde_json::to_string_pretty(&d)?))?;
+    match tol {
+        Some(t) if !d.within(t) => Err(Error::invalid(
+            "--tol",
+            format!(
+                "{} differs from {}: largest difference {:e}, {} non-finite values differ (tolerance {t:e})",
+                b.display(),
+                a.display(),
+                d.max_abs,
+                d.non_finite_differ
+            ),
+        )
+        .into()),
+        _ => Ok(()),
     }
 }
 
