@@ -259,61 +259,12 @@ impl EmissionReport {
                 R: r,
             });
         }
-        let kd = tally
-            .windows(2)
-            .map(|w| KdLayer {
-                from_m: w[0].depth_m,
-                to_m: w[1].depth_m,
-                Kd: w[0]
-                    .Ed
-                    .iter()
-                    .zip(&w[1].Ed)
-                    .map(|(a, b)| {
-                        if *a > 0.0 && *b > 0.0 {
-                            (a / b).ln() / (w[1].depth_m - w[0].depth_m)
-                        } else {
-                            f64::NAN
-                        }
-                    })
-                    .collect(),
-            })
-            .collect();
+        let kd = kd_layers(&tally);
         let (up, uu) = totals.above_slots();
         let (ed, ed_se) = series(up);
         let (eu, eu_se) = series(uu);
 
-        let power = |counts: &[u64]| -> Vec<f64> {
-            counts
-                .iter()
-                .zip(photon_power)
-                .map(|(&c, p)| c as f64 / super::trace::FATE_UNIT as f64 * p)
-                .collect()
-        };
-        let emitted: Vec<f64> = (0..nb)
-            .map(|b| inputs.incident_irradiance[b] * area)
-            .collect();
-        let escaped = power(&totals.escaped);
-        let absorbed_water = power(&totals.absorbed_water);
-        let absorbed_surfaces = power(&totals.absorbed_surfaces);
-        let lost_edges = power(&totals.lost_edges);
-        let mut residual = Vec::with_capacity(nb);
-        let mut sigma = Vec::with_capacity(nb);
-        for b in 0..nb {
-            let sinks = escaped[b] + absorbed_water[b] + absorbed_surfaces[b] + lost_edges[b];
-            let res = emitted[b] - sinks;
-            // The band's photon count is binomial: sd = P_b sqrt(N p (1 - p)).
-            let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
-            let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
-            residual.push(res);
-            sigma.push(if sd > 0.0 {
-                res / sd
-            } else if res == 0.0 {
-                0.0
-            } else {
-                f64::INFINITY
-            });
-        }
-        let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+        let energy = energy(inputs, totals);
         EmissionReport {
             scene: inputs.scene.clone(),
             bands_nm: inputs.bands_nm.clone(),
@@ -326,17 +277,7 @@ impl EmissionReport {
                 Eu_stderr: eu_se,
             },
             kd,
-            energy: Energy {
-                units: "W nm^-1".into(),
-                emitted,
-                escaped,
-                absorbed_water,
-                absorbed_surfaces,
-                lost_edges,
-                residual,
-                closure_sigma_per_band: sigma,
-                closure_sigma,
-            },
+            energy,
             photons: PhotonCounts {
                 traced: totals.traced,
                 stored_volume: totals.stored_volume,
@@ -345,5 +286,81 @@ impl EmissionReport {
             },
             photon_power: photon_power.to_vec(),
         }
+    }
+}
+
+/// Kd between consecutive tally depths, from their E_d (NaN where a band
+/// has none at either depth).
+fn kd_layers(tally: &[DepthTally]) -> Vec<KdLayer> {
+    tally
+        .windows(2)
+        .map(|w| KdLayer {
+            from_m: w[0].depth_m,
+            to_m: w[1].depth_m,
+            Kd: w[0]
+                .Ed
+                .iter()
+                .zip(&w[1].Ed)
+                .map(|(a, b)| {
+                    if *a > 0.0 && *b > 0.0 {
+                        (a / b).ln() / (w[1].depth_m - w[0].depth_m)
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The energy budget: emitted, the power in each fate, and the closure
+/// residual in binomial standard deviations per band.
+fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
+    let photon_power = &inputs.photon_power[..];
+    let nb = inputs.bands_nm.len();
+    let n = totals.traced as f64;
+    let area = inputs.area_m2;
+    let power = |counts: &[u64]| -> Vec<f64> {
+        counts
+            .iter()
+            .zip(photon_power)
+            .map(|(&c, p)| c as f64 / super::trace::FATE_UNIT as f64 * p)
+            .collect()
+    };
+    let emitted: Vec<f64> = (0..nb)
+        .map(|b| inputs.incident_irradiance[b] * area)
+        .collect();
+    let escaped = power(&totals.escaped);
+    let absorbed_water = power(&totals.absorbed_water);
+    let absorbed_surfaces = power(&totals.absorbed_surfaces);
+    let lost_edges = power(&totals.lost_edges);
+    let mut residual = Vec::with_capacity(nb);
+    let mut sigma = Vec::with_capacity(nb);
+    for b in 0..nb {
+        let sinks = escaped[b] + absorbed_water[b] + absorbed_surfaces[b] + lost_edges[b];
+        let res = emitted[b] - sinks;
+        // The band's photon count is binomial: sd = P_b sqrt(N p (1 - p)).
+        let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
+        let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
+        residual.push(res);
+        sigma.push(if sd > 0.0 {
+            res / sd
+        } else if res == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        });
+    }
+    let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+    Energy {
+        units: "W nm^-1".into(),
+        emitted,
+        escaped,
+        absorbed_water,
+        absorbed_surfaces,
+        lost_edges,
+        residual,
+        closure_sigma_per_band: sigma,
+        closure_sigma,
     }
 }
