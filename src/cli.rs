@@ -51,14 +51,10 @@ pub fn threads_arg(text: &str) -> Result<usize, String> {
     let n: usize = text
         .parse()
         .map_err(|e| format!("{text}: not a thread count ({e})"))?;
-    let cap = crate::parallel::thread_cap();
-    if n > cap {
-        return Err(format!(
-            "at most {cap} threads on this machine ({} cores; 0 = one per core)",
-            crate::parallel::workers(0)
-        ));
+    match crate::parallel::too_many_threads(n) {
+        Some(what) => Err(what),
+        None => Ok(n),
     }
-    Ok(n)
 }
 
 /// Write `text` to stdout; a closed pipe (`| head`) ends quietly, other

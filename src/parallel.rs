@@ -13,19 +13,24 @@ pub fn thread_cap() -> usize {
     (workers(0) * THREADS_PER_CORE_CAP).max(MIN_THREAD_CAP)
 }
 
-/// Refuse a thread count beyond [`thread_cap`], with the machine's core count.
+/// What is wrong with `threads` when it is beyond [`thread_cap`], naming
+/// the machine's core count; none when it is within.
+pub fn too_many_threads(threads: usize) -> Option<String> {
+    (threads > thread_cap()).then(|| {
+        format!(
+            "{threads} threads: at most {} on this machine ({} cores; 0 = one per core)",
+            thread_cap(),
+            workers(0)
+        )
+    })
+}
+
+/// Refuse a thread count beyond [`thread_cap`] ([`too_many_threads`]).
 pub fn check_threads(threads: usize) -> Result<usize> {
-    if threads > thread_cap() {
-        return Err(Error::invalid(
-            "--threads",
-            format!(
-                "{threads} threads: at most {} on this machine ({} cores; 0 = one per core)",
-                thread_cap(),
-                workers(0)
-            ),
-        ));
+    match too_many_threads(threads) {
+        Some(what) => Err(Error::invalid("--threads", what)),
+        None => Ok(threads),
     }
-    Ok(threads)
 }
 
 /// A rayon pool of `threads` workers (0 = one per core). Stages install

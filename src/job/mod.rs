@@ -320,19 +320,13 @@ pub(crate) fn prepare_outputs(
 /// replaced; anything else is someone's file, and refused).
 pub(crate) fn check_map_target(path: &Path) -> Result<()> {
     crate::output::set::check_target(path)?;
-    let Ok(mut f) = std::fs::File::open(path) else {
+    let Ok(f) = std::fs::File::open(path) else {
         return Ok(());
     };
-    let mut head = [0u8; 8];
-    let mut n = 0;
-    while n < head.len() {
-        match std::io::Read::read(&mut f, &mut head[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) => return Err(Error::io(path, "read", e)),
-        }
-    }
-    if n == 0 || head[..n] == crate::store::format::HEADER_MAGIC[..n] {
+    let mut head = Vec::with_capacity(8);
+    std::io::Read::read_to_end(&mut std::io::Read::take(f, 8), &mut head)
+        .map_err(|e| Error::io(path, "read", e))?;
+    if head[..] == crate::store::format::HEADER_MAGIC[..head.len()] {
         return Ok(());
     }
     Err(Error::io(
