@@ -102,6 +102,17 @@ pub struct CubeSpec {
 }
 
 impl CubeSpec {
+    /// The band centres as the header records them (each f32 centre in
+    /// its shortest decimal form, read back as f64), so that a copy made
+    /// from the spec names its bands as one made from the header would.
+    pub fn header_wavelengths_nm(&self) -> Vec<f64> {
+        self.bands
+            .centers_nm()
+            .iter()
+            .map(|c| c.to_string().parse().unwrap_or(*c as f64))
+            .collect()
+    }
+
     /// Total values in the cube, or an error if it overflows the address space.
     fn values(&self) -> Result<u64> {
         (self.samples as u64)

@@ -12,24 +12,36 @@
 //! multi-part file): the renderer adds the standard error ("stderr") to
 //! the radiance ("radiance") when it has one.
 //!
-//! The file is tiled (64 x 64 pixels, uncompressed: noisy float radiance
-//! barely compresses) and written tile by tile from the ENVI cube with
-//! positioned reads, so memory holds one tile of all bands (2 MiB at 128
-//! bands) whatever the cube's size. It is written under a temporary name
-//! and renamed when complete.
+//! The file is tiled (64 x 64 pixels) and written tile by tile as the
+//! pixels arrive ([`ExrWriter`]): a renderer hands it each finished image
+//! tile from any thread, a cube tool the windows of an ENVI cube. A tile
+//! complete in every layer is compressed by the thread that completed it
+//! and written by one writer thread in a fixed order (the tiles' Morton
+//! order, layer by layer within a tile; the header's line order is
+//! "unspecified", which the format allows for tiled files), so the bytes
+//! are a pure function of the pixels whatever the threads' timing. Memory
+//! holds the tiles in progress: one at a time for a cube tool, about one
+//! per rendering thread for a renderer (2 MiB a layer at 128 bands). The
+//! file is written under a temporary name and renamed when complete.
 
 use super::envi::EnviCube;
 use crate::error::{Error, Result};
 use crate::output::{publish, temp_beside};
+use exr::block::chunk::Chunk;
+use exr::block::writer::ChunksWriter;
 use exr::block::UncompressedBlock;
 use exr::math::RoundingMode;
 use exr::meta::attribute::LevelMode;
+use exr::meta::header::Header;
 use exr::meta::BlockDescription;
 use exr::prelude::{
     AttributeValue, ChannelDescription, Compression, LineOrder, SampleType, SmallVec, Text,
     TileDescription, Vec2,
 };
-use std::path::Path;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::thread::JoinHandle;
 
 /// Tile side (pixels).
 pub const TILE: usize = 64;
@@ -41,6 +53,26 @@ pub fn channel_name(nm: f64) -> String {
 
 pub use crate::scene::settings::ExrCompression;
 
+/// One layer (part) of a spectral EXR: its name, its bands' centres and
+/// the data units of its values.
+#[derive(Clone, Copy, Debug)]
+pub struct ExrLayer<'a> {
+    pub name: &'a str,
+    pub wavelengths_nm: &'a [f64],
+    pub units: Option<&'a str>,
+}
+
+impl<'a> ExrLayer<'a> {
+    /// The layer `name` holding `cube`.
+    pub fn of_cube(name: &'a str, cube: &'a EnviCube) -> Self {
+        ExrLayer {
+            name,
+            wavelengths_nm: cube.wavelengths_nm(),
+            units: cube.data_units(),
+        }
+    }
+}
+
 /// Write `cube` as a spectral OpenEXR file at `path` (one layer, "radiance"),
 /// ZIP-compressed.
 pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
@@ -49,11 +81,11 @@ pub fn write_spectral_exr(cube: &EnviCube, path: &Path) -> Result<()> {
 
 /// One layer's header and the bands of its channels, in channel order.
 fn layer_header(
-    name: &str,
-    cube: &EnviCube,
+    layer: &ExrLayer,
+    (w, h): (usize, usize),
     compression: ExrCompression,
-) -> Result<(exr::meta::header::Header, Vec<usize>)> {
-    let (w, h, nb) = (cube.samples(), cube.lines(), cube.bands());
+) -> Result<(Header, Vec<usize>)> {
+    let nb = layer.wavelengths_nm.len();
     let invalid = |what: String| Error::invalid("spectral EXR", what);
     if w == 0 || h == 0 || nb == 0 {
         return Err(invalid(format!(
@@ -61,8 +93,8 @@ fn layer_header(
         )));
     }
     // Channels sorted by name; order[i] is the band of channel i.
-    let mut named: Vec<(String, usize)> = cube
-        .wavelengths_nm()
+    let mut named: Vec<(String, usize)> = layer
+        .wavelengths_nm
         .iter()
         .enumerate()
         .map(|(b, &nm)| (channel_name(nm), b))
@@ -78,22 +110,21 @@ fn layer_header(
         .iter()
         .map(|(name, _)| Ok(ChannelDescription::new(text(name)?, SampleType::F32, false)))
         .collect::<Result<_>>()?;
-    let mut header = exr::meta::header::Header::new(text(name)?, Vec2(w, h), channels)
-        .with_encoding(
-            match compression {
-                ExrCompression::None => Compression::Uncompressed,
-                ExrCompression::Zip => Compression::ZIP16,
-                ExrCompression::Piz => Compression::PIZ,
-            },
-            BlockDescription::Tiles(TileDescription {
-                tile_size: Vec2(TILE, TILE),
-                level_mode: LevelMode::Singular,
-                rounding_mode: RoundingMode::Down,
-            }),
-            LineOrder::Increasing,
-        );
+    let mut header = Header::new(text(layer.name)?, Vec2(w, h), channels).with_encoding(
+        match compression {
+            ExrCompression::None => Compression::Uncompressed,
+            ExrCompression::Zip => Compression::ZIP16,
+            ExrCompression::Piz => Compression::PIZ,
+        },
+        BlockDescription::Tiles(TileDescription {
+            tile_size: Vec2(TILE, TILE),
+            level_mode: LevelMode::Singular,
+            rounding_mode: RoundingMode::Down,
+        }),
+        LineOrder::Unspecified,
+    );
     // The layout spells units with dots and carets.
-    let units = match cube.data_units() {
+    let units = match layer.units {
         None | Some("W m-2 sr-1 nm-1") => "W.m^-2.sr^-1.nm^-1".to_string(),
         Some(other) => other.to_string(),
     };
@@ -118,89 +149,330 @@ pub fn write_spectral_exr_layers(layers: &[(&str, &EnviCube)], path: &Path) -> R
     write_spectral_exr_layers_with(layers, path, ExrCompression::default())
 }
 
-/// [`write_spectral_exr_layers`] with the given (lossless) compression.
-/// The bytes are a pure function of the cubes and the compression.
+/// [`write_spectral_exr_layers`] with the given (lossless) compression,
+/// one EXR tile of all layers read from the cubes at a time. The bytes are
+/// a pure function of the cubes and the compression.
 pub fn write_spectral_exr_layers_with(
     layers: &[(&str, &EnviCube)],
     path: &Path,
     compression: ExrCompression,
 ) -> Result<()> {
-    let invalid = |what: String| Error::invalid("spectral EXR", what);
     let Some((_, first)) = layers.first() else {
-        return Err(invalid("no layers to write".into()));
+        return Err(Error::invalid("spectral EXR", "no layers to write"));
     };
     let (w, h) = (first.samples(), first.lines());
     if layers
         .iter()
         .any(|(_, c)| (c.samples(), c.lines()) != (w, h))
     {
-        return Err(invalid("layers of different sizes".into()));
+        return Err(Error::invalid("spectral EXR", "layers of different sizes"));
     }
-    let mut headers: SmallVec<[exr::meta::header::Header; 3]> = SmallVec::new();
-    let mut orders = Vec::new();
-    for (name, cube) in layers {
-        let (header, order) = layer_header(name, cube, compression)?;
-        headers.push(header);
-        orders.push(order);
-    }
-    let tiles: Vec<Vec<_>> = headers
+    let described: Vec<ExrLayer> = layers
         .iter()
-        .map(|h| h.blocks_increasing_y_order().collect())
+        .map(|(name, cube)| ExrLayer::of_cube(name, cube))
         .collect();
+    let writer = ExrWriter::create(path, &described, (w, h), compression)?;
+    for (x0, y0) in writer.tile_origins() {
+        let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+        let values = layers
+            .iter()
+            .map(|(_, cube)| pixels_of(cube, (x0, y0, tw, th)))
+            .collect::<Result<Vec<_>>>()?;
+        let slices: Vec<&[f32]> = values.iter().map(Vec::as_slice).collect();
+        writer.write_tile(x0, y0, tw, th, &slices)?;
+    }
+    writer.finish()
+}
 
-    let tmp = temp_beside(path)?;
-    let exr_error =
-        |e: exr::error::Error| Error::io(path, "write", std::io::Error::other(e.to_string()));
-    let mut failure: Option<Error> = None;
-    {
-        let out = std::io::BufWriter::new(tmp.as_file());
-        exr::block::write(out, headers, true, |meta, writer| {
-            use exr::block::writer::ChunksWriter;
-            let mut compressor = writer.sequential_blocks_compressor(&meta);
-            for (layer, ((_, cube), order)) in layers.iter().zip(&orders).enumerate() {
-                for (index, tile) in tiles[layer].iter().enumerate() {
-                    let (x0, y0) = (
-                        tile.location.tile_index.x() * TILE,
-                        tile.location.tile_index.y() * TILE,
-                    );
-                    let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
-                    let bands: Vec<Vec<f32>> = match order
-                        .iter()
-                        .map(|&b| cube.window(b, x0, y0, tw, th))
-                        .collect::<Result<_>>()
-                    {
-                        Ok(v) => v,
-                        Err(e) => {
-                            failure = Some(e);
-                            return Err(exr::error::Error::Aborted);
-                        }
-                    };
-                    // Per line, per channel, the line's samples (native endian).
-                    let mut data = Vec::with_capacity(tw * th * bands.len() * 4);
-                    for row in 0..th {
-                        for band in &bands {
-                            for v in &band[row * tw..(row + 1) * tw] {
-                                data.extend_from_slice(&v.to_ne_bytes());
-                            }
+/// The `tw` x `th` pixels of `cube` at (`x0`, `y0`), bands innermost.
+fn pixels_of(cube: &EnviCube, (x0, y0, tw, th): (usize, usize, usize, usize)) -> Result<Vec<f32>> {
+    let nb = cube.bands();
+    let mut out = vec![0.0; tw * th * nb];
+    for b in 0..nb {
+        for (i, v) in cube.window(b, x0, y0, tw, th)?.into_iter().enumerate() {
+            out[i * nb + b] = v;
+        }
+    }
+    Ok(out)
+}
+
+/// The chunks of one complete EXR tile (each with its index in its
+/// layer's offset table), tagged with the tile's place in the write order.
+type TileChunks = (usize, Vec<(usize, Chunk)>);
+
+/// An EXR tile whose pixels are arriving: per layer the block's data
+/// (per line, per channel, the line's samples), and the pixels still
+/// missing.
+struct Pending {
+    layers: Vec<Vec<f32>>,
+    missing: usize,
+}
+
+/// A spectral OpenEXR file being written tile by tile, from any thread, in
+/// any order (see the module docs).
+pub struct ExrWriter {
+    path: PathBuf,
+    headers: Vec<Header>,
+    /// Per layer, the channel of each band.
+    channel_of: Vec<Vec<usize>>,
+    size: (usize, usize),
+    tiles_x: usize,
+    /// Per EXR tile (row-major), its place in the write order.
+    rank: Vec<usize>,
+    pending: Mutex<HashMap<usize, Pending>>,
+    sender: Option<crossbeam_channel::Sender<TileChunks>>,
+    thread: Option<JoinHandle<Result<tempfile::NamedTempFile>>>,
+}
+
+impl ExrWriter {
+    /// Start a `w` x `h` file at `path` with `layers` (under a temporary
+    /// name until [`ExrWriter::finish`]).
+    pub fn create(
+        path: &Path,
+        layers: &[ExrLayer],
+        (w, h): (usize, usize),
+        compression: ExrCompression,
+    ) -> Result<ExrWriter> {
+        if layers.is_empty() {
+            return Err(Error::invalid("spectral EXR", "no layers to write"));
+        }
+        let mut headers: SmallVec<[Header; 3]> = SmallVec::new();
+        let mut channel_of = Vec::new();
+        for layer in layers {
+            let (header, order) = layer_header(layer, (w, h), compression)?;
+            let mut of = vec![0; order.len()];
+            for (c, &b) in order.iter().enumerate() {
+                of[b] = c;
+            }
+            headers.push(header);
+            channel_of.push(of);
+        }
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let mut order: Vec<(u128, usize)> = (0..tiles_y)
+            .flat_map(|ty| {
+                (0..tiles_x).map(move |tx| {
+                    let morton = crate::morton::morton3_wide([tx as u64, ty as u64, 0]);
+                    (morton, ty * tiles_x + tx)
+                })
+            })
+            .collect();
+        order.sort_unstable();
+        let mut rank = vec![0; order.len()];
+        for (place, &(_, tile)) in order.iter().enumerate() {
+            rank[tile] = place;
+        }
+        let tmp = temp_beside(path)?;
+        let (sender, receiver) = crossbeam_channel::unbounded::<TileChunks>();
+        let tiles = order.len();
+        let file_headers = headers.clone();
+        let thread_path = path.to_path_buf();
+        let thread = std::thread::Builder::new()
+            .name("exr-writer".into())
+            .spawn(move || write_in_order(tmp, file_headers, receiver, tiles, &thread_path))
+            .map_err(|e| Error::io(path, "start a writer thread for", e))?;
+        Ok(ExrWriter {
+            path: path.to_path_buf(),
+            headers: headers.into_vec(),
+            channel_of,
+            size: (w, h),
+            tiles_x,
+            rank,
+            pending: Mutex::new(HashMap::new()),
+            sender: Some(sender),
+            thread: Some(thread),
+        })
+    }
+
+    /// The pixel origins of the file's tiles, in its write order (the
+    /// order in which one caller fills them best).
+    pub fn tile_origins(&self) -> Vec<(usize, usize)> {
+        let mut by_rank = vec![(0, 0); self.rank.len()];
+        for (tile, &place) in self.rank.iter().enumerate() {
+            by_rank[place] = ((tile % self.tiles_x) * TILE, (tile / self.tiles_x) * TILE);
+        }
+        by_rank
+    }
+
+    /// Write the `tw` x `th` pixels at (`x0`, `y0`) of every layer: one
+    /// slice per layer, pixel by pixel with the layer's bands innermost.
+    /// Each pixel is written once.
+    pub fn write_tile(
+        &self,
+        x0: usize,
+        y0: usize,
+        tw: usize,
+        th: usize,
+        layers: &[&[f32]],
+    ) -> Result<()> {
+        let (w, h) = self.size;
+        let sizes_fit = layers.len() == self.headers.len()
+            && layers
+                .iter()
+                .zip(&self.channel_of)
+                .all(|(v, of)| v.len() == tw * th * of.len());
+        if !sizes_fit || x0 + tw > w || y0 + th > h {
+            return Err(Error::invalid(
+                format!("spectral EXR {}", self.path.display()),
+                format!("a {tw} x {th} tile at ({x0}, {y0}) does not fit the layers"),
+            ));
+        }
+        for ty in y0 / TILE..(y0 + th).div_ceil(TILE) {
+            for tx in x0 / TILE..(x0 + tw).div_ceil(TILE) {
+                self.fill(tx, ty, (x0, y0, tw, th), layers)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Copy the part of a rectangle of pixels that falls in EXR tile
+    /// (`tx`, `ty`); send the tile to the writer once it is complete.
+    fn fill(
+        &self,
+        tx: usize,
+        ty: usize,
+        (x0, y0, tw, th): (usize, usize, usize, usize),
+        layers: &[&[f32]],
+    ) -> Result<()> {
+        let (w, h) = self.size;
+        let (bx, by) = (tx * TILE, ty * TILE);
+        let (bw, bh) = (TILE.min(w - bx), TILE.min(h - by));
+        let (xa, xb) = (x0.max(bx), (x0 + tw).min(bx + bw));
+        let (ya, yb) = (y0.max(by), (y0 + th).min(by + bh));
+        let tile = ty * self.tiles_x + tx;
+        let complete = {
+            let mut pending = self.pending.lock().unwrap_or_else(|e| e.into_inner());
+            let p = pending.entry(tile).or_insert_with(|| Pending {
+                layers: self
+                    .channel_of
+                    .iter()
+                    .map(|of| vec![0.0; bw * bh * of.len()])
+                    .collect(),
+                missing: bw * bh,
+            });
+            for ((data, values), of) in p.layers.iter_mut().zip(layers).zip(&self.channel_of) {
+                let nb = of.len();
+                for y in ya..yb {
+                    for x in xa..xb {
+                        let src = ((y - y0) * tw + (x - x0)) * nb;
+                        for (b, &c) in of.iter().enumerate() {
+                            data[((y - by) * nb + c) * bw + (x - bx)] = values[src + b];
                         }
                     }
-                    let block = UncompressedBlock {
-                        index: exr::block::BlockIndex {
-                            layer,
-                            pixel_position: Vec2(x0, y0),
-                            pixel_size: Vec2(tw, th),
-                            level: Vec2(0, 0),
-                        },
-                        data,
-                    };
-                    compressor.compress_block(index, block)?;
                 }
+            }
+            p.missing = p.missing.saturating_sub((xb - xa) * (yb - ya));
+            if p.missing == 0 {
+                pending.remove(&tile)
+            } else {
+                None
+            }
+        };
+        let Some(done) = complete else {
+            return Ok(());
+        };
+        let mut chunks = Vec::with_capacity(done.layers.len());
+        for (layer, data) in done.layers.into_iter().enumerate() {
+            let block = UncompressedBlock {
+                index: exr::block::BlockIndex {
+                    layer,
+                    pixel_position: Vec2(bx, by),
+                    pixel_size: Vec2(bw, bh),
+                    level: Vec2(0, 0),
+                },
+                data: data.iter().flat_map(|v| v.to_ne_bytes()).collect(),
+            };
+            let chunk = block
+                .compress_to_chunk(&self.headers)
+                .map_err(|e| self.exr_error(e))?;
+            chunks.push((tile, chunk));
+        }
+        let sent = self
+            .sender
+            .as_ref()
+            .is_some_and(|s| s.send((self.rank[tile], chunks)).is_ok());
+        if sent {
+            Ok(())
+        } else {
+            // The writer thread stopped: `finish` reports why.
+            Err(self.stopped())
+        }
+    }
+
+    fn exr_error(&self, e: exr::error::Error) -> Error {
+        Error::io(&self.path, "write", std::io::Error::other(e.to_string()))
+    }
+
+    /// The writer thread's own error, once it has stopped.
+    fn stopped(&self) -> Error {
+        Error::io(
+            &self.path,
+            "write",
+            std::io::Error::other("the EXR writer stopped"),
+        )
+    }
+
+    /// Wait for every tile to be written, complete the file and rename it
+    /// into place. A pixel never written is an error.
+    pub fn finish(mut self) -> Result<()> {
+        drop(self.sender.take());
+        let thread = self.thread.take().ok_or_else(|| self.stopped())?;
+        let tmp = thread.join().map_err(|_| self.stopped())??;
+        publish(tmp, &self.path)
+    }
+}
+
+impl Drop for ExrWriter {
+    /// An unfinished file is abandoned: the writer thread sees the channel
+    /// close early and stops; its temporary file is removed.
+    fn drop(&mut self) {
+        drop(self.sender.take());
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// The writer thread: write each tile's chunks in the order of their
+/// places (holding those that arrive early), then complete the file.
+fn write_in_order(
+    tmp: tempfile::NamedTempFile,
+    headers: SmallVec<[Header; 3]>,
+    receiver: crossbeam_channel::Receiver<TileChunks>,
+    tiles: usize,
+    path: &Path,
+) -> Result<tempfile::NamedTempFile> {
+    let exr_error =
+        |e: exr::error::Error| Error::io(path, "write", std::io::Error::other(e.to_string()));
+    let mut missing = false;
+    let written = {
+        let out = std::io::BufWriter::new(tmp.as_file());
+        exr::block::write(out, headers, true, |_, writer| {
+            let mut early: BTreeMap<usize, Vec<(usize, Chunk)>> = BTreeMap::new();
+            let mut next = 0;
+            for (place, chunks) in receiver.iter() {
+                early.insert(place, chunks);
+                while let Some(chunks) = early.remove(&next) {
+                    for (index, chunk) in chunks {
+                        writer.write_chunk(index, chunk)?;
+                    }
+                    next += 1;
+                }
+            }
+            if next < tiles {
+                missing = true;
+                return Err(exr::error::Error::Aborted);
             }
             Ok(())
         })
-        .map_err(|e| failure.take().unwrap_or_else(|| exr_error(e)))?;
+    };
+    if missing {
+        return Err(Error::invalid(
+            format!("spectral EXR {}", path.display()),
+            "some pixels were never written",
+        ));
     }
-    publish(tmp, path)
+    written.map_err(exr_error)?;
+    Ok(tmp)
 }
 
 #[cfg(test)]

@@ -37,13 +37,19 @@ fn band_grid(cube: &EnviCube) -> Result<BandGrid> {
 
 /// The spec of a cube derived from `cube`: `samples` x `lines` over
 /// `bands`, its description followed by `note` (if any), its data units.
-fn derived_spec(
-    cube: &EnviCube,
+fn derived_spec(cube: &EnviCube, size: [usize; 2], bands: BandGrid, note: &str) -> CubeSpec {
+    spec_from(cube.description(), cube.data_units(), size, bands, note)
+}
+
+/// The spec of a derived cube from its source's description and units.
+fn spec_from(
+    description: &str,
+    units: Option<&str>,
     [samples, lines]: [usize; 2],
     bands: BandGrid,
     note: &str,
 ) -> CubeSpec {
-    let description = cube.description().replace(['{', '}'], "");
+    let description = description.replace(['{', '}'], "");
     CubeSpec {
         samples,
         lines,
@@ -53,10 +59,7 @@ fn derived_spec(
         } else {
             format!("{description} ({note})")
         },
-        data_units: cube
-            .data_units()
-            .unwrap_or("unknown")
-            .replace(['{', '}'], ""),
+        data_units: units.unwrap_or("unknown").replace(['{', '}'], ""),
     }
 }
 
@@ -247,70 +250,120 @@ pub fn subset(
     writer.finish()
 }
 
+/// Bands of a cube integrated over the bands of a sensor
+/// (`spectral::response`): the sensor bands the cube covers, by wavelength,
+/// each with its cube bands' weights.
+pub struct Resampler {
+    /// The sensor bands made, by wavelength.
+    pub made: Vec<crate::spectral::response::BandWeights>,
+    /// Their grid (the sensor's centres and widths).
+    pub bands: BandGrid,
+}
+
+impl Resampler {
+    /// The sensor bands of `sensor` that `grid` covers. Bands whose
+    /// response the grid's spectral range does not cover are left out;
+    /// none covered is an error, reported against `source`.
+    pub fn new(
+        grid: &BandGrid,
+        sensor: &crate::spectral::response::SpectralResponse,
+        source: &Path,
+    ) -> Result<Resampler> {
+        let mut made = sensor.weights(grid);
+        // The cube's bands rise in wavelength (a panchromatic band is listed last).
+        made.sort_by(|a, b| {
+            let c = |m: &crate::spectral::response::BandWeights| sensor.bands[m.band].centre_nm;
+            c(a).total_cmp(&c(b))
+        });
+        if made.is_empty() {
+            return Err(Error::data(
+                source,
+                None,
+                "wavelength",
+                format!(
+                    "the cube's {:.1}-{:.1} nm cover no band of {} (each needs {} % of its response inside)",
+                    grid.centers_nm()[0],
+                    grid.centers_nm()[grid.len() - 1],
+                    sensor.name,
+                    crate::spectral::response::MIN_COVERAGE * 100.0
+                ),
+            ));
+        }
+        let bands = BandGrid::explicit(
+            made.iter()
+                .map(|m| sensor.bands[m.band].centre_nm as f32)
+                .collect(),
+            made.iter()
+                .map(|m| sensor.bands[m.band].fwhm_nm as f32)
+                .collect(),
+        )?;
+        Ok(Resampler { made, bands })
+    }
+
+    /// `pixels` pixels in the sensor's bands (bands innermost), from
+    /// `value(pixel, cube band)`; sums in f64.
+    pub fn apply(&self, pixels: usize, value: impl Fn(usize, usize) -> f32) -> Vec<f32> {
+        let out_nb = self.made.len();
+        let mut sums = vec![0f64; pixels * out_nb];
+        for (o, m) in self.made.iter().enumerate() {
+            for &(b, weight) in &m.weights {
+                for i in 0..pixels {
+                    sums[i * out_nb + o] += weight * value(i, b) as f64;
+                }
+            }
+        }
+        sums.iter().map(|&v| v as f32).collect()
+    }
+
+    /// The spec of a cube in these bands, from the source cube's
+    /// description and units.
+    pub fn spec(
+        &self,
+        sensor_name: &str,
+        [samples, lines]: [usize; 2],
+        description: &str,
+        units: Option<&str>,
+    ) -> CubeSpec {
+        let note = format!("in the bands of {sensor_name}");
+        spec_from(
+            description,
+            units,
+            [samples, lines],
+            self.bands.clone(),
+            &note,
+        )
+    }
+}
+
 /// `cube` integrated over the bands of `sensor` (`spectral::response`) as a new
 /// cube `dir/NAME.{hdr,bsq}`, one 64 x 64 tile at a time; returns its
-/// files and the sensor bands made, by wavelength. Bands whose response the
-/// cube's spectral range does not cover are left out; none covered is an
-/// error.
+/// files and the sensor bands made, by wavelength ([`Resampler`]).
 pub fn resample(
     cube: &EnviCube,
     sensor: &crate::spectral::response::SpectralResponse,
     dir: &Path,
     name: &str,
 ) -> Result<(CubeFiles, Vec<crate::spectral::response::BandWeights>)> {
-    let grid = band_grid(cube)?;
-    let mut made = sensor.weights(&grid);
-    // The cube's bands rise in wavelength (a panchromatic band is listed last).
-    made.sort_by(|a, b| {
-        let c = |m: &crate::spectral::response::BandWeights| sensor.bands[m.band].centre_nm;
-        c(a).total_cmp(&c(b))
-    });
-    if made.is_empty() {
-        return Err(Error::data(
-            cube.header_path(),
-            None,
-            "wavelength",
-            format!(
-                "the cube's {:.1}-{:.1} nm cover no band of {} (each needs {} % of its response inside)",
-                grid.centers_nm()[0],
-                grid.centers_nm()[grid.len() - 1],
-                sensor.name,
-                crate::spectral::response::MIN_COVERAGE * 100.0
-            ),
-        ));
-    }
-    let bands = BandGrid::explicit(
-        made.iter()
-            .map(|m| sensor.bands[m.band].centre_nm as f32)
-            .collect(),
-        made.iter()
-            .map(|m| sensor.bands[m.band].fwhm_nm as f32)
-            .collect(),
-    )?;
-    let note = format!("in the bands of {}", sensor.name);
-    let spec = derived_spec(cube, [cube.samples(), cube.lines()], bands, &note);
-    let (w, h, nb, out_nb) = (cube.samples(), cube.lines(), cube.bands(), made.len());
+    let resampler = Resampler::new(&band_grid(cube)?, sensor, cube.header_path())?;
+    let (w, h, nb) = (cube.samples(), cube.lines(), cube.bands());
+    let spec = resampler.spec(&sensor.name, [w, h], cube.description(), cube.data_units());
     let writer = EnviWriter::create_with(dir, name, spec, &carried_lines(cube, (0, 0))?)?;
     for ty in (0..h).step_by(TILE) {
         for tx in (0..w).step_by(TILE) {
             let (tw, th) = (TILE.min(w - tx), TILE.min(h - ty));
             let mut bands = vec![Vec::new(); nb];
-            let mut sums = vec![0f64; tw * th * out_nb];
-            for (o, m) in made.iter().enumerate() {
-                for &(b, weight) in &m.weights {
+            for m in &resampler.made {
+                for &(b, _) in &m.weights {
                     if bands[b].is_empty() {
                         bands[b] = cube.window(b, tx, ty, tw, th)?;
                     }
-                    for (i, v) in bands[b].iter().enumerate() {
-                        sums[i * out_nb + o] += weight * *v as f64;
-                    }
                 }
             }
-            let tile: Vec<f32> = sums.iter().map(|&v| v as f32).collect();
+            let tile = resampler.apply(tw * th, |i, b| bands[b][i]);
             writer.write_tile(tx, ty, tw, th, &tile)?;
         }
     }
-    Ok((writer.finish()?, made))
+    Ok((writer.finish()?, resampler.made))
 }
 
 /// One band's statistics over its finite values.

@@ -1,12 +1,13 @@
-//! A render's files: the cube set written tile by tile ([`CubeSet`], the
-//! render's [`TileSink`]), then the quicklook, the spectral EXR, the depth
-//! profiles, the sensor-band cubes, the HTML page and the JSON report, all
-//! staged and published as one set (`publish_run`).
+//! A render's files: the cube set written tile by tile as the render hands
+//! over its tiles ([`CubeSet`], the render's [`TileSink`]: the ENVI cubes,
+//! the spectral EXR and the sensor-band cubes), then the quicklook, the
+//! depth profiles, the HTML page and the JSON report, all staged and
+//! published as one set (`publish_run`).
 //!
-//! Every file is written once, in the staging directory
-//! (`output::set::Staging`); the EXR, the sensor-band cubes and the HTML
-//! read the staged cubes, never a final name, so they always belong to the
-//! same run as the cubes beside them.
+//! Every file is written once, streaming, in the staging directory
+//! (`output::set::Staging`): no output is made by reading another back. The
+//! HTML page reads the staged quicklook and cubes, never a final name, so
+//! it always belongs to the same run as the files beside it.
 //!
 //! Not for: computing values (`render`), the tile files of a part
 //! (`job::distributed::parts`).
@@ -14,6 +15,8 @@
 use super::report::{self, Outputs, RenderTimings, RunReport, SensorSummary};
 use super::{html, units, MapStage, RenderShares};
 use crate::cube::envi::{CubeFiles, CubeSpec, EnviWriter};
+use crate::cube::exr::{ExrLayer, ExrWriter};
+use crate::cube::ops::Resampler;
 use crate::cube::quicklook::write_png;
 use crate::error::{Error, Result};
 use crate::output::set::Staging;
@@ -30,7 +33,28 @@ pub struct CubeSet {
     writer: EnviWriter,
     products: Vec<EnviWriter>,
     stderr: Option<EnviWriter>,
+    exr: ExrWriter,
+    exr_path: PathBuf,
+    sensor: Option<SensorCubes>,
     image: std::sync::Mutex<Vec<f32>>,
+}
+
+/// With `[sensor] response`: the radiance and the product cubes integrated
+/// over that sensor's bands, as `NAME[.product].SENSOR.{hdr,bsq}`, each
+/// tile resampled as it arrives.
+struct SensorCubes {
+    resampler: Resampler,
+    /// Per cube (the radiance, then [`PRODUCTS`]): what it holds and its
+    /// writer.
+    cubes: Vec<(&'static str, EnviWriter)>,
+}
+
+/// A finished sensor-band cube: what it holds, its units and its files.
+#[derive(Clone, Debug)]
+pub struct SensorCubeFiles {
+    pub product: &'static str,
+    pub units: String,
+    pub files: CubeFiles,
 }
 
 /// The files of a finished [`CubeSet`], where they were written.
@@ -43,6 +67,9 @@ pub struct CubeSetFiles {
     pub stderr: Option<CubeFiles>,
     /// The product cubes, in the order of [`PRODUCTS`].
     pub products: Vec<CubeFiles>,
+    /// The sensor-band cubes (radiance, then products), with `[sensor]
+    /// response`.
+    pub sensor: Vec<SensorCubeFiles>,
 }
 
 impl CubeSet {
@@ -95,23 +122,49 @@ impl CubeSet {
             )?),
             None => None,
         };
+        // The spectral OpenEXR: the radiance, its standard error, then the
+        // products, each with the band centres its ENVI header records.
+        let exr_path = dir.join(format!("{}.exr", scene.name));
+        let mut named = vec![("radiance", &writer)];
+        named.extend(stderr.as_ref().map(|s| ("stderr", s)));
+        named.extend(PRODUCTS.iter().map(|p| p.layer).zip(&products));
+        let wavelengths: Vec<Vec<f64>> = named
+            .iter()
+            .map(|(_, w)| w.spec().header_wavelengths_nm())
+            .collect();
+        let layers: Vec<ExrLayer> = named
+            .iter()
+            .zip(&wavelengths)
+            .map(|((name, w), nm)| ExrLayer {
+                name,
+                wavelengths_nm: nm,
+                units: Some(&w.spec().data_units),
+            })
+            .collect();
+        let exr = ExrWriter::create(&exr_path, &layers, (w, h), scene.render.exr_compression)?;
+        let sensor = SensorCubes::create(scene, dir, &writer, &products, &extra)?;
         Ok(CubeSet {
             dir: dir.to_path_buf(),
             writer,
             products,
             stderr,
+            exr,
+            exr_path,
+            sensor,
             image: std::sync::Mutex::new(vec![0f32; w * h * 3]),
         })
     }
 
-    /// Finish the cubes, write the quicklook and the spectral EXR (from
-    /// the cubes just finished).
+    /// Finish the cubes and the EXR, and write the quicklook.
     pub fn finish(self, scene: &Scene) -> Result<CubeSetFiles> {
         let CubeSet {
             dir,
             writer,
             products,
             stderr,
+            exr,
+            exr_path,
+            sensor,
             image,
         } = self;
         let [w, h] = scene.sensor.pixels;
@@ -124,29 +177,18 @@ impl CubeSet {
             .into_iter()
             .map(|p| p.finish())
             .collect::<Result<Vec<_>>>()?;
-        // The spectral OpenEXR: the radiance, its standard error, then the
-        // products.
-        let exr = dir.join(format!("{}.exr", scene.name));
-        let mut layers = vec![("radiance", crate::cube::EnviCube::open(&radiance.hdr)?)];
-        if let Some(se) = &stderr {
-            layers.push(("stderr", crate::cube::EnviCube::open(&se.hdr)?));
-        }
-        for (p, files) in PRODUCTS.iter().zip(&products) {
-            layers.push((p.layer, crate::cube::EnviCube::open(&files.hdr)?));
-        }
-        let named: Vec<(&str, &crate::cube::EnviCube)> =
-            layers.iter().map(|(n, c)| (*n, c)).collect();
-        crate::cube::exr::write_spectral_exr_layers_with(
-            &named,
-            &exr,
-            scene.render.exr_compression,
-        )?;
+        exr.finish()?;
+        let sensor = match sensor {
+            Some(s) => s.finish()?,
+            None => Vec::new(),
+        };
         Ok(CubeSetFiles {
             radiance,
-            exr,
+            exr: exr_path,
             png,
             stderr,
             products,
+            sensor,
         })
     }
 }
@@ -161,6 +203,15 @@ impl TileSink for CubeSet {
         }
         if let Some(se) = &self.stderr {
             se.write_tile(x0, y0, t.w, t.h, &t.errors)?;
+        }
+        let mut layers: Vec<&[f32]> = vec![&t.values];
+        if self.stderr.is_some() {
+            layers.push(&t.errors);
+        }
+        layers.extend(t.products.iter().map(Vec::as_slice));
+        self.exr.write_tile(x0, y0, t.w, t.h, &layers)?;
+        if let Some(sensor) = &self.sensor {
+            sensor.write(t)?;
         }
         let w = self.writer.spec().samples;
         let mut image = self.image.lock().unwrap_or_else(|e| e.into_inner());
@@ -199,42 +250,76 @@ pub fn run_file_names(scene: &Scene) -> Vec<String> {
     names
 }
 
-/// With `[sensor] response`: the radiance and the product cubes integrated
-/// over that sensor's bands (`cube::ops::resample`), as
-/// `NAME[.product].SENSOR.{hdr,bsq}` in `staging`.
-fn sensor_cubes(
-    scene: &Scene,
-    staging: &Staging,
-    files: &CubeSetFiles,
-) -> Result<Vec<report::ProductFiles>> {
-    let Some(sensor) = &scene.sensor.response else {
-        return Ok(Vec::new());
-    };
-    let tag = sensor_tag(&sensor.name);
-    let mut cubes = vec![("radiance", files.radiance.hdr.clone())];
-    cubes.extend(
-        PRODUCTS
-            .iter()
-            .zip(&files.products)
-            .map(|(p, f)| (p.suffix, f.hdr.clone())),
-    );
-    let mut out = Vec::with_capacity(cubes.len());
-    for (product, hdr) in cubes {
-        let cube = crate::cube::EnviCube::open(&hdr)?;
-        let stem = hdr
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let (made, _) =
-            crate::cube::ops::resample(&cube, sensor, staging.dir(), &format!("{stem}.{tag}"))?;
-        out.push(report::ProductFiles {
-            product: product.into(),
-            units: cube.data_units().unwrap_or("unknown").into(),
-            hdr: published(staging, &made.hdr),
-            bsq: published(staging, &made.bsq),
-        });
+impl SensorCubes {
+    /// The sensor-band cubes of `scene` beside `radiance` and `products`
+    /// in `dir`, with the header lines `extra`; `None` without `[sensor]
+    /// response`.
+    fn create(
+        scene: &Scene,
+        dir: &Path,
+        radiance: &EnviWriter,
+        products: &[EnviWriter],
+        extra: &[String],
+    ) -> Result<Option<SensorCubes>> {
+        let Some(sensor) = &scene.sensor.response else {
+            return Ok(None);
+        };
+        let spec = radiance.spec();
+        let grid = crate::spectral::BandGrid::explicit(
+            spec.bands.centers_nm().to_vec(),
+            spec.bands.fwhm_nm().to_vec(),
+        )?;
+        let resampler = Resampler::new(&grid, sensor, &dir.join(format!("{}.hdr", scene.name)))?;
+        let tag = sensor_tag(&sensor.name);
+        let mut sources = vec![("radiance", scene.name.clone(), radiance)];
+        sources.extend(
+            PRODUCTS
+                .iter()
+                .zip(products)
+                .map(|(p, w)| (p.suffix, format!("{}.{}", scene.name, p.suffix), w)),
+        );
+        let cubes = sources
+            .into_iter()
+            .map(|(product, stem, source)| {
+                let s = source.spec();
+                let spec = resampler.spec(
+                    &sensor.name,
+                    [s.samples, s.lines],
+                    &s.description,
+                    Some(&s.data_units),
+                );
+                let writer = EnviWriter::create_with(dir, &format!("{stem}.{tag}"), spec, extra)?;
+                Ok((product, writer))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Some(SensorCubes { resampler, cubes }))
     }
-    Ok(out)
+
+    /// Resample one tile of the radiance and the products.
+    fn write(&self, t: &TileResult) -> Result<()> {
+        let (x0, y0) = (t.i * TILE_PX, t.j * TILE_PX);
+        let sources = std::iter::once(&t.values).chain(&t.products);
+        for ((_, writer), values) in self.cubes.iter().zip(sources) {
+            let nb = values.len() / (t.w * t.h);
+            let tile = self.resampler.apply(t.w * t.h, |i, b| values[i * nb + b]);
+            writer.write_tile(x0, y0, t.w, t.h, &tile)?;
+        }
+        Ok(())
+    }
+
+    fn finish(self) -> Result<Vec<SensorCubeFiles>> {
+        self.cubes
+            .into_iter()
+            .map(|(product, writer)| {
+                let units = writer.spec().data_units.clone();
+                Ok(SensorCubeFiles {
+                    product,
+                    units,
+                    files: writer.finish()?,
+                })
+            })
+            .collect()
+    }
 }
 
 /// How a sensor's cubes are tagged: its name, or a response file's stem.
@@ -291,7 +376,16 @@ pub(super) fn publish_run(
             staging.final_path(&k).display().to_string(),
         ));
     }
-    let sensor_cubes = sensor_cubes(scene, &staging, &files)?;
+    let sensor_cubes = files
+        .sensor
+        .iter()
+        .map(|c| report::ProductFiles {
+            product: c.product.into(),
+            units: c.units.clone(),
+            hdr: published(&staging, &c.files.hdr),
+            bsq: published(&staging, &c.files.bsq),
+        })
+        .collect();
     let report = RunReport {
         integrator,
         Ed_above_surface: ed_above,

@@ -20,8 +20,7 @@
 //! is read by final gathering (`RayMarcher::gather`), the floor by its
 //! surface photon estimate.
 
-use super::air_sea::{from_air_parts, sky_radiance};
-use super::camera::CameraRay;
+use super::air_sea::sky_radiance;
 use super::sun::SunBeam;
 use crate::error::Result;
 use crate::estimate::estimator::{Estimator, Scratch};
@@ -552,27 +551,5 @@ impl<'a> RayMarcher<'a> {
             }
         }
         Ok(())
-    }
-
-    /// Radiance per band reaching a sensor along `ray` (in air, toward the
-    /// water): the surface as `air_sea::from_air` treats it, the march
-    /// below it; the water-leaving part into `water`.
-    pub fn camera(
-        &self,
-        ray: CameraRay,
-        rng: &mut Pcg32,
-        scratch: &mut Scratch,
-        out: &mut [f64],
-        water: &mut [f64],
-    ) -> Result<()> {
-        from_air_parts(
-            self.scene,
-            &self.sky_l,
-            ray,
-            rng,
-            out,
-            water,
-            &mut |p, dir, rng, out| self.march(p, dir, rng, scratch, out),
-        )
     }
 }

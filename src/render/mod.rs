@@ -41,6 +41,7 @@ use crate::rng::{mix64, Pcg32};
 use crate::scene::settings::PATH_RADIOMETER_PATHS_PER_SPP;
 use crate::scene::{Radiometer, Scene};
 use crate::store::PhotonQuery;
+use air_sea::from_air_parts;
 use glam::Vec3;
 use march::RayMarcher;
 use moments::Moments;
@@ -136,7 +137,15 @@ impl Integrator for RayMarcher<'_> {
         water: &mut [f64],
     ) -> Result<()> {
         with_scratch(self.bands(), |s| {
-            RayMarcher::camera(self, ray, rng, s, out, water)
+            from_air_parts(
+                self.scene,
+                &self.sky_l,
+                ray,
+                rng,
+                out,
+                water,
+                &mut |p, d, rng, out| self.march(p, d, rng, s, out),
+            )
         })
     }
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {
@@ -174,7 +183,18 @@ impl Integrator for PathTracer<'_> {
         water: &mut [f64],
     ) -> Result<()> {
         with_path_scratch(out.len(), |s| {
-            PathTracer::camera(self, ray, rng, s, out, water)
+            from_air_parts(
+                self.scene,
+                &self.sky_l,
+                ray,
+                rng,
+                out,
+                water,
+                &mut |p, d, rng, out| {
+                    self.in_water(p, d, rng, s, out);
+                    Ok(())
+                },
+            )
         })
     }
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()> {

@@ -72,11 +72,9 @@
 //!
 //! Not for: speed at low noise (the photon map is for that); polarisation.
 
-use super::air_sea::{from_air_parts, sky_radiance};
-use super::camera::CameraRay;
+use super::air_sea::sky_radiance;
 use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
-use crate::error::Result;
 use crate::optics::iop::Iop;
 use crate::optics::phase::{cosine_hemisphere, Mixture};
 use crate::optics::surface::{fresnel_reflectance, refract};
@@ -97,7 +95,7 @@ const GUIDE_FRACTION: f64 = 0.3;
 /// The path integrator of one scene.
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
-    sky_l: Vec<f64>,
+    pub(super) sky_l: Vec<f64>,
     /// Horizontal irradiance of the sun above the surface per band.
     sun_h: Vec<f64>,
     /// Extinction majorant over every band and the whole water (1/m).
@@ -173,30 +171,6 @@ impl<'a> PathTracer<'a> {
             sun: SunBeam::new(scene),
             uniform,
         }
-    }
-
-    /// Radiance per band reaching a sensor along `ray` (in air), and the
-    /// water-leaving part of it into `water`.
-    pub fn camera(
-        &self,
-        ray: CameraRay,
-        rng: &mut Pcg32,
-        scratch: &mut PathScratch,
-        out: &mut [f64],
-        water: &mut [f64],
-    ) -> Result<()> {
-        from_air_parts(
-            self.scene,
-            &self.sky_l,
-            ray,
-            rng,
-            out,
-            water,
-            &mut |p, dir, rng, out| {
-                self.in_water(p, dir, rng, scratch, out);
-                Ok(())
-            },
-        )
     }
 
     /// For a path direction `next` (in water, pointing up): the direct

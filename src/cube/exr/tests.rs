@@ -209,3 +209,114 @@ fn compressions_are_lossless() {
         "sizes {sizes:?}"
     );
 }
+
+/// Two layers of a 150 x 70 image (3 x 2 EXR tiles) streamed as 16 x 16
+/// tiles from four threads in reverse order: the bytes equal those of
+/// the same pixels written by one thread in order, and every value reads
+/// back under its layer and band.
+#[test]
+fn tiles_in_any_order_from_any_thread_give_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (150usize, 70usize);
+    let nm = [450.0, 550.0, 650.0];
+    let layers = [
+        ExrLayer {
+            name: "radiance",
+            wavelengths_nm: &nm,
+            units: None,
+        },
+        ExrLayer {
+            name: "stderr",
+            wavelengths_nm: &nm,
+            units: None,
+        },
+    ];
+    let value = |l: usize, x: usize, y: usize, b: usize| {
+        (l * 100_000 + y * 1000 + x) as f32 + 0.25 * b as f32
+    };
+    let tiles: Vec<(usize, usize)> = (0..h.div_ceil(16))
+        .flat_map(|j| (0..w.div_ceil(16)).map(move |i| (i * 16, j * 16)))
+        .collect();
+    let write = |path: &std::path::Path, order: &[(usize, usize)], threads: usize| {
+        let writer = ExrWriter::create(path, &layers, (w, h), ExrCompression::Zip).unwrap();
+        let chunk = order.len().div_ceil(threads);
+        std::thread::scope(|s| {
+            for part in order.chunks(chunk) {
+                let writer = &writer;
+                s.spawn(move || {
+                    for &(x0, y0) in part {
+                        let (tw, th) = (16.min(w - x0), 16.min(h - y0));
+                        let values: Vec<Vec<f32>> = (0..2)
+                            .map(|l| {
+                                (0..th)
+                                    .flat_map(|y| {
+                                        (0..tw).flat_map(move |x| {
+                                            (0..3).map(move |b| value(l, x0 + x, y0 + y, b))
+                                        })
+                                    })
+                                    .collect()
+                            })
+                            .collect();
+                        writer
+                            .write_tile(x0, y0, tw, th, &[&values[0], &values[1]])
+                            .unwrap();
+                    }
+                });
+            }
+        });
+        writer.finish().unwrap();
+        std::fs::read(path).unwrap()
+    };
+    let in_order = write(&dir.path().join("a.exr"), &tiles, 1);
+    let reversed: Vec<_> = tiles.iter().rev().copied().collect();
+    let shuffled = write(&dir.path().join("b.exr"), &reversed, 4);
+    assert!(in_order == shuffled, "the bytes depend on the write order");
+
+    let image = read_all_flat_layers_from_file(dir.path().join("b.exr")).unwrap();
+    assert_eq!(image.layer_data.len(), 2);
+    for (l, layer) in image.layer_data.iter().enumerate() {
+        for (b, &c) in nm.iter().enumerate() {
+            let name = Text::new_or_none(channel_name(c)).unwrap();
+            let ch = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|ch| ch.name == name)
+                .unwrap();
+            let FlatSamples::F32(s) = &ch.sample_data else {
+                panic!("not f32")
+            };
+            for y in 0..h {
+                for x in 0..w {
+                    assert_eq!(
+                        s[y * w + x],
+                        value(l, x, y, b),
+                        "layer {l} band {b} at ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A file with pixels never written is refused at `finish`, naming the
+/// file, and leaves nothing under its name or a temporary one; a tile
+/// that does not fit is refused as it is written.
+#[test]
+fn unwritten_pixels_and_misfit_tiles_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("part.exr");
+    let nm = [500.0];
+    let layer = ExrLayer {
+        name: "radiance",
+        wavelengths_nm: &nm,
+        units: None,
+    };
+    let writer = ExrWriter::create(&path, &[layer], (100, 10), ExrCompression::None).unwrap();
+    writer.write_tile(0, 0, 64, 10, &[&[1.0; 640]]).unwrap();
+    assert!(writer.write_tile(90, 0, 16, 10, &[&[1.0; 160]]).is_err());
+    assert!(writer.write_tile(64, 0, 36, 10, &[&[1.0; 10]]).is_err());
+    let e = writer.finish().unwrap_err().to_string();
+    assert!(e.contains("part.exr") && e.contains("never written"), "{e}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

@@ -92,10 +92,23 @@ pub(super) fn sensor_and_radiometers(
                 }
                 _ => name.clone(),
             };
-            Some(
-                crate::spectral::response::SpectralResponse::named(&name)
-                    .map_err(|e| ctx.err(&sk("response"), e.to_string()))?,
-            )
+            let response = crate::spectral::response::SpectralResponse::named(&name)
+                .map_err(|e| ctx.err(&sk("response"), e.to_string()))?;
+            // Refused now, not after the render that would resample into it.
+            if response.weights(&ctx.bands).is_empty() {
+                let c = ctx.bands.centers_nm();
+                return Err(ctx.err(
+                    &sk("response"),
+                    format!(
+                        "the scene's bands ({:.1}-{:.1} nm) cover no band of {} (each needs {} % of its response inside)",
+                        c[0],
+                        c[c.len() - 1],
+                        response.name,
+                        crate::spectral::response::MIN_COVERAGE * 100.0
+                    ),
+                ));
+            }
+            Some(response)
         }
     };
     let sensor = Sensor {
