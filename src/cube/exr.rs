@@ -12,17 +12,23 @@
 //! multi-part file): the renderer adds the standard error ("stderr") to
 //! the radiance ("radiance") when it has one.
 //!
-//! The file is tiled (64 x 64 pixels) and written tile by tile as the
+//! The file is tiled in 16 x 16 pixel tiles, the renderer's own
+//! (`render::TILE_PX`), or 32 x 32 with PIZ, whose wavelet gains nothing
+//! on 16 x 16 blocks ([`tile_px`]); it is written tile by tile as the
 //! pixels arrive ([`ExrWriter`]): a renderer hands it each finished image
 //! tile from any thread, a cube tool the windows of an ENVI cube. A tile
 //! complete in every layer is compressed by the thread that completed it
 //! and written by one writer thread in a fixed order (the tiles' Morton
-//! order, layer by layer within a tile; the header's line order is
-//! "unspecified", which the format allows for tiled files), so the bytes
-//! are a pure function of the pixels whatever the threads' timing. Memory
-//! holds the tiles in progress: one at a time for a cube tool, about one
-//! per rendering thread for a renderer (2 MiB a layer at 128 bands). The
-//! file is written under a temporary name and renamed when complete.
+//! order, the renderer's, layer by layer within a tile; the header's line
+//! order is "unspecified", which the format allows for tiled files), so
+//! the bytes are a pure function of the pixels whatever the threads'
+//! timing. Memory holds the tiles in progress and those finished ahead of
+//! a slower one: the renderer hands image tiles out at most
+//! `render::dispatch_window` past the oldest unfinished one, which bounds
+//! them (128 KiB a layer each at 128 bands and 16 pixels). Small tiles keep
+//! that small at a small cost in ZIP's ratio (a rendered 40 x 36 pixel,
+//! 24-band cube set: 677 kB in 16-pixel tiles, 646 kB in 64-pixel ones).
+//! The file is //! written under a temporary name and renamed when complete.
 
 use super::envi::EnviCube;
 use crate::error::{Error, Result};
@@ -43,8 +49,19 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::thread::JoinHandle;
 
-/// Tile side (pixels).
-pub const TILE: usize = 64;
+/// Tile side (pixels) with ZIP or no compression: the renderer's tile
+/// (`render::TILE_PX`, which asserts that the two agree).
+pub const TILE: usize = 16;
+
+/// Tile side (pixels) for `compression`: [`TILE`], or twice that with PIZ
+/// (aligned groups of 2 x 2 image tiles, which finish in the same Morton
+/// order as the image tiles).
+pub fn tile_px(compression: ExrCompression) -> usize {
+    match compression {
+        ExrCompression::Piz => 2 * TILE,
+        ExrCompression::None | ExrCompression::Zip => TILE,
+    }
+}
 
 /// The spectral-layout channel name of a band centred at `nm`.
 pub fn channel_name(nm: f64) -> String {
@@ -85,6 +102,7 @@ fn layer_header(
     (w, h): (usize, usize),
     compression: ExrCompression,
 ) -> Result<(Header, Vec<usize>)> {
+    let tile = tile_px(compression);
     let nb = layer.wavelengths_nm.len();
     let invalid = |what: String| Error::invalid("spectral EXR", what);
     if w == 0 || h == 0 || nb == 0 {
@@ -117,7 +135,7 @@ fn layer_header(
             ExrCompression::Piz => Compression::PIZ,
         },
         BlockDescription::Tiles(TileDescription {
-            tile_size: Vec2(TILE, TILE),
+            tile_size: Vec2(tile, tile),
             level_mode: LevelMode::Singular,
             rounding_mode: RoundingMode::Down,
         }),
@@ -172,8 +190,9 @@ pub fn write_spectral_exr_layers_with(
         .map(|(name, cube)| ExrLayer::of_cube(name, cube))
         .collect();
     let writer = ExrWriter::create(path, &described, (w, h), compression)?;
+    let tile = tile_px(compression);
     for (x0, y0) in writer.tile_origins() {
-        let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+        let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
         let values = layers
             .iter()
             .map(|(_, cube)| pixels_of(cube, (x0, y0, tw, th)))
@@ -196,6 +215,9 @@ fn pixels_of(cube: &EnviCube, (x0, y0, tw, th): (usize, usize, usize, usize)) ->
     Ok(out)
 }
 
+/// Complete tiles waiting for the writer thread at most.
+pub const CHANNEL_TILES: usize = 2;
+
 /// The chunks of one complete EXR tile (each with its index in its
 /// layer's offset table), tagged with the tile's place in the write order.
 type TileChunks = (usize, Vec<(usize, Chunk)>);
@@ -216,6 +238,8 @@ pub struct ExrWriter {
     /// Per layer, the channel of each band.
     channel_of: Vec<Vec<usize>>,
     size: (usize, usize),
+    /// Tile side (pixels).
+    tile: usize,
     tiles_x: usize,
     /// Per EXR tile (row-major), its place in the write order.
     rank: Vec<usize>,
@@ -247,7 +271,8 @@ impl ExrWriter {
             headers.push(header);
             channel_of.push(of);
         }
-        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let tile = tile_px(compression);
+        let (tiles_x, tiles_y) = (w.div_ceil(tile), h.div_ceil(tile));
         let mut order: Vec<(u128, usize)> = (0..tiles_y)
             .flat_map(|ty| {
                 (0..tiles_x).map(move |tx| {
@@ -262,7 +287,8 @@ impl ExrWriter {
             rank[tile] = place;
         }
         let tmp = temp_beside(path)?;
-        let (sender, receiver) = crossbeam_channel::unbounded::<TileChunks>();
+        // Bounded: a thread whose tile is ready waits while the writer is behind.
+        let (sender, receiver) = crossbeam_channel::bounded::<TileChunks>(CHANNEL_TILES);
         let tiles = order.len();
         let file_headers = headers.clone();
         let thread_path = path.to_path_buf();
@@ -275,6 +301,7 @@ impl ExrWriter {
             headers: headers.into_vec(),
             channel_of,
             size: (w, h),
+            tile,
             tiles_x,
             rank,
             pending: Mutex::new(HashMap::new()),
@@ -288,7 +315,10 @@ impl ExrWriter {
     pub fn tile_origins(&self) -> Vec<(usize, usize)> {
         let mut by_rank = vec![(0, 0); self.rank.len()];
         for (tile, &place) in self.rank.iter().enumerate() {
-            by_rank[place] = ((tile % self.tiles_x) * TILE, (tile / self.tiles_x) * TILE);
+            by_rank[place] = (
+                (tile % self.tiles_x) * self.tile,
+                (tile / self.tiles_x) * self.tile,
+            );
         }
         by_rank
     }
@@ -316,8 +346,9 @@ impl ExrWriter {
                 format!("a {tw} x {th} tile at ({x0}, {y0}) does not fit the layers"),
             ));
         }
-        for ty in y0 / TILE..(y0 + th).div_ceil(TILE) {
-            for tx in x0 / TILE..(x0 + tw).div_ceil(TILE) {
+        let t = self.tile;
+        for ty in y0 / t..(y0 + th).div_ceil(t) {
+            for tx in x0 / t..(x0 + tw).div_ceil(t) {
                 self.fill(tx, ty, (x0, y0, tw, th), layers)?;
             }
         }
@@ -334,8 +365,8 @@ impl ExrWriter {
         layers: &[&[f32]],
     ) -> Result<()> {
         let (w, h) = self.size;
-        let (bx, by) = (tx * TILE, ty * TILE);
-        let (bw, bh) = (TILE.min(w - bx), TILE.min(h - by));
+        let (bx, by) = (tx * self.tile, ty * self.tile);
+        let (bw, bh) = (self.tile.min(w - bx), self.tile.min(h - by));
         let (xa, xb) = (x0.max(bx), (x0 + tw).min(bx + bw));
         let (ya, yb) = (y0.max(by), (y0 + th).min(by + bh));
         let tile = ty * self.tiles_x + tx;

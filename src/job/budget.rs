@@ -12,8 +12,13 @@
 //! - the geometry (BVH and triangle tables), which lives through the run;
 //! - the image-sized buffers: the quicklook's RGB image and the RGB tiles
 //!   collected for it (2 x 12 bytes per pixel);
-//! - the spectral OpenEXR conversion: one 64 x 64 tile of every band, held
-//!   twice (the tile and the encoder's block);
+//! - the spectral OpenEXR, written as tiles finish: its tiles
+//!   (`cube::exr::tile_px`) of every band of every layer (radiance,
+//!   standard error, products) in progress or finished ahead of a slower
+//!   one (those meeting the `render::dispatch_window` image tiles past the
+//!   oldest unfinished one, one more at each end), those waiting for the
+//!   writer (`cube::exr::CHANNEL_TILES`), and per worker the chunks of one
+//!   being compressed; no more than the image has;
 //! - per worker: one 16 x 16 image tile of every band (f32), the
 //!   estimator's neighbour lists (two of `k_expanded` neighbours of 36
 //!   bytes) and the query's packed candidates (28 bytes each), and three
@@ -43,9 +48,6 @@ const MIB: u64 = 1 << 20;
 
 /// Process baseline and per-thread allocator overhead (see the module notes).
 pub const RUNTIME_RESERVE: u64 = 4 * MIB;
-
-/// Side of the tiles the EXR conversion holds (pixels).
-const EXR_TILE_PX: u64 = 64;
 
 /// A run's memory budget in bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,12 +119,20 @@ impl MemoryBudget {
         let nb = scene.bands.len() as u64;
         let [w, h] = scene.sensor.pixels.map(|p| p as u64);
         let image = 2 * 12 * w * h;
-        let exr = 2 * EXR_TILE_PX * EXR_TILE_PX * nb * 4;
         let tile = (crate::render::TILE_PX * crate::render::TILE_PX) as u64 * nb * 4;
         let k = scene.estimate.k_expanded.max(scene.estimate.k) as u64;
         let neighbours = k * (2 * 36 + 28);
         let sums = 3 * nb * 16;
         let workers = crate::parallel::workers(threads) as u64;
+        let layers = 2 + crate::render::PRODUCTS.len() as u64;
+        let side = crate::cube::exr::tile_px(scene.render.exr_compression) as u64;
+        let per_exr_tile = (side / crate::render::TILE_PX as u64).pow(2);
+        let window = crate::render::dispatch_window(workers as usize) as u64;
+        let exr_tiles =
+            (window.div_ceil(per_exr_tile) + 2 + crate::cube::exr::CHANNEL_TILES as u64 + workers)
+                .min(w.div_ceil(side) * h.div_ceil(side));
+        let exr_px = side * side;
+        let exr = exr_tiles * layers * exr_px * nb * 4;
         RUNTIME_RESERVE
             + scene.geometry.heap_bytes()
             + image

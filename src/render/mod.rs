@@ -51,6 +51,9 @@ use std::cell::RefCell;
 
 /// Side of an image tile in pixels.
 pub const TILE_PX: usize = 16;
+// A spectral EXR tile is 2 x 2 image tiles, aligned, so tiles finishing in
+// their Morton order finish the EXR's tiles in theirs.
+const _: () = assert!(TILE_PX == crate::cube::exr::TILE);
 /// Samples (jittered positions within 0.5 m) per radiometer reading.
 pub const RADIOMETER_SAMPLES: u64 = 256;
 
@@ -450,6 +453,79 @@ pub fn render_with(
     read_radiometers(scene, light, threads)
 }
 
+/// How many tiles past the oldest unfinished one may be handed out with
+/// `workers` rendering: a sink that writes in a fixed order (the spectral
+/// EXR) holds at most this many finished tiles while one is slow. Two
+/// more than the workers keeps them busy past a tile twice as slow as the
+/// others.
+pub fn dispatch_window(workers: usize) -> usize {
+    workers.max(1) + 2
+}
+
+/// Tile indices handed out in order to the rendering threads, never more
+/// than `window` past the oldest unfinished one (a thread asking for more
+/// waits for it).
+struct Dispatch {
+    state: std::sync::Mutex<DispatchState>,
+    ready: std::sync::Condvar,
+    window: usize,
+}
+
+struct DispatchState {
+    next: usize,
+    oldest: usize,
+    done: Vec<bool>,
+    stopped: bool,
+}
+
+impl Dispatch {
+    fn new(tiles: usize, window: usize) -> Dispatch {
+        Dispatch {
+            state: std::sync::Mutex::new(DispatchState {
+                next: 0,
+                oldest: 0,
+                done: vec![false; tiles],
+                stopped: false,
+            }),
+            ready: std::sync::Condvar::new(),
+            window: window.max(1),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, DispatchState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The next tile, or `None` once all are handed out or a thread failed.
+    fn take(&self) -> Option<usize> {
+        let mut s = self.lock();
+        loop {
+            if s.stopped || s.next >= s.done.len() {
+                return None;
+            }
+            if s.next < s.oldest + self.window {
+                s.next += 1;
+                return Some(s.next - 1);
+            }
+            s = self.ready.wait(s).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    fn finish(&self, k: usize) {
+        let mut s = self.lock();
+        s.done[k] = true;
+        while s.oldest < s.done.len() && s.done[s.oldest] {
+            s.oldest += 1;
+        }
+        self.ready.notify_all();
+    }
+
+    fn stop(&self) {
+        self.lock().stopped = true;
+        self.ready.notify_all();
+    }
+}
+
 /// Render the image tiles `tiles` of `scene` with `light` into `sink`, in
 /// parallel on `threads`.
 pub fn render_tiles(
@@ -463,14 +539,21 @@ pub fn render_tiles(
     let pool = crate::parallel::pool(threads)?;
     let quicklook = Quicklook::new(&scene.bands);
     progress.stage("render tiles", tiles.len() as u64);
-    pool.install(|| {
-        tiles.par_iter().try_for_each(|&tile| -> Result<()> {
-            let t = render_tile(scene, light, tile, &quicklook)?;
-            sink.write(&t)?;
+    let dispatch = Dispatch::new(tiles.len(), dispatch_window(pool.current_num_threads()));
+    // One loop per pool thread, each taking the next tile in order.
+    let results = pool.broadcast(|_| -> Result<()> {
+        while let Some(k) = dispatch.take() {
+            let step = render_tile(scene, light, tiles[k], &quicklook).and_then(|t| sink.write(&t));
+            if let Err(e) = step {
+                dispatch.stop();
+                return Err(e);
+            }
             progress.advance(1);
-            Ok(())
-        })
-    })?;
+            dispatch.finish(k);
+        }
+        Ok(())
+    });
+    results.into_iter().collect::<Result<()>>()?;
     progress.finish();
     Ok(())
 }

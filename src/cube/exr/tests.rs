@@ -210,10 +210,11 @@ fn compressions_are_lossless() {
     );
 }
 
-/// Two layers of a 150 x 70 image (3 x 2 EXR tiles) streamed as 16 x 16
-/// tiles from four threads in reverse order: the bytes equal those of
-/// the same pixels written by one thread in order, and every value reads
-/// back under its layer and band.
+/// Two layers of a 150 x 70 image streamed as 16 x 16 tiles from four
+/// threads in reverse order, with ZIP (16-pixel EXR tiles) and PIZ (32,
+/// filled by four image tiles each): the bytes equal those of the same
+/// pixels written by one thread in order, and every value reads back
+/// under its layer and band.
 #[test]
 fn tiles_in_any_order_from_any_thread_give_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
@@ -237,8 +238,8 @@ fn tiles_in_any_order_from_any_thread_give_the_same_bytes() {
     let tiles: Vec<(usize, usize)> = (0..h.div_ceil(16))
         .flat_map(|j| (0..w.div_ceil(16)).map(move |i| (i * 16, j * 16)))
         .collect();
-    let write = |path: &std::path::Path, order: &[(usize, usize)], threads: usize| {
-        let writer = ExrWriter::create(path, &layers, (w, h), ExrCompression::Zip).unwrap();
+    let write = |path: &std::path::Path, order: &[(usize, usize)], threads: usize, c| {
+        let writer = ExrWriter::create(path, &layers, (w, h), c).unwrap();
         let chunk = order.len().div_ceil(threads);
         std::thread::scope(|s| {
             for part in order.chunks(chunk) {
@@ -267,32 +268,34 @@ fn tiles_in_any_order_from_any_thread_give_the_same_bytes() {
         writer.finish().unwrap();
         std::fs::read(path).unwrap()
     };
-    let in_order = write(&dir.path().join("a.exr"), &tiles, 1);
-    let reversed: Vec<_> = tiles.iter().rev().copied().collect();
-    let shuffled = write(&dir.path().join("b.exr"), &reversed, 4);
-    assert!(in_order == shuffled, "the bytes depend on the write order");
+    for c in [ExrCompression::Zip, ExrCompression::Piz] {
+        let in_order = write(&dir.path().join("a.exr"), &tiles, 1, c);
+        let reversed: Vec<_> = tiles.iter().rev().copied().collect();
+        let shuffled = write(&dir.path().join("b.exr"), &reversed, 4, c);
+        assert!(
+            in_order == shuffled,
+            "{c:?}: the bytes depend on the write order"
+        );
 
-    let image = read_all_flat_layers_from_file(dir.path().join("b.exr")).unwrap();
-    assert_eq!(image.layer_data.len(), 2);
-    for (l, layer) in image.layer_data.iter().enumerate() {
-        for (b, &c) in nm.iter().enumerate() {
-            let name = Text::new_or_none(channel_name(c)).unwrap();
-            let ch = layer
-                .channel_data
-                .list
-                .iter()
-                .find(|ch| ch.name == name)
-                .unwrap();
-            let FlatSamples::F32(s) = &ch.sample_data else {
-                panic!("not f32")
-            };
-            for y in 0..h {
-                for x in 0..w {
-                    assert_eq!(
-                        s[y * w + x],
-                        value(l, x, y, b),
-                        "layer {l} band {b} at ({x}, {y})"
-                    );
+        let image = read_all_flat_layers_from_file(dir.path().join("b.exr")).unwrap();
+        assert_eq!(image.layer_data.len(), 2);
+        for (l, layer) in image.layer_data.iter().enumerate() {
+            for (b, &nm) in nm.iter().enumerate() {
+                let name = Text::new_or_none(channel_name(nm)).unwrap();
+                let ch = layer
+                    .channel_data
+                    .list
+                    .iter()
+                    .find(|ch| ch.name == name)
+                    .unwrap();
+                let FlatSamples::F32(s) = &ch.sample_data else {
+                    panic!("not f32")
+                };
+                for y in 0..h {
+                    for x in 0..w {
+                        let want = value(l, x, y, b);
+                        assert_eq!(s[y * w + x], want, "{c:?} layer {l} band {b} at ({x}, {y})");
+                    }
                 }
             }
         }
