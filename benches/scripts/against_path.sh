@@ -11,88 +11,11 @@ spp=${3:-1024}
 mkdir -p "$out"
 cargo build --release --quiet
 bin=target/release/littoral
-base() {
-cat <<TOML
-name = "$1"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 8
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[sky]
-radiance = 0.02
-[domain]
-size_m = [40.0, 40.0]
-[photons]
-count = $photons
-[sensor]
-pixels = [1, 1]
-[estimate]
-max_radius_m = 2.0
-step_m = 0.25
-TOML
-}
-radiometers() {
-  for d in "$@"; do
-    printf '[[radiometer]]\ndepth_m = %s\nview = "nadir"\nposition_m = [20.0, 20.0]\n' "$d"
-  done
-}
-write() { # name, extra TOML, radiometer depths...
-  local name=$1 extra=$2; shift 2
-  { base "$name"; printf '%s\n' "$extra"; radiometers "$@"; } > "$out/$name.toml"
-}
-write deep '[water]
-chl = 1.0
-cdom_440 = 0.05' 1.0 3.0 -1.0
-write shallow '[water]
-chl = 1.0
-cdom_440 = 0.05
-[bottom]
-depth_m = 4.0
-reflectance = "sand"' 1.0 3.9 -1.0
-write layered '[water]
-chl = 0.5
-cdom_440 = 0.05
-[[water.layer]]
-top_m = 2.0
-bottom_m = 4.0
-chl = 8.0
-cdom_440 = 0.2
-nap_440 = 0.1
-[bottom]
-depth_m = 8.0
-reflectance = 0.2' 1.0 3.0 -1.0
-write target '[water]
-chl = 1.0
-cdom_440 = 0.05
-[bottom]
-depth_m = 6.0
-reflectance = 0.1
-[[target]]
-kind = "panel"
-center_m = [20.0, 20.0, -3.0]
-size_m = [4.0, 4.0]
-reflectance = 0.5' 1.0 2.5 -1.0
-write rough '[surface]
-kind = "cox-munk"
-wind_speed = 8.0
-[water]
-chl = 1.0
-cdom_440 = 0.05
-[bottom]
-depth_m = 5.0
-reflectance = "sand"' 1.0 4.0 -1.0
-write near_floor '[water]
-chl = 1.0
-cdom_440 = 0.05
-[bottom]
-depth_m = 3.0
-reflectance = 0.3' 2.9999 2.99 1.5
+# The scenes are tests/scenes/against_path/, shared with the test.
+scenes=tests/scenes/against_path
 for f in deep shallow layered target rough near_floor; do
-  "$bin" render "$out/$f.toml" --out "$out/$f-pm" --quiet
-  "$bin" render "$out/$f.toml" --out "$out/$f-path" --integrator path --spp "$spp" --quiet
+  "$bin" render "$scenes/$f.toml" --out "$out/$f-pm" --photons "$photons" --quiet
+  "$bin" render "$scenes/$f.toml" --out "$out/$f-path" --integrator path --spp "$spp" --quiet
   python3 - "$out/$f-pm/$f.json" "$out/$f-path/$f.json" "$f" <<'PY'
 import json, sys
 pm, pa, name = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), sys.argv[3]

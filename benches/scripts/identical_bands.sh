@@ -10,29 +10,9 @@ mkdir -p "$out"
 cargo build --release --quiet
 bin=target/release/littoral
 scene="$out/ident.toml"
-cat > "$scene" <<'TOML'
-name = "ident"
-[spectral]
-start_nm = 400.0
-end_nm = 700.0
-bands = 128
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [60.0, 60.0]
-[water]
-iop = { a = 0.1, b = 0.4 }
-phase = { kind = "fournier-forand", bb_ratio = 0.0183 }
-[photons]
-count = 4000000
-[sensor]
-pixels = [48, 48]
-gsd_m = 0.5
-[estimate]
-max_radius_m = 3.0
-step_m = 0.75
-TOML
+"$bin" scene set tests/scenes/identical_bands.toml spectral.start_nm=400.0 spectral.end_nm=700.0 \
+  spectral.bands=128 'domain.size_m=[60.0, 60.0]' photons.count=4000000 'sensor.pixels=[48, 48]' \
+  sensor.gsd_m=0.5 > "$scene"
 spread() {
 python3 - "$1" <<'PY'
 import sys, re, numpy as np

@@ -16,9 +16,9 @@ spp=${3:-256}
 gather=${4:-32}
 wind=${5:-5}
 if [ "$wind" = 0 ]; then
-  surface='kind = "flat"'
+  surface=(surface.kind='"flat"')
 else
-  surface=$(printf 'kind = "cox-munk"\nwind_speed = %s' "$wind")
+  surface=(surface.kind='"cox-munk"' "surface.wind_speed=$wind")
 fi
 mkdir -p "$out"
 cargo build --release --quiet
@@ -32,49 +32,10 @@ for size in 0.5 1 2 4; do
     name="box-${size}m-${depth}m"
     floor=$(python3 -c "print($depth + 0.5)")
     centre=$(python3 -c "print(-($depth + 0.25))")
-    cat > "$out/$name.toml" <<TOML
-name = "$name"
-[spectral]
-start_nm = 400.0
-end_nm = 720.0
-bands = 32
-out_of_range = "clamp"
-[sun]
-zenith_deg = 30.0
-spectrum = "astm-g173-direct"
-[sky]
-spectrum = "astm-g173-diffuse"
-[surface]
-$surface
-[domain]
-size_m = [$domain.0, $domain.0]
-[water]
-chl = 2.0
-cdom_440 = 0.05
-nap_440 = 0.02
-[bottom]
-depth_m = $floor
-reflectance = "sand"
-[[target]]
-kind = "box"
-center_m = [20.0, 20.0, $centre]
-size_m = [$size, $size, 0.5]
-reflectance = 0.5
-[photons]
-count = $photons
-[sensor]
-pixels = [1, 1]
-[estimate]
-gather_rays = $gather
-[[radiometer]]
-depth_m = -1.0
-view = "nadir"
-position_m = [20.0, 20.0]
-[[radiometer]]
-depth_m = -1.0
-view = "nadir"
-position_m = [28.0, 20.0]
-TOML
+    "$bin" scene set tests/scenes/box.toml "name=\"$name\"" "${surface[@]}" \
+      "domain.size_m=[$domain.0, $domain.0]" "bottom.depth_m=$floor" \
+      "target=[{ kind = \"box\", center_m = [20.0, 20.0, $centre], size_m = [$size, $size, 0.5], reflectance = 0.5 }]" \
+      "photons.count=$photons" "estimate.gather_rays=$gather" > "$out/$name.toml"
     "$bin" render "$out/$name.toml" --out "$out/$name-pm" --quiet 2>/dev/null
     "$bin" render "$out/$name.toml" --out "$out/$name-path" --integrator path --spp "$spp" --quiet 2>/dev/null
     python3 - "$out/$name-pm/$name.json" "$out/$name-path/$name.json" "$size" "$depth" <<'PY'

@@ -17,6 +17,7 @@ mod emission_inputs;
 pub mod file;
 pub mod locate;
 pub mod settings;
+pub mod text;
 
 pub use settings::{BoundaryMode, EstimateSettings, IntegratorMode, RenderSettings, SpectralMode};
 

@@ -11,6 +11,7 @@
 //! their figures in benches/README.md.
 
 use crate::common::{render_job, tempdir};
+use littoral::scene::text::SceneText;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
 use std::path::Path;
 
@@ -18,110 +19,43 @@ const PHOTONS: u64 = 4_000_000;
 /// Paths per radiometer: 1024 per sample per pixel.
 const SPP: u32 = 64;
 
-fn base(name: &str, extra: &str, depths: &[f64]) -> String {
-    let mut s = format!(
-        r#"
-name = "{name}"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 8
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[sky]
-radiance = 0.02
-[domain]
-size_m = [40.0, 40.0]
-[photons]
-count = 1000
-[sensor]
-pixels = [1, 1]
-[estimate]
-max_radius_m = 2.0
-step_m = 0.25
-{extra}
-"#
-    );
-    for d in depths {
-        s += &format!(
-            "[[radiometer]]\ndepth_m = {d}\nview = \"nadir\"\nposition_m = [20.0, 20.0]\n"
-        );
-    }
-    s
-}
-
-fn scenes() -> Vec<(&'static str, String)> {
-    let water = "[water]\nchl = 1.0\ncdom_440 = 0.05\n";
-    vec![
-        ("deep", base("deep", water, &[1.0, 3.0, -1.0])),
-        (
-            "shallow",
-            base(
-                "shallow",
-                &format!("{water}[bottom]\ndepth_m = 4.0\nreflectance = \"sand\"\n"),
-                &[1.0, 3.9, -1.0],
-            ),
-        ),
-        (
-            "layered",
-            base(
-                "layered",
-                "[water]\nchl = 0.5\ncdom_440 = 0.05\n[[water.layer]]\ntop_m = 2.0\nbottom_m = 4.0\n\
-                 chl = 8.0\ncdom_440 = 0.2\nnap_440 = 0.1\n[bottom]\ndepth_m = 8.0\nreflectance = 0.2\n",
-                &[1.0, 3.0, -1.0],
-            ),
-        ),
-        (
-            "target",
-            base(
-                "target",
-                &format!(
-                    "{water}[bottom]\ndepth_m = 6.0\nreflectance = 0.1\n[[target]]\nkind = \"panel\"\n\
-                     center_m = [20.0, 20.0, -3.0]\nsize_m = [4.0, 4.0]\nreflectance = 0.5\n"
-                ),
-                &[1.0, 2.5, -1.0],
-            ),
-        ),
-        (
-            "rough",
-            base(
-                "rough",
-                &format!(
-                    "[surface]\nkind = \"cox-munk\"\nwind_speed = 8.0\nrefractive_index = \"quan-fry\"\n\
-                     {water}[bottom]\ndepth_m = 5.0\nreflectance = \"sand\"\n"
-                ),
-                &[1.0, 4.0, -1.0],
-            ),
-        ),
-        (
-            "near_floor",
-            base(
-                "near_floor",
-                &format!("{water}[bottom]\ndepth_m = 3.0\nreflectance = 0.3\n"),
-                &[2.9999, 2.99, 1.5],
-            ),
-        ),
-    ]
-}
+/// The six scenes (`tests/scenes/against_path/`, shared with the bench
+/// script).
+const SCENES: [(&str, &str); 6] = [
+    ("deep", include_str!("../scenes/against_path/deep.toml")),
+    (
+        "shallow",
+        include_str!("../scenes/against_path/shallow.toml"),
+    ),
+    (
+        "layered",
+        include_str!("../scenes/against_path/layered.toml"),
+    ),
+    ("target", include_str!("../scenes/against_path/target.toml")),
+    ("rough", include_str!("../scenes/against_path/rough.toml")),
+    (
+        "near_floor",
+        include_str!("../scenes/against_path/near_floor.toml"),
+    ),
+];
 
 #[test]
 fn photon_map_radiometers_match_the_path_integrator_in_six_scenes() {
     let dir = tempdir();
     let mut failures = Vec::new();
-    for (name, text) in scenes() {
+    for (name, text) in SCENES {
         let photon_map = Overrides {
             photons: Some(PHOTONS),
             ..Overrides::default()
         };
-        let s = Scene::parse(&text, Path::new("scene.toml"), &photon_map).unwrap();
+        let s = Scene::parse(text, Path::new("scene.toml"), &photon_map).unwrap();
         let pm = render_job(&s, &dir.path().join(name), 0).radiometers;
         let path = Overrides {
             integrator: Some(IntegratorMode::Path),
             samples_per_pixel: Some(SPP),
             ..Overrides::default()
         };
-        let s = Scene::parse(&text, Path::new("scene.toml"), &path).unwrap();
+        let s = Scene::parse(text, Path::new("scene.toml"), &path).unwrap();
         let reference = littoral::render::radiometers_path(&s, 0).unwrap();
         for (a, b) in pm.iter().zip(&reference) {
             let mut worst = 0.0f64;
@@ -180,51 +114,37 @@ fn photon_map_radiometers_match_the_path_integrator_in_six_scenes() {
 /// this test sees a 5 % error there.
 #[test]
 fn small_targets_match_the_path_integrator() {
-    let mut text = String::from(
-        r#"
-name = "boxes"
-[spectral]
-start_nm = 400.0
-end_nm = 720.0
-bands = 32
-out_of_range = "clamp"
-[sun]
-zenith_deg = 30.0
-spectrum = "astm-g173-direct"
-[sky]
-spectrum = "astm-g173-diffuse"
-[domain]
-size_m = [40.0, 40.0]
-[water]
-chl = 10.0
-cdom_440 = 0.1
-nap_440 = 0.05
-[bottom]
-depth_m = 6.0
-reflectance = "sand"
-[photons]
-count = 4000000
-[sensor]
-pixels = [1, 1]
-"#,
-    );
     // (x, y, size, top depth); the last radiometer is over the sand.
     let boxes = [
         (30.0, 10.0, 1.0, 3.0),
         (10.0, 30.0, 2.0, 5.5),
         (10.0, 10.0, 1.0, 1.5),
     ];
+    let mut scene = SceneText::parse(include_str!("../scenes/box.toml"))
+        .unwrap()
+        .set("name", "boxes")
+        .set("water.chl", 10.0)
+        .set("water.cdom_440", 0.1)
+        .set("water.nap_440", 0.05)
+        .set("bottom.depth_m", 6.0)
+        .set("photons.count", 4_000_000)
+        .remove("target")
+        .remove("radiometer");
     for (x, y, size, top) in boxes {
-        text += &format!(
-            "[[target]]\nkind = \"box\"\ncenter_m = [{x}, {y}, {}]\nsize_m = [{size}, {size}, 0.5]\n\
-             reflectance = 0.5\n",
-            -(top + 0.25)
-        );
+        let z = -(top + 0.25);
+        scene = scene
+            .push(
+                "target",
+                &format!(
+                    "kind = \"box\"\ncenter_m = [{x}, {y}, {z}]\nsize_m = [{size}, {size}, 0.5]\nreflectance = 0.5"
+                ),
+            )
+            .unwrap();
     }
     for [x, y] in boxes.iter().map(|b| [b.0, b.1]).chain([[30.0, 30.0]]) {
-        text +=
-            &format!("[[radiometer]]\ndepth_m = -1.0\nview = \"nadir\"\nposition_m = [{x}, {y}]\n");
+        scene = scene.push("radiometer", &nadir_above(x, y)).unwrap();
     }
+    let text = scene.text();
     let dir = tempdir();
     let s = Scene::parse(&text, Path::new("boxes.toml"), &Overrides::default()).unwrap();
     let pm = render_job(&s, &dir.path().join("boxes"), 0).radiometers;
@@ -236,11 +156,10 @@ pixels = [1, 1]
     // Three more radiometers over the shallow box (independent streams)
     // for the path integrator, averaged with its first.
     let shallow = boxes.len() - 1;
-    let mut path_text = text.clone();
     for _ in 0..3 {
-        path_text +=
-            "[[radiometer]]\ndepth_m = -1.0\nview = \"nadir\"\nposition_m = [10.0, 10.0]\n";
+        scene = scene.push("radiometer", &nadir_above(10.0, 10.0)).unwrap();
     }
+    let path_text = scene.text();
     let s = Scene::parse(&path_text, Path::new("boxes.toml"), &path).unwrap();
     let mut reference = littoral::render::radiometers_path(&s, 0).unwrap();
     let copies: Vec<_> = reference.split_off(boxes.len() + 1);
@@ -305,4 +224,10 @@ pixels = [1, 1]
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A nadir radiometer 1 m above the water at (`x`, `y`), as a
+/// `[[radiometer]]` entry.
+fn nadir_above(x: f64, y: f64) -> String {
+    format!("depth_m = -1.0\nview = \"nadir\"\nposition_m = [{x}, {y}]")
 }

@@ -7,29 +7,7 @@ use std::path::Path;
 /// Deep water with the same IOPs and sun in all 16 bands: every band of
 /// every pixel has the same radiance, so the spread of (pixel, band)
 /// values around their mean is the estimate's error.
-const IDENTICAL_BANDS: &str = r#"
-name = "ident"
-[spectral]
-start_nm = 450.0
-end_nm = 600.0
-bands = 16
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = { a = 0.1, b = 0.4 }
-phase = { kind = "fournier-forand", bb_ratio = 0.0183 }
-[photons]
-count = 200000
-[sensor]
-pixels = [24, 24]
-gsd_m = 1.0
-[estimate]
-max_radius_m = 3.0
-step_m = 0.75
-"#;
+const IDENTICAL_BANDS: &str = include_str!("../scenes/identical_bands.toml");
 
 /// Relative spread of every (pixel, band) value of a render of the
 /// identical-band scene with `photons` photons in `mode`.

@@ -220,6 +220,67 @@ fn scene_commands() {
     );
 }
 
+/// `scene set` prints the scene with its changes, which `scene check`
+/// then reads: a fragment merged, keys set (a new table made), the
+/// values as given; a change that is not KEY=VALUE, a value that is not
+/// TOML and an unreadable base are one clean error each.
+#[test]
+fn scene_set_changes_keys_and_merges_fragments() {
+    let dir = tempdir();
+    let base = dir.path().join("base.toml");
+    std::fs::write(&base, MINIMAL_SCENE).unwrap();
+    let fragment = dir.path().join("floor.toml");
+    std::fs::write(&fragment, "[bottom]\ndepth_m = 4.0\nreflectance = 0.3\n").unwrap();
+    let out = littoral(&[
+        "scene",
+        "set",
+        p(&base),
+        "spectral.bands=8",
+        "sensor.pixels=[6, 2]",
+        "water.iop={ a = 0.3, b = 0.1 }",
+        "--merge",
+        p(&fragment),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let made = dir.path().join("made.toml");
+    std::fs::write(&made, &out.stdout).unwrap();
+    let scene = Scene::load(&made, &Overrides::default()).unwrap();
+    assert_eq!(scene.bands.len(), 8);
+    assert_eq!(scene.sensor.pixels, [6, 2]);
+    assert!(
+        scene.summary().contains("2 triangles"),
+        "{}",
+        scene.summary()
+    );
+    assert_eq!(
+        Scene::load(&base, &Overrides::default())
+            .unwrap()
+            .bands
+            .len(),
+        4,
+        "the base is left as it was"
+    );
+    let out = littoral(&["scene", "set", "default", "photons.count=5000"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("count = 5000"));
+    assert_clean_failure(
+        &littoral(&["scene", "set", p(&base), "sensor.pixels"]),
+        "KEY=VALUE",
+    );
+    assert_clean_failure(
+        &littoral(&["scene", "set", p(&base), "sensor.pixels=[6,"]),
+        "sensor.pixels",
+    );
+    let missing = dir.path().join("missing.toml");
+    assert_clean_failure(
+        &littoral(&["scene", "set", p(&missing), "a=1"]),
+        "missing.toml",
+    );
+}
+
 /// `emit` on the built-in scene: report fields, a valid map, and the same
 /// map bytes for 1 and 2 threads.
 #[test]

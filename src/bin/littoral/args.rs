@@ -139,6 +139,27 @@ pub enum SceneCommand {
     Default,
     /// Validate a scene file; prints a summary on success.
     Check { file: PathBuf },
+    /// Print a scene file with keys changed, e.g. `littoral scene set
+    /// base.toml sensor.pixels=[48,48] 'water.phase={kind="petzold"}'`.
+    Set(SetArgs),
+}
+
+#[derive(Args)]
+pub struct SetArgs {
+    /// Scene file to start from (`default`: the built-in scene).
+    pub base: PathBuf,
+    /// KEY=VALUE, the key dotted and the value in TOML; set in order.
+    pub changes: Vec<String>,
+    /// TOML fragment files merged in (table by table) before the changes.
+    #[arg(long)]
+    pub merge: Vec<PathBuf>,
+}
+
+impl SetArgs {
+    /// The scene text these arguments make.
+    pub fn scene(&self) -> littoral::Result<littoral::scene::text::SceneText> {
+        littoral::scene::text::from_command_line(&self.base, &self.changes, &self.merge)
+    }
 }
 
 #[derive(Args)]

@@ -28,6 +28,7 @@ fn run(cli: Cli) -> AnyResult<()> {
             let scene = Scene::load(&file, &Overrides::default())?;
             cli::print(&format!("{}: {}\n", file.display(), scene.summary()))
         }
+        Command::Scene(SceneCommand::Set(a)) => cli::print(&a.scene()?.text()),
         Command::Emit(a) => run_emit(a),
         Command::Plan(a) => run_plan(a),
         Command::Render(a) => run_render(a),
