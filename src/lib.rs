@@ -50,8 +50,9 @@
 //! (per-index random streams), [`progress`] (progress hooks), [`size`]
 //! (memory sizes such as `64MiB`), [`mem`] (the process's own peak memory),
 //! [`output`] (files written whole or not at all, positioned I/O), [`synth`]
-//! (synthetic photon sources for tests and benchmarks), [`cli`] (what the
-//! command-line programs share).
+//! (synthetic photon sources for tests and benchmarks), [`simd`] (prefetch
+//! and the 16 x 16 byte transpose, each with a portable fallback giving the
+//! same bits), [`cli`] (what the command-line programs share).
 //!
 //! Layering: `scene`, `optics`, `geometry`, `store` and `spectral` import
 //! none of `job`, `render`, `estimate`, `emit` and `cube` (the stages build

@@ -16,7 +16,7 @@
 //! finds a complete cube, and a writer dropped without `finish` (a crash, an
 //! error in another tile) leaves neither final name behind.
 //!
-//! [`EnviCube`] (in `envi/reader.rs`) reads such a cube, or an ENVI cube
+//! [`EnviCube`] (in `envi/reader.rs`, its header in `envi/header.rs`) reads such a cube, or an ENVI cube
 //! of another software (BSQ, BIL or BIP; int16, uint16, float32 or float64;
 //! either byte order), with positioned reads: a pixel's spectrum, a band,
 //! or rows of a band, never the whole cube. Malformed headers are refused

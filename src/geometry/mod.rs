@@ -29,7 +29,7 @@
 //! origin off its surface by the same amount for grazing directions.
 //!
 //! Not for: water-column optics (the water is not geometry), the wavy sea
-//! surface (handled analytically by the interface model), instancing or
+//! surface (handled analytically by the sea-surface model, `optics::surface`), instancing or
 //! moving geometry, or shading (surface reflectance belongs to the material
 //! list indexed by [`SurfaceId`]).
 

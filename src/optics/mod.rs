@@ -1,5 +1,6 @@
 //! Optics: data tables, inherent optical properties, phase functions, the
-//! sky's radiance distribution and the sea surface.
+//! sky's radiance distribution, the sea surface, local majorants for delta
+//! tracking and the water's refractive index per band.
 
 pub mod iop;
 pub mod majorant;

@@ -21,7 +21,8 @@
 //! sampling noise (march jitter, rough-surface facets) is not in it.
 //!
 //! Not for: emission (see `emit`), writing files (the sinks live in
-//! `job::outputs` and `job::distributed::parts`) or file formats (see `cube`).
+//! `job::outputs` and `job::distributed::tile_file`) or file formats (see
+//! `cube`).
 
 pub mod air_sea;
 pub mod camera;

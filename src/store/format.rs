@@ -280,7 +280,7 @@ impl Header {
             return Err(Error::format(
                 path,
                 format!(
-                    "format version {version} compresses a tile as one zstd frame (version 3 keeps volume photons in one layer, version 2 records no photon groups, version 1 no provenance either); this build reads version {FORMAT_VERSION}: emit the map again"
+                    "format version {version} is older than this build's {FORMAT_VERSION} (version 4 compresses a tile as one zstd frame, version 3 keeps volume photons in one layer, version 2 records no photon groups, version 1 no provenance either): emit the map again"
                 ),
             ));
         }

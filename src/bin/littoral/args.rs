@@ -120,7 +120,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
     pub spp: Option<u32>,
     /// Render only part I of N of the image tiles into --out (a part
-    /// directory), from the photon map at --map; `littoral-cube assemble`
+    /// directory), from the photon map at --map; `littoral assemble`
     /// joins the parts. Started again, a part keeps its finished tiles.
     #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "resume")]
     pub tiles: Option<(u64, u64)>,

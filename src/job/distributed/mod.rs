@@ -1,14 +1,15 @@
 //! A run split over machines, in one place: emission in shards and their
 //! merge ([`ShardJob`], [`MergeJob`]; the tracing itself is
-//! `emit::shard`), a render in parts and their assembly ([`parts`]), and
-//! the Slurm batch scripts that chain them ([`plan`]).
+//! `emit::shard`), a render in parts and their assembly ([`parts`]; a
+//! part's tile files, their layout, writer and reader, in `tile_file`),
+//! and the Slurm batch scripts that chain them ([`plan`]).
 //!
 //! Every job here returns a typed report and writes its own files (under
 //! the lock of what it writes, `output::set::RunLock`); the binary only
 //! parses and prints.
 //!
-//! Not for: the shard and tile file formats' bytes (`store::shard`,
-//! [`parts`]'s tile files), a run on one machine (`job::RenderJob`).
+//! Not for: the shard file format (`store::shard`), a run on one machine
+//! (`job::RenderJob`).
 
 pub mod parts;
 pub mod plan;

@@ -7,7 +7,7 @@
 //!   and a CRC-32), then `part.json` (what the part measured, and for part
 //!   0 the radiometers and the emission report). A part started again
 //!   skips the tiles already there.
-//! - [`assemble`] (`littoral-cube assemble PARTDIR... --out DIR`): checks
+//! - [`assemble`] (`littoral assemble PARTDIR... --out DIR`): checks
 //!   that the parts are all of one render, builds the scene again from
 //!   the text, path and overrides recorded with it, and writes every file a
 //!   whole render writes. The cubes are byte-identical to a whole render's:
