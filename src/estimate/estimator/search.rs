@@ -232,6 +232,12 @@ impl Estimator<'_> {
     /// viewer carry most of the in-scatter (upwelling light seen looking
     /// down rests on the few photons travelling up), and a local search of
     /// k holds too few of them for a steady estimate.
+    ///
+    /// One function of about 150 lines, the estimator's inner loop: one
+    /// pass over the neighbours feeds six sums held in the scratch (local,
+    /// coarse and expanded, each per band and per photon group), which the
+    /// combination then reads; split apart, each piece would take the same
+    /// dozen buffers.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn estimate(
         &self,

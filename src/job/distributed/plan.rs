@@ -211,12 +211,9 @@ impl Plan<'_> {
         h
     }
 
-    /// Write the scripts into `dir`; returns their paths (`submit.sh` last).
-    pub fn write(&self) -> Result<Vec<PathBuf>> {
-        if self.shards == 0 {
-            return Err(Error::invalid("--shards", "must be at least 1"));
-        }
-        let dir = abs(&self.dir)?;
+    /// The values that go on `#SBATCH` lines, which cannot carry white
+    /// space (nor quote it).
+    fn check_sbatch_values(&self, dir: &Path) -> Result<()> {
         for (flag, v) in [
             ("--out", Some(dir.display().to_string())),
             ("--partition", self.partition.clone()),
@@ -229,6 +226,16 @@ impl Plan<'_> {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Write the scripts into `dir`; returns their paths (`submit.sh` last).
+    pub fn write(&self) -> Result<Vec<PathBuf>> {
+        if self.shards == 0 {
+            return Err(Error::invalid("--shards", "must be at least 1"));
+        }
+        let dir = abs(&self.dir)?;
+        self.check_sbatch_values(&dir)?;
         let results = abs(&self.results)?;
         let plan = Plan {
             dir: dir.clone(),
@@ -328,30 +335,36 @@ impl Plan<'_> {
         } else {
             vec!["render", "assemble"]
         };
-        let mut submit = String::from(
-            "#!/bin/bash\n# Submit the plan's jobs, each after the one before succeeds; prints the\n# last job's id. With --wait, returns when it has finished (non-zero if\n# any job failed).\nset -euo pipefail\ncd \"$(dirname \"$0\")\"\nwait_flag=()\nif [[ \"${1:-}\" == --wait ]]; then wait_flag=(--wait); fi\n",
-        );
-        let mut prev: Option<String> = None;
-        for (k, stage) in stages.iter().enumerate() {
-            let last = k + 1 == stages.len();
-            let dep = prev
-                .as_ref()
-                .map(|p| format!(" --dependency=afterok:\"${p}\" --kill-on-invalid-dep=yes"))
-                .unwrap_or_default();
-            // `${a[@]+"${a[@]}"}`: an empty array under `set -u` is an
-            // unbound variable to bash 4.3 and older.
-            let wait = if last {
-                " ${wait_flag[@]+\"${wait_flag[@]}\"}"
-            } else {
-                ""
-            };
-            submit += &format!("{stage}=$(sbatch --parsable{dep}{wait} {stage}.sbatch)\n");
-            prev = Some(stage.to_string());
-        }
-        submit += &format!("echo \"${}\"\n", prev.expect("a stage"));
-        write("submit.sh", submit)?;
+        write("submit.sh", submit_script(&stages))?;
         Ok(scripts)
     }
+}
+
+/// `submit.sh`: submit `stages` (`NAME.sbatch`), each after the one
+/// before succeeds; prints the last job's id.
+fn submit_script(stages: &[&str]) -> String {
+    let mut submit = String::from(
+        "#!/bin/bash\n# Submit the plan's jobs, each after the one before succeeds; prints the\n# last job's id. With --wait, returns when it has finished (non-zero if\n# any job failed).\nset -euo pipefail\ncd \"$(dirname \"$0\")\"\nwait_flag=()\nif [[ \"${1:-}\" == --wait ]]; then wait_flag=(--wait); fi\n",
+    );
+    let mut prev: Option<String> = None;
+    for (k, stage) in stages.iter().enumerate() {
+        let last = k + 1 == stages.len();
+        let dep = prev
+            .as_ref()
+            .map(|p| format!(" --dependency=afterok:\"${p}\" --kill-on-invalid-dep=yes"))
+            .unwrap_or_default();
+        // `${a[@]+"${a[@]}"}`: an empty array under `set -u` is an
+        // unbound variable to bash 4.3 and older.
+        let wait = if last {
+            " ${wait_flag[@]+\"${wait_flag[@]}\"}"
+        } else {
+            ""
+        };
+        submit += &format!("{stage}=$(sbatch --parsable{dep}{wait} {stage}.sbatch)\n");
+        prev = Some(stage.to_string());
+    }
+    submit += &format!("echo \"${}\"\n", prev.expect("a stage"));
+    submit
 }
 
 #[cfg(test)]

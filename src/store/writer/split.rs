@@ -13,6 +13,11 @@ impl MapWriter {
     /// Split an overfull cell in two, streaming, without holding it in
     /// memory decoded: its spilled frames are read from `fetched` when
     /// given (all of them, undecoded), else from the scratch file.
+    ///
+    /// One function of about 130 lines: its two passes share the cell's
+    /// buffers, the fetched frames and the writer's budget charges, and
+    /// each pass is a closure over the same frame loop; split apart, the
+    /// pieces would hand that state back and forth.
     pub(super) fn split(
         &mut self,
         mut cell: CellBuf,
