@@ -31,10 +31,10 @@
 //!   map, where every other term is negligible: 1.2 MiB with one or two
 //!   threads. 4 MiB leaves room for allocator fragmentation.
 //!
-//! Check of the whole reserve (built-in scene at 64 x 64 pixels, 300 k
-//! photons, 2 threads, `--mem-budget 64MiB`, map reused): peak RssAnon
-//! 24.3 MiB, of which the tile cache held at most 19.0 MiB; the other
-//! 5.3 MiB are inside the computed reserve of 8.7 MiB.
+//! Check of the whole reserve (built-in scene at 64 x 64 pixels of 3 m,
+//! 128 bands, 300 k photons, 2 threads, `--mem-budget 64MiB`, map reused):
+//! peak RssAnon 26.0 MiB, of which the tile cache held at most 18.0 MiB;
+//! the other 8.0 MiB are inside the computed reserve of 10.7 MiB.
 //!
 //! The rest goes to the boundary grid (when the scene asks for one) and
 //! then the tile cache; a budget that leaves the cache nothing is refused

@@ -1,7 +1,22 @@
 use super::*;
 use crate::cube::envi::{CubeSpec, EnviWriter};
 use crate::spectral::BandGrid;
-use exr::prelude::{read_all_flat_layers_from_file, FlatSamples};
+use exr::prelude::{read_all_flat_layers_from_file, AnyChannels, FlatSamples, Layer};
+
+/// The f32 samples of the channel of the band centred at `nm` in `layer`.
+fn band_samples(layer: &Layer<AnyChannels<FlatSamples>>, nm: f64) -> &[f32] {
+    let name = channel_name(nm);
+    let channel = layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name == Text::new_or_none(&name).unwrap())
+        .unwrap_or_else(|| panic!("no channel {name}"));
+    let FlatSamples::F32(samples) = &channel.sample_data else {
+        panic!("{name} is not f32");
+    };
+    samples
+}
 
 /// A cube whose value encodes (x, y, band), with band centres of three
 /// and four digits (so name order is not band order) and a size that is
@@ -51,15 +66,7 @@ fn round_trips_through_an_exr_reader() {
     assert_eq!(layer.channel_data.list.len(), 3);
     for (b, nm) in centres.iter().enumerate() {
         let name = channel_name(*nm as f64);
-        let channel = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == text(&name))
-            .unwrap_or_else(|| panic!("no channel {name}"));
-        let FlatSamples::F32(samples) = &channel.sample_data else {
-            panic!("{name} is not f32");
-        };
+        let samples = band_samples(layer, *nm as f64);
         for y in 0..h {
             for x in 0..w {
                 assert_eq!(samples[y * w + x], value(x, y, b), "{name} at ({x}, {y})");
@@ -187,16 +194,7 @@ fn compressions_are_lossless() {
         let image = read_all_flat_layers_from_file(&path).unwrap();
         let layer = &image.layer_data[0];
         for (b, nm) in cube.wavelengths_nm().iter().enumerate() {
-            let name = Text::new_or_none(channel_name(*nm)).unwrap();
-            let ch = layer
-                .channel_data
-                .list
-                .iter()
-                .find(|ch| ch.name == name)
-                .unwrap();
-            let FlatSamples::F32(s) = &ch.sample_data else {
-                panic!("not f32")
-            };
+            let s = band_samples(layer, *nm);
             for y in 0..h {
                 for x in 0..w {
                     assert_eq!(s[y * w + x], value(x, y, b), "{c:?} band {b} at ({x}, {y})");
@@ -281,16 +279,7 @@ fn tiles_in_any_order_from_any_thread_give_the_same_bytes() {
         assert_eq!(image.layer_data.len(), 2);
         for (l, layer) in image.layer_data.iter().enumerate() {
             for (b, &nm) in nm.iter().enumerate() {
-                let name = Text::new_or_none(channel_name(nm)).unwrap();
-                let ch = layer
-                    .channel_data
-                    .list
-                    .iter()
-                    .find(|ch| ch.name == name)
-                    .unwrap();
-                let FlatSamples::F32(s) = &ch.sample_data else {
-                    panic!("not f32")
-                };
+                let s = band_samples(layer, nm);
                 for y in 0..h {
                     for x in 0..w {
                         let want = value(l, x, y, b);
