@@ -125,9 +125,11 @@ impl CubeSet {
         // The spectral OpenEXR: the radiance, its standard error, then the
         // products, each with the band centres its ENVI header records.
         let exr_path = dir.join(format!("{}.exr", scene.name));
-        let mut named = vec![("radiance", &writer)];
-        named.extend(stderr.as_ref().map(|s| ("stderr", s)));
-        named.extend(PRODUCTS.iter().map(|p| p.layer).zip(&products));
+        let named = in_layer_order(
+            ("radiance", &writer),
+            stderr.as_ref().map(|s| ("stderr", s)),
+            PRODUCTS.iter().map(|p| p.layer).zip(&products),
+        );
         let wavelengths: Vec<Vec<f64>> = named
             .iter()
             .map(|(_, w)| w.spec().header_wavelengths_nm())
@@ -197,18 +199,17 @@ impl TileSink for CubeSet {
     /// Write one tile into every cube and the quicklook.
     fn write(&self, t: &TileResult) -> Result<()> {
         let (x0, y0) = (t.i * TILE_PX, t.j * TILE_PX);
-        self.writer.write_tile(x0, y0, t.w, t.h, &t.values)?;
-        for (pw, v) in self.products.iter().zip(&t.products) {
-            pw.write_tile(x0, y0, t.w, t.h, v)?;
+        let cubes = in_layer_order(
+            (&self.writer, &t.values[..]),
+            self.stderr.as_ref().map(|s| (s, &t.errors[..])),
+            self.products
+                .iter()
+                .zip(t.products.iter().map(Vec::as_slice)),
+        );
+        for (cube, values) in &cubes {
+            cube.write_tile(x0, y0, t.w, t.h, values)?;
         }
-        if let Some(se) = &self.stderr {
-            se.write_tile(x0, y0, t.w, t.h, &t.errors)?;
-        }
-        let mut layers: Vec<&[f32]> = vec![&t.values];
-        if self.stderr.is_some() {
-            layers.push(&t.errors);
-        }
-        layers.extend(t.products.iter().map(Vec::as_slice));
+        let layers: Vec<&[f32]> = cubes.iter().map(|(_, values)| *values).collect();
         self.exr.write_tile(x0, y0, t.w, t.h, &layers)?;
         if let Some(sensor) = &self.sensor {
             sensor.write(t)?;
@@ -221,6 +222,20 @@ impl TileSink for CubeSet {
         }
         Ok(())
     }
+}
+
+/// `radiance`, the standard error's (when there is one), then the
+/// products': the order of the EXR's layers, in which `create` names them
+/// and `write` fills them.
+fn in_layer_order<T>(
+    radiance: T,
+    stderr: Option<T>,
+    products: impl IntoIterator<Item = T>,
+) -> Vec<T> {
+    std::iter::once(radiance)
+        .chain(stderr)
+        .chain(products)
+        .collect()
 }
 
 /// The names a render of `scene` publishes in its output directory (the
