@@ -70,3 +70,15 @@ pub fn chi_square_critical(dof: usize) -> f64 {
 
 #[cfg(test)]
 mod tests;
+
+/// The smallest valid scene (`tests/scenes/minimal.toml`, which the
+/// integration tests share) as a scene text to change.
+pub fn minimal_scene() -> crate::scene::text::SceneText {
+    crate::scene::text::SceneText::parse(include_str!("../tests/scenes/minimal.toml")).unwrap()
+}
+
+/// [`minimal_scene`] with the TOML `fragment` merged in table by table,
+/// as scene text.
+pub fn minimal_with(fragment: &str) -> String {
+    minimal_scene().merge(fragment).unwrap().text()
+}

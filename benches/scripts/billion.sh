@@ -14,11 +14,8 @@ photons=${2:-690000000}
 mkdir -p "$out"
 cargo build --release --quiet
 bin=target/release/littoral
-"$bin" scene default | sed -e 's/^pixels = \[256, 256\]/pixels = [64, 64]/' \
-  -e 's/^gsd_m = 0.75/gsd_m = 3.0/' > "$out/coastal64.toml"
-grep -q 'pixels = \[64, 64\]' "$out/coastal64.toml"
-sed -e 's/^\[estimate\]/[estimate]\nk = 1000\nk_expanded = 5000/' "$out/coastal64.toml" > "$out/coastal64-k.toml"
-grep -q '^k = 1000' "$out/coastal64-k.toml"
+"$bin" scene set default "sensor.pixels=[64, 64]" sensor.gsd_m=3.0 > "$out/coastal64.toml"
+"$bin" scene set "$out/coastal64.toml" estimate.k=1000 estimate.k_expanded=5000 > "$out/coastal64-k.toml"
 run() { # name, command...: wall, user and sys time and peak RSS of a stage
   local name=$1; shift
   /usr/bin/time -f "$name: %e s wall, %U s user, %S s sys, %M KiB peak RSS" "$@" 2>>"$out/times.txt"

@@ -24,35 +24,12 @@ for albedo in 0.9 0.2; do
   a=$(python3 -c "print(1 - $albedo)")
   photons=$photons_09
   [ "$albedo" = 0.2 ] && photons=$photons_02
-  cat > "$out/$name.toml" <<TOML
-name = "$name"
-[spectral]
-start_nm = 550.0
-end_nm = 550.0
-bands = 1
-[sun]
-zenith_deg = 60.0
-irradiance = 1.0
-[sky]
-radiance = 0.0
-[surface]
-kind = "flat"
-refractive_index = 1.34
-[domain]
-size_m = [20.0, 20.0]
-[water]
-iop = { a = $a, b = $albedo }
-phase = { kind = "petzold" }
-[bottom]
-depth_m = 60.0
-reflectance = 0.0
-[photons]
-count = $photons
-[sensor]
-pixels = [2, 2]
-[tally]
-depths_m = [1.0, 5.0, 10.0]
-TOML
+  "$bin" scene set tests/scenes/minimal.toml "name=\"$name\"" \
+    "spectral={ start_nm = 550.0, end_nm = 550.0, bands = 1 }" sun.zenith_deg=60.0 sky.radiance=0.0 \
+    "surface={ kind = \"flat\", refractive_index = 1.34 }" "domain.size_m=[20.0, 20.0]" \
+    "water={ iop = { a = $a, b = $albedo }, phase = { kind = \"petzold\" } }" \
+    "bottom={ depth_m = 60.0, reflectance = 0.0 }" photons.count=$photons "sensor.pixels=[2, 2]" \
+    "tally.depths_m=[1.0, 5.0, 10.0]" > "$out/$name.toml"
   csvs=()
   for seed in $seeds; do
     "$bin" render "$out/$name.toml" --seed "$seed" --out "$out/$name-s$seed" --mem-budget 1GiB --quiet

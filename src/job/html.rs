@@ -18,6 +18,7 @@
 //! Not for: numbers a program reads (the JSON report has them all).
 
 use super::report::RunReport;
+use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use base64::Engine;
@@ -99,89 +100,9 @@ pub fn page(scene: &Scene, report: &RunReport, files: &Path) -> Result<String> {
         base64::engine::general_purpose::STANDARD.encode(png)
     );
 
-    // R_rs at pixels, L / E_d(0+) at radiometers.
-    h.push_str("<h2>Remote-sensing reflectance</h2>\n");
-    h.push_str(&plot(
-        &Axes {
-            title: "R_rs at five pixels (± 1 standard error)",
-            x_label: "wavelength (nm)",
-            y_label: "R_rs (sr^-1)",
-            depth: false,
-        },
-        &pixel_rrs(report, files, &nm)?,
-    )?);
-    if report.radiometers.is_empty() {
-        h.push_str("<p class=\"note\">The scene has no radiometers.</p>\n");
-    } else {
-        let curves: Vec<Curve> = report
-            .radiometers
-            .iter()
-            .map(|r| Curve {
-                label: format!(
-                    "{} m, looking {} at ({}, {}) m",
-                    r.depth_m, r.view, r.position_m[0], r.position_m[1]
-                ),
-                x: nm.clone(),
-                y: per_ed(&r.L, &report.Ed_above_surface),
-                err: Some(per_ed(&r.stderr, &report.Ed_above_surface)),
-            })
-            .collect();
-        h.push_str(&plot(
-            &Axes {
-                title: "Radiometers: L / E_d(0+) (± 1 standard error)",
-                x_label: "wavelength (nm)",
-                y_label: "L / E_d(0+) (sr^-1)",
-                depth: false,
-            },
-            &curves,
-        )?);
-    }
-
-    // Profiles, K_d and the energy budget: the emission's tallies.
+    reflectance(&mut h, report, files, &nm)?;
     match &report.emission {
-        Some(e) => {
-            h.push_str("<h2>Light field against depth</h2>\n");
-            if e.tally.is_empty() {
-                h.push_str(
-                    "<p class=\"note\">The scene sets no <code>[tally] depths_m</code>, so \
-                     this run has no depth profiles or K_d.</p>\n",
-                );
-            } else {
-                profiles(&mut h, e, &nm)?;
-            }
-            h.push_str("<h2>Energy budget</h2>\n");
-            let en = &e.energy;
-            let parts: [(&str, &[f64]); 5] = [
-                ("escaped", &en.escaped),
-                ("absorbed in water", &en.absorbed_water),
-                ("absorbed by floor and targets", &en.absorbed_surfaces),
-                ("lost at the edges", &en.lost_edges),
-                ("residual", &en.residual),
-            ];
-            let curves: Vec<Curve> = parts
-                .iter()
-                .map(|(label, v)| Curve {
-                    label: (*label).into(),
-                    x: nm.clone(),
-                    y: v.iter().zip(&en.emitted).map(|(p, t)| p / t).collect(),
-                    err: None,
-                })
-                .collect();
-            h.push_str(&plot(
-                &Axes {
-                    title: "Where the emitted power went, per band",
-                    x_label: "wavelength (nm)",
-                    y_label: "fraction of the emitted power",
-                    depth: false,
-                },
-                &curves,
-            )?);
-            let _ = writeln!(
-                h,
-                "<p>Energy closure: largest |residual| over the bands {:.2} standard errors.</p>",
-                en.closure_sigma
-            );
-        }
+        Some(e) => emission(&mut h, e, &nm)?,
         None => h.push_str(
             "<h2>Light field against depth</h2>\n<p class=\"note\">The path integrator traces \
              no photons, so this run has no depth tallies, K_d or energy budget.</p>\n",
@@ -199,8 +120,96 @@ pub fn page(scene: &Scene, report: &RunReport, files: &Path) -> Result<String> {
     Ok(h)
 }
 
+/// R_rs at five pixels and L / E_d(0+) at the radiometers.
+fn reflectance(h: &mut String, report: &RunReport, files: &Path, nm: &[f64]) -> Result<()> {
+    h.push_str("<h2>Remote-sensing reflectance</h2>\n");
+    h.push_str(&plot(
+        &Axes {
+            title: "R_rs at five pixels (± 1 standard error)",
+            x_label: "wavelength (nm)",
+            y_label: "R_rs (sr^-1)",
+            depth: false,
+        },
+        &pixel_rrs(report, files, nm)?,
+    )?);
+    if report.radiometers.is_empty() {
+        h.push_str("<p class=\"note\">The scene has no radiometers.</p>\n");
+    } else {
+        let curves: Vec<Curve> = report
+            .radiometers
+            .iter()
+            .map(|r| Curve {
+                label: format!(
+                    "{} m, looking {} at ({}, {}) m",
+                    r.depth_m, r.view, r.position_m[0], r.position_m[1]
+                ),
+                x: nm.to_vec(),
+                y: per_ed(&r.L, &report.Ed_above_surface),
+                err: Some(per_ed(&r.stderr, &report.Ed_above_surface)),
+            })
+            .collect();
+        h.push_str(&plot(
+            &Axes {
+                title: "Radiometers: L / E_d(0+) (± 1 standard error)",
+                x_label: "wavelength (nm)",
+                y_label: "L / E_d(0+) (sr^-1)",
+                depth: false,
+            },
+            &curves,
+        )?);
+    }
+    Ok(())
+}
+
+/// The emission's tallies: the profiles against depth, K_d and the energy
+/// budget.
+fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
+    h.push_str("<h2>Light field against depth</h2>\n");
+    if e.tally.is_empty() {
+        h.push_str(
+            "<p class=\"note\">The scene sets no <code>[tally] depths_m</code>, so \
+             this run has no depth profiles or K_d.</p>\n",
+        );
+    } else {
+        profiles(h, e, nm)?;
+    }
+    h.push_str("<h2>Energy budget</h2>\n");
+    let en = &e.energy;
+    let parts: [(&str, &[f64]); 5] = [
+        ("escaped", &en.escaped),
+        ("absorbed in water", &en.absorbed_water),
+        ("absorbed by floor and targets", &en.absorbed_surfaces),
+        ("lost at the edges", &en.lost_edges),
+        ("residual", &en.residual),
+    ];
+    let curves: Vec<Curve> = parts
+        .iter()
+        .map(|(label, v)| Curve {
+            label: (*label).into(),
+            x: nm.to_vec(),
+            y: v.iter().zip(&en.emitted).map(|(p, t)| p / t).collect(),
+            err: None,
+        })
+        .collect();
+    h.push_str(&plot(
+        &Axes {
+            title: "Where the emitted power went, per band",
+            x_label: "wavelength (nm)",
+            y_label: "fraction of the emitted power",
+            depth: false,
+        },
+        &curves,
+    )?);
+    let _ = writeln!(
+        h,
+        "<p>Energy closure: largest |residual| over the bands {:.2} standard errors.</p>",
+        en.closure_sigma
+    );
+    Ok(())
+}
+
 /// E_d, E_u, E_ou and L_u against depth at a few bands, and K_d per band.
-fn profiles(h: &mut String, e: &crate::emit::report::EmissionReport, nm: &[f64]) -> Result<()> {
+fn profiles(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
     let shown = shown_bands(nm.len());
     type Field = fn(&crate::emit::report::DepthTally) -> &[f64];
     let quantities: [(&str, &str, Field); 4] = [

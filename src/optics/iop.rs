@@ -376,21 +376,23 @@ impl WaterModel {
     /// An upper bound of the extinction anywhere in `band` (exact for
     /// uniform water).
     pub fn majorant(&self, band: usize) -> f64 {
-        match self {
-            WaterModel::Explicit { a, b } => a + b,
-            WaterModel::Bands(iops) => iops[band].c(),
-            WaterModel::Constituents {
-                spectra,
-                field,
-                bp_550,
-            } => Self::from_constituents(spectra, &field.max(), *bp_550, band).c(),
-        }
+        self.extinction_at_bound(band, ConstituentField::max)
     }
 
     /// A lower bound of the extinction anywhere in `band` (exact for
     /// uniform water): every IOP grows with each concentration, so the
     /// smallest concentrations give it.
     pub fn minorant(&self, band: usize) -> f64 {
+        self.extinction_at_bound(band, ConstituentField::min)
+    }
+
+    /// The extinction in `band` at the concentrations `bound` picks from
+    /// the field (its largest or smallest).
+    fn extinction_at_bound(
+        &self,
+        band: usize,
+        bound: fn(&ConstituentField) -> Constituents,
+    ) -> f64 {
         match self {
             WaterModel::Explicit { a, b } => a + b,
             WaterModel::Bands(iops) => iops[band].c(),
@@ -398,7 +400,7 @@ impl WaterModel {
                 spectra,
                 field,
                 bp_550,
-            } => Self::from_constituents(spectra, &field.min(), *bp_550, band).c(),
+            } => Self::from_constituents(spectra, &bound(field), *bp_550, band).c(),
         }
     }
 

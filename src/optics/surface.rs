@@ -457,5 +457,45 @@ fn smith_lambda_nu(nu: f64) -> f64 {
     0.5 * ((-nu * nu).exp() / (std::f64::consts::PI.sqrt() * nu) - libm::erfc(nu)).max(0.0)
 }
 
+/// A quadrature over the Cox–Munk facets a ray along `d` meets (from the
+/// air when `d.z < 0`): the slopes (zx, zy) on a `cells` x `cells`
+/// midpoint grid over six standard deviations, each facet weighted by the
+/// slope density times its projected area along the ray, |d . (-zx, -zy,
+/// 1)|, over the facets that face the ray. Calls `f` with the facet's unit
+/// normal on the ray's side and its weight; returns the sum of the
+/// weights, which normalises them. Written from the physics, not from the
+/// sampler (`SeaSurface::interact`), so it is an independent reference
+/// for it.
+pub fn facet_quadrature(
+    slope_variance: f64,
+    d: DVec3,
+    cells: usize,
+    mut f: impl FnMut(DVec3, f64),
+) -> f64 {
+    let from_above = d.z < 0.0;
+    let s_max = 6.0 * (0.5 * slope_variance).sqrt();
+    let h = 2.0 * s_max / cells as f64;
+    let mut norm = 0.0;
+    for i in 0..cells {
+        let zx = -s_max + (i as f64 + 0.5) * h;
+        for j in 0..cells {
+            let zy = -s_max + (j as f64 + 0.5) * h;
+            let m_up = DVec3::new(-zx, -zy, 1.0);
+            let facing = if from_above {
+                -d.dot(m_up)
+            } else {
+                d.dot(m_up)
+            };
+            if facing <= 0.0 {
+                continue;
+            }
+            let w = (-(zx * zx + zy * zy) / slope_variance).exp() * facing;
+            norm += w;
+            f(if from_above { m_up } else { -m_up }.normalize(), w);
+        }
+    }
+    norm
+}
+
 #[cfg(test)]
 mod tests;

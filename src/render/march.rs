@@ -281,6 +281,13 @@ impl<'a> RayMarcher<'a> {
     /// `tr` (carried in and out), up to a scattering into the forward peak
     /// (`Turned`) or the end of the ray, where the floor, a target or the
     /// sky through the surface is added (`Ended`).
+    ///
+    /// It stays one function: each step is one pass over the bands in
+    /// which the step's sample, its turn into the forward peak, the IOPs
+    /// and the sun's transmittance there are shared by every band's
+    /// source, closed-form single scattering and transmittance; split, the
+    /// renderer's innermost loop would hand a dozen borrowed buffers
+    /// between pieces at every step.
     #[allow(clippy::too_many_arguments)]
     fn segment(
         &self,

@@ -100,39 +100,7 @@ impl MapFile {
                 ),
             ));
         }
-        let mut r = ByteReader::new(index, path, "index");
-        let mut tiles = Vec::with_capacity(footer.tiles as usize);
-        let mut expect = header_len as u64;
-        let mut photons = 0u64;
-        for t in 0..footer.tiles {
-            let e = TileEntry::decode(&mut r)?;
-            let bad = |what: String| Error::tile(path, t, format!("index entry: {what}"));
-            if e.offset != expect {
-                return Err(bad(format!(
-                    "blob at {} where {} was expected",
-                    e.offset, expect
-                )));
-            }
-            if e.count == 0 || e.length == 0 {
-                return Err(bad("empty tile".into()));
-            }
-            if e.layer as usize >= LAYERS {
-                return Err(bad(format!("layer {} is not a known layer", e.layer)));
-            }
-            if !e.quant.is_valid() || !e.bounds.is_valid() {
-                return Err(bad("box is not valid".into()));
-            }
-            // A zstd frame expands at most ~128x; larger claims are corrupt.
-            if e.count as u64 * RECORD_BYTES as u64 > e.length as u64 * 1024 + 4096 {
-                return Err(bad(format!(
-                    "{} photons cannot fit in {} bytes",
-                    e.count, e.length
-                )));
-            }
-            expect = e.offset + e.length as u64;
-            photons += e.count as u64;
-            tiles.push(e);
-        }
+        let (tiles, expect, photons) = read_index(index, path, footer.tiles, header_len as u64)?;
         let meta = header.metadata;
         if expect != meta.offset
             || meta.offset.checked_add(meta.length) != Some(footer.index_offset)
@@ -363,4 +331,49 @@ impl MapFile {
         }
         Ok(())
     }
+}
+
+/// The map's tile index: each entry checked (blobs back to back from
+/// `first_offset`, non-empty, a known layer, valid boxes, a plausible
+/// size); the entries, where the last blob ends and the photons they hold.
+fn read_index(
+    index: &[u8],
+    path: &Path,
+    count: u32,
+    first_offset: u64,
+) -> Result<(Vec<TileEntry>, u64, u64)> {
+    let mut r = ByteReader::new(index, path, "index");
+    let mut tiles = Vec::with_capacity(count as usize);
+    let mut expect = first_offset;
+    let mut photons = 0u64;
+    for t in 0..count {
+        let e = TileEntry::decode(&mut r)?;
+        let bad = |what: String| Error::tile(path, t, format!("index entry: {what}"));
+        if e.offset != expect {
+            return Err(bad(format!(
+                "blob at {} where {} was expected",
+                e.offset, expect
+            )));
+        }
+        if e.count == 0 || e.length == 0 {
+            return Err(bad("empty tile".into()));
+        }
+        if e.layer as usize >= LAYERS {
+            return Err(bad(format!("layer {} is not a known layer", e.layer)));
+        }
+        if !e.quant.is_valid() || !e.bounds.is_valid() {
+            return Err(bad("box is not valid".into()));
+        }
+        // A zstd frame expands at most ~128x; larger claims are corrupt.
+        if e.count as u64 * RECORD_BYTES as u64 > e.length as u64 * 1024 + 4096 {
+            return Err(bad(format!(
+                "{} photons cannot fit in {} bytes",
+                e.count, e.length
+            )));
+        }
+        expect = e.offset + e.length as u64;
+        photons += e.count as u64;
+        tiles.push(e);
+    }
+    Ok((tiles, expect, photons))
 }

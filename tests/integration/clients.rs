@@ -2,35 +2,27 @@
 //! for the ENVI cubes and OpenEXR's Python binding for the multi-part EXR
 //! (both installed from PyPI by `.ci/run`), against littoral's own reader.
 
-use crate::common::{render_job, tempdir};
+use crate::common::{minimal_with, render_job, tempdir};
 use littoral::scene::{Overrides, Scene};
 use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-const SCENE: &str = r#"
+/// Five bands over a grey floor 4 m deep, seen by 5 x 3 pixels.
+fn scene_text() -> String {
+    minimal_with(
+        r#"
 name = "cl"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 5
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[sky]
-radiance = 0.02
-[domain]
-size_m = [20.0, 20.0]
-[water]
-iop = { a = 0.1, b = 0.3 }
-[bottom]
-depth_m = 4.0
-reflectance = 0.2
-[photons]
-count = 50000
-[sensor]
-pixels = [5, 3]
-"#;
+spectral = { start_nm = 450.0, end_nm = 650.0, bands = 5 }
+sky = { radiance = 0.02 }
+domain = { size_m = [20.0, 20.0] }
+water = { iop = { a = 0.1, b = 0.3 } }
+bottom = { depth_m = 4.0, reflectance = 0.2 }
+photons = { count = 50000 }
+sensor = { pixels = [5, 3] }
+"#,
+    )
+}
 
 const SCRIPT: &str = r#"
 import sys, numpy as np, spectral, OpenEXR
@@ -66,7 +58,7 @@ print("ok")
 #[test]
 fn spectral_python_and_openexr_read_the_outputs() {
     let dir = tempdir();
-    let s = Scene::parse(SCENE, Path::new("cl.toml"), &Overrides::default()).unwrap();
+    let s = Scene::parse(&scene_text(), Path::new("cl.toml"), &Overrides::default()).unwrap();
     let r = render_job(&s, &dir.path().join("out"), 0);
     let base = r.outputs.hdr.trim_end_matches(".hdr").to_string();
     let mut child = Command::new("python3")
@@ -100,8 +92,9 @@ fn spectral_python_and_openexr_read_the_outputs() {
 fn html_report_opens_in_headless_chromium() {
     let dir = tempdir();
     let text = format!(
-        "{SCENE}\n[tally]\ndepths_m = [0.5, 1.5, 3.0]\n\
-         [[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [10.0, 10.0]\n"
+        "{}\n[tally]\ndepths_m = [0.5, 1.5, 3.0]\n\
+         [[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [10.0, 10.0]\n",
+        scene_text()
     );
     let s = Scene::parse(&text, Path::new("cl.toml"), &Overrides::default()).unwrap();
     let r = render_job(&s, &dir.path().join("out"), 0);

@@ -90,23 +90,22 @@ pub fn assert_clean_failure(out: &std::process::Output, needle: &str) {
     assert!(!err.contains("panicked"), "{err}");
 }
 
-/// The smallest valid scene: four bands, a constant sun, 10 m of explicit
-/// IOPs and no floor. Tests add tables or replace lines.
-pub const MINIMAL_SCENE: &str = r#"
-[spectral]
-start_nm = 400.0
-end_nm = 700.0
-bands = 4
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = { a = 0.1, b = 0.2 }
-[photons]
-count = 1000
-"#;
+/// The smallest valid scene (`tests/scenes/minimal.toml`): four bands, a
+/// constant sun, 10 m of explicit IOPs and no floor. Tests add tables or
+/// replace lines.
+pub const MINIMAL_SCENE: &str = include_str!("../scenes/minimal.toml");
+
+/// [`MINIMAL_SCENE`] with the TOML `fragment` merged in table by table
+/// (`SceneText::merge`), as scene text. Written with inline tables, one
+/// line per table, a fragment says only how a test's scene differs.
+pub fn minimal_with(fragment: &str) -> String {
+    minimal().merge(fragment).unwrap().text()
+}
+
+/// [`MINIMAL_SCENE`] as a scene text to change.
+pub fn minimal() -> littoral::scene::text::SceneText {
+    littoral::scene::text::SceneText::parse(MINIMAL_SCENE).unwrap()
+}
 
 /// Render `scene` through the library into `out` on `threads` threads
 /// (0 = all) within 256 MiB, with a scratch map; the typed report.

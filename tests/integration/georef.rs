@@ -1,7 +1,7 @@
 //! Georeferenced cubes, read by GDAL (installed by `.ci/run`): the map
 //! transform, the CRS, the wavelengths, and north-up orientation.
 
-use crate::common::{f32s, render_job, tempdir};
+use crate::common::{f32s, minimal, render_job, tempdir};
 use littoral::scene::{Overrides, Scene};
 use std::path::Path;
 use std::process::Command;
@@ -9,36 +9,23 @@ use std::process::Command;
 /// 4 x 4 pixels of 5 m over a 20 m domain; a bright panel 1 m deep in the
 /// north half (y 12-18 m) over a dark floor.
 fn scene(georef: &str) -> String {
-    format!(
-        r#"
+    minimal()
+        .merge(
+            r#"
 name = "geo"
-[spectral]
-start_nm = 450.0
-end_nm = 600.0
-bands = 2
-[sun]
-zenith_deg = 20.0
-irradiance = 1.0
-[domain]
-size_m = [20.0, 20.0]
-[water]
-iop = {{ a = 0.1, b = 0.05 }}
-[bottom]
-depth_m = 3.0
-reflectance = 0.02
-[[target]]
-kind = "panel"
-center_m = [10.0, 15.0, -1.0]
-size_m = [16.0, 6.0]
-reflectance = 0.8
-[photons]
-count = 100000
-[sensor]
-pixels = [4, 4]
-gsd_m = 5.0
-{georef}
-"#
-    )
+spectral = { start_nm = 450.0, end_nm = 600.0, bands = 2 }
+sun = { zenith_deg = 20.0 }
+domain = { size_m = [20.0, 20.0] }
+water = { iop = { a = 0.1, b = 0.05 } }
+bottom = { depth_m = 3.0, reflectance = 0.02 }
+target = [{ kind = "panel", center_m = [10.0, 15.0, -1.0], size_m = [16.0, 6.0], reflectance = 0.8 }]
+photons = { count = 100000 }
+sensor = { pixels = [4, 4], gsd_m = 5.0 }
+"#,
+        )
+        .and_then(|s| s.merge(georef))
+        .unwrap()
+        .text()
 }
 
 fn gdalinfo(path: &Path) -> serde_json::Value {

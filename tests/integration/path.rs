@@ -1,9 +1,10 @@
 //! The path integrator against closed forms and independent Monte Carlo
 //! readings, and its determinism.
 
-use crate::common::{f32s, render_job, tempdir};
+use crate::common::{f32s, minimal, minimal_with, render_job, tempdir};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::render::RadiometerReading;
+use littoral::scene::text::SceneText;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
 use std::path::Path;
 
@@ -14,6 +15,21 @@ fn scene(text: &str, spp: u32) -> Scene {
         ..Overrides::default()
     };
     Scene::parse(text, Path::new("path.toml"), &o).unwrap()
+}
+
+/// [`MINIMAL_SCENE`](crate::common::MINIMAL_SCENE) cut to one band at
+/// 550 nm over a 40 m domain seen by one pixel, with `fragment` merged in.
+fn one_band(fragment: &str) -> SceneText {
+    minimal()
+        .merge(
+            r#"
+spectral = { start_nm = 550.0, end_nm = 550.0, bands = 1 }
+domain = { size_m = [40.0, 40.0] }
+sensor = { pixels = [1, 1] }
+"#,
+        )
+        .and_then(|s| s.merge(fragment))
+        .unwrap()
 }
 
 fn path_radiometers(s: &Scene) -> Vec<RadiometerReading> {
@@ -29,43 +45,24 @@ const SUN_ZENITH_DEG: f64 = 30.0;
 const N_WATER: f64 = 1.34;
 
 fn floor_scene() -> String {
-    format!(
+    minimal_with(&format!(
         r#"
 name = "floor"
-[spectral]
-start_nm = 500.0
-end_nm = 560.0
-bands = 3
-[sun]
-zenith_deg = {SUN_ZENITH_DEG}
-irradiance = 1.0
-[surface]
-refractive_index = {N_WATER}
-[domain]
-size_m = [20.0, 20.0]
-[water]
-iop = {{ a = {A}, b = 0.0 }}
-[bottom]
-depth_m = {H}
-reflectance = {RHO}
-[photons]
-count = 1000
-[sensor]
-pixels = [2, 2]
-[[radiometer]]
-depth_m = 0.01
-view = "nadir"
-[[radiometer]]
-depth_m = -1.0
-view = "nadir"
-[[radiometer]]
-depth_m = 1.5
-view = [0.5, 0.0, -0.8660254]
-[[radiometer]]
-depth_m = 2.9999
-view = "nadir"
+spectral = {{ start_nm = 500.0, end_nm = 560.0, bands = 3 }}
+sun = {{ zenith_deg = {SUN_ZENITH_DEG} }}
+surface = {{ refractive_index = {N_WATER} }}
+domain = {{ size_m = [20.0, 20.0] }}
+water = {{ iop = {{ a = {A}, b = 0.0 }} }}
+bottom = {{ depth_m = {H}, reflectance = {RHO} }}
+sensor = {{ pixels = [2, 2] }}
+radiometer = [
+    {{ depth_m = 0.01, view = "nadir" }},
+    {{ depth_m = -1.0, view = "nadir" }},
+    {{ depth_m = 1.5, view = [0.5, 0.0, -0.8660254] }},
+    {{ depth_m = 2.9999, view = "nadir" }},
+]
 "#
-    )
+    ))
 }
 
 /// Radiance leaving the floor: the direct beam (Fresnel transmittance,
@@ -136,34 +133,20 @@ fn floor_under_absorbing_water_matches_the_closed_form() {
 /// nadir here).
 #[test]
 fn deep_water_nadir_radiance_matches_the_lu_tally() {
-    let text = r#"
+    let text = minimal_with(
+        r#"
 name = "deep"
-[spectral]
-start_nm = 450.0
-end_nm = 550.0
-bands = 2
-[sun]
-zenith_deg = 20.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = { a = 0.2, b = 0.8 }
-phase = { kind = "henyey-greenstein", g = 0.9 }
-[photons]
-count = 1500000
-[tally]
-depths_m = [1.0, 3.0]
-[sensor]
-pixels = [2, 2]
-[[radiometer]]
-depth_m = 1.0
-view = "nadir"
-[[radiometer]]
-depth_m = 3.0
-view = "nadir"
-"#;
-    let s = scene(text, 256);
+spectral = { start_nm = 450.0, end_nm = 550.0, bands = 2 }
+sun = { zenith_deg = 20.0 }
+domain = { size_m = [40.0, 40.0] }
+water = { iop = { a = 0.2, b = 0.8 }, phase = { kind = "henyey-greenstein", g = 0.9 } }
+photons = { count = 1500000 }
+tally = { depths_m = [1.0, 3.0] }
+sensor = { pixels = [2, 2] }
+radiometer = [{ depth_m = 1.0, view = "nadir" }, { depth_m = 3.0, view = "nadir" }]
+"#,
+    );
+    let s = scene(&text, 256);
     let r = path_radiometers(&s);
     let totals = littoral::emit::Emitter::new(&s)
         .unwrap()
@@ -395,36 +378,22 @@ fn photon_map_radiometer_touching_the_floor_reads_it() {
 /// band, a nadir radiometer 1 m above the water, with `radiometers` copies
 /// (independent streams) of `spp` x 1024 paths each.
 fn forward_peaked_floor_scene(radiometers: usize) -> String {
-    let mut text = String::from(
+    let mut text = one_band(
         r#"
 name = "ff-floor"
-[spectral]
-start_nm = 550.0
-end_nm = 550.0
-bands = 1
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = { a = 0.05, b = 0.3 }
-phase = { kind = "fournier-forand", bb_ratio = 0.0183 }
-[bottom]
-depth_m = 3.0
-reflectance = 1.0
-[photons]
-count = 1000
-[sensor]
-pixels = [1, 1]
+water = { iop = { a = 0.05, b = 0.3 }, phase = { kind = "fournier-forand", bb_ratio = 0.0183 } }
+bottom = { depth_m = 3.0, reflectance = 1.0 }
 "#,
     );
     for _ in 0..radiometers {
-        text.push_str(
-            "[[radiometer]]\ndepth_m = -1.0\nview = \"nadir\"\nposition_m = [20.0, 20.0]\n",
-        );
+        text = text
+            .push(
+                "radiometer",
+                "depth_m = -1.0\nview = \"nadir\"\nposition_m = [20.0, 20.0]",
+            )
+            .unwrap();
     }
-    text
+    text.text()
 }
 
 /// The path integrator's error bar can be trusted where the phase function
@@ -541,42 +510,20 @@ fn chandrasekhar_h(omega: f64, mus: &[f64]) -> Vec<f64> {
 #[test]
 fn semi_infinite_isotropic_medium_matches_chandrasekhar() {
     let omega = 0.9;
-    let text = format!(
+    let text = one_band(&format!(
         r#"
 name = "chandrasekhar"
-[spectral]
-start_nm = 550.0
-end_nm = 550.0
-bands = 1
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[surface]
-refractive_index = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = {{ a = {a}, b = {omega} }}
-phase = {{ kind = "isotropic" }}
-[photons]
-count = 1000
-[sensor]
-pixels = [1, 1]
-[[radiometer]]
-depth_m = -1.0
-view = "nadir"
-position_m = [20.0, 20.0]
-[[radiometer]]
-depth_m = -1.0
-view = [0.8660254, 0.0, -0.5]
-position_m = [20.0, 20.0]
-[[radiometer]]
-depth_m = -1.0
-view = [0.0, 0.8660254, -0.5]
-position_m = [20.0, 20.0]
+surface = {{ refractive_index = 1.0 }}
+water = {{ iop = {{ a = {a}, b = {omega} }}, phase = {{ kind = "isotropic" }} }}
+radiometer = [
+    {{ depth_m = -1.0, view = "nadir", position_m = [20.0, 20.0] }},
+    {{ depth_m = -1.0, view = [0.8660254, 0.0, -0.5], position_m = [20.0, 20.0] }},
+    {{ depth_m = -1.0, view = [0.0, 0.8660254, -0.5], position_m = [20.0, 20.0] }},
+]
 "#,
         a = 1.0 - omega
-    );
+    ))
+    .text();
     let readings = path_radiometers(&scene(&text, 128));
     let mu0 = 30f64.to_radians().cos();
     let h = chandrasekhar_h(omega, &[1.0, 0.5, mu0]);
@@ -612,36 +559,17 @@ position_m = [20.0, 20.0]
 #[test]
 fn thin_slab_single_scattering_matches_the_closed_form() {
     let (a, b, g, depth, z_r) = (0.2, 1e-4, 0.5, 1.0, 1e-3);
-    let text = format!(
+    let text = one_band(&format!(
         r#"
 name = "slab"
-[spectral]
-start_nm = 550.0
-end_nm = 550.0
-bands = 1
-[sun]
-zenith_deg = {SUN_ZENITH_DEG}
-irradiance = 1.0
-[surface]
-refractive_index = {N_WATER}
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = {{ a = {a}, b = {b} }}
-phase = {{ kind = "henyey-greenstein", g = {g} }}
-[bottom]
-depth_m = {depth}
-reflectance = 0.0
-[photons]
-count = 1000
-[sensor]
-pixels = [1, 1]
-[[radiometer]]
-depth_m = {z_r}
-view = "nadir"
-position_m = [20.0, 20.0]
+sun = {{ zenith_deg = {SUN_ZENITH_DEG} }}
+surface = {{ refractive_index = {N_WATER} }}
+water = {{ iop = {{ a = {a}, b = {b} }}, phase = {{ kind = "henyey-greenstein", g = {g} }} }}
+bottom = {{ depth_m = {depth}, reflectance = 0.0 }}
+radiometer = [{{ depth_m = {z_r}, view = "nadir", position_m = [20.0, 20.0] }}]
 "#
-    );
+    ))
+    .text();
     let r = &path_radiometers(&scene(&text, 64))[0];
     let mu0 = SUN_ZENITH_DEG.to_radians().cos();
     let sin_w = (1.0 - mu0 * mu0).sqrt() / N_WATER;

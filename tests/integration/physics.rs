@@ -7,6 +7,7 @@
 //! standard errors (and, for Kirk, from the accuracy of his fit), or from
 //! rounding where the check is deterministic.
 
+use crate::common::{minimal, minimal_with};
 use littoral::emit::tally::{Totals, ED, EOD, EOU, EU};
 use littoral::emit::Emitter;
 use littoral::scene::{Overrides, Scene};
@@ -36,28 +37,16 @@ fn simple_text(
     photons: u64,
     depths: &[f64],
 ) -> String {
-    format!(
+    minimal_with(&format!(
         r#"
-[spectral]
-start_nm = 500.0
-end_nm = 500.0
-bands = 1
-[sun]
-zenith_deg = {zenith}
-irradiance = 1.0
-[surface]
-refractive_index = {n}
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = {a}, b = {b} }}
-phase = {phase}
-[photons]
-count = {photons}
-[tally]
-depths_m = {depths:?}
+spectral = {{ start_nm = 500.0, end_nm = 500.0, bands = 1 }}
+sun = {{ zenith_deg = {zenith} }}
+surface = {{ refractive_index = {n} }}
+water = {{ iop = {{ a = {a}, b = {b} }}, phase = {phase} }}
+photons = {{ count = {photons} }}
+tally = {{ depths_m = {depths:?} }}
 "#
-    )
+    ))
 }
 
 /// Mean count per photon and its standard error.
@@ -254,47 +243,34 @@ fn gershun() {
     );
 }
 
-const CLOSURE_SCENE: &str = r#"
+/// A floor sloping from 1 to 6 m, a box and a panel, a rough surface, sky
+/// and open edges: every sink of the energy budget.
+fn closure_scene() -> String {
+    minimal()
+        .remove("water.iop")
+        .merge(
+            r#"
 name = "closure"
 seed = 4
-[spectral]
-start_nm = 420.0
-end_nm = 680.0
-bands = 8
-[sun]
-zenith_deg = 40.0
-azimuth_deg = 30.0
-spectrum = "astm-g173-direct"
-[sky]
-spectrum = "astm-g173-diffuse"
-[surface]
-kind = "cox-munk"
-wind_speed = 6.0
-[domain]
-size_m = [20.0, 20.0]
-edges = "open"
-[water]
-chl = 2.0
-cdom_440 = 0.1
-nap_440 = 0.02
-[bottom]
-slope = { from_depth_m = 1.0, to_depth_m = 6.0, axis = "x" }
-reflectance = "sand"
-[[target]]
-kind = "box"
-center_m = [10.0, 10.0, -2.5]
-size_m = [2.0, 2.0, 1.0]
-reflectance = 0.3
-[[target]]
-kind = "panel"
-center_m = [5.0, 5.0, -1.0]
-size_m = [1.0, 1.0]
-reflectance = 0.6
-[photons]
-count = 200000
-[tally]
-depths_m = [0.0, 1.0]
-"#;
+spectral = { start_nm = 420.0, end_nm = 680.0, bands = 8 }
+sun = { zenith_deg = 40.0, azimuth_deg = 30.0, spectrum = "astm-g173-direct" }
+sky = { spectrum = "astm-g173-diffuse" }
+surface = { kind = "cox-munk", wind_speed = 6.0 }
+domain = { size_m = [20.0, 20.0], edges = "open" }
+water = { chl = 2.0, cdom_440 = 0.1, nap_440 = 0.02 }
+bottom = { slope = { from_depth_m = 1.0, to_depth_m = 6.0, axis = "x" }, reflectance = "sand" }
+target = [
+    { kind = "box", center_m = [10.0, 10.0, -2.5], size_m = [2.0, 2.0, 1.0], reflectance = 0.3 },
+    { kind = "panel", center_m = [5.0, 5.0, -1.0], size_m = [1.0, 1.0], reflectance = 0.6 },
+]
+photons = { count = 200000 }
+tally = { depths_m = [0.0, 1.0] }
+"#,
+        )
+        .unwrap()
+        .remove("sun.irradiance")
+        .text()
+}
 
 /// Every photon ends in one sink; with band counts binomial around the
 /// source spectrum, emitted = escaped + absorbed + lost within 3 standard
@@ -302,7 +278,7 @@ depths_m = [0.0, 1.0]
 /// and open edges.
 #[test]
 fn energy_closes_per_band() {
-    let s = scene(CLOSURE_SCENE);
+    let s = scene(&closure_scene());
     let e = Emitter::new(&s).unwrap();
     let t = e.trace_all(0).unwrap();
     let power: Vec<f64> = (0..s.bands.len()).map(|b| e.photon_power(b)).collect();
@@ -317,25 +293,20 @@ fn energy_closes_per_band() {
 }
 
 fn layered(water: &str) -> Scene {
-    scene(&format!(
-        r#"
-[spectral]
-start_nm = 440.0
-end_nm = 560.0
-bands = 2
-[sun]
-zenith_deg = 20.0
-irradiance = 1.0
-[domain]
-size_m = [50.0, 50.0]
-[water]
-{water}
-[photons]
-count = 300000
-[tally]
-depths_m = [0.0, 2.0, 5.0]
-"#
-    ))
+    let text = minimal()
+        .remove("water")
+        .merge(
+            r#"
+spectral = { start_nm = 440.0, end_nm = 560.0, bands = 2 }
+sun = { zenith_deg = 20.0 }
+domain = { size_m = [50.0, 50.0] }
+photons = { count = 300000 }
+tally = { depths_m = [0.0, 2.0, 5.0] }
+"#,
+        )
+        .and_then(|t| t.merge(&format!("[water]\n{water}")))
+        .unwrap();
+    scene(&text.text())
 }
 
 /// Delta tracking is unbiased: water whose constituents rise only far
@@ -518,28 +489,15 @@ fn flat_surface_transfers_water_radiance_as_t_over_n_squared() {
 
 /// A Cox–Munk scene with two bands of direct normal sun irradiance 1.7.
 fn glint_scene(zenith: f64, azimuth: f64, wind: f64) -> Scene {
-    scene(&format!(
+    scene(&minimal_with(&format!(
         r#"
-[spectral]
-start_nm = 500.0
-end_nm = 600.0
-bands = 2
-[sun]
-zenith_deg = {zenith}
-azimuth_deg = {azimuth}
-irradiance = 1.7
-[surface]
-kind = "cox-munk"
-wind_speed = {wind}
-refractive_index = 1.34
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = 0.1, b = 0.1 }}
-[photons]
-count = 1
+spectral = {{ start_nm = 500.0, end_nm = 600.0, bands = 2 }}
+sun = {{ zenith_deg = {zenith}, azimuth_deg = {azimuth}, irradiance = 1.7 }}
+surface = {{ kind = "cox-munk", wind_speed = {wind}, refractive_index = 1.34 }}
+water = {{ iop = {{ a = 0.1, b = 0.1 }} }}
+photons = {{ count = 1 }}
 "#
-    ))
+    )))
 }
 
 /// Zenith and azimuth (rad) of a direction.

@@ -1,7 +1,7 @@
 //! The products beside the total radiance: water-leaving radiance,
 //! surface-reflected radiance and remote-sensing reflectance.
 
-use crate::common::{f32s, render_job, tempdir};
+use crate::common::{f32s, minimal_with, render_job, tempdir};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
 use std::path::Path;
@@ -13,33 +13,20 @@ const SUN_ZENITH_DEG: f64 = 30.0;
 /// Deep enough water over a black floor, flat surface, isotropic sky,
 /// three bands; `b` the scattering coefficient.
 fn scene(b: f64) -> String {
-    format!(
+    minimal_with(&format!(
         r#"
 name = "prod"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 3
-[sun]
-zenith_deg = {SUN_ZENITH_DEG}
-irradiance = 1.0
-[sky]
-radiance = {SKY}
-[surface]
-refractive_index = {N_WATER}
-[domain]
-size_m = [20.0, 20.0]
-[water]
-iop = {{ a = 0.2, b = {b} }}
-[bottom]
-depth_m = 5.0
-reflectance = 0.0
-[photons]
-count = 200000
-[sensor]
-pixels = [6, 6]
+spectral = {{ start_nm = 450.0, end_nm = 650.0, bands = 3 }}
+sun = {{ zenith_deg = {SUN_ZENITH_DEG} }}
+sky = {{ radiance = {SKY} }}
+surface = {{ refractive_index = {N_WATER} }}
+domain = {{ size_m = [20.0, 20.0] }}
+water = {{ iop = {{ a = 0.2, b = {b} }} }}
+bottom = {{ depth_m = 5.0, reflectance = 0.0 }}
+photons = {{ count = 200000 }}
+sensor = {{ pixels = [6, 6] }}
 "#
-    )
+    ))
 }
 
 /// L_t, L_w, surface-reflected and R_rs cubes of a render.

@@ -316,39 +316,26 @@ fn periodic_edges_are_searched_across() {
     }
 }
 
+/// Deep Fournier–Forand water seen by 4 x 4 orthographic pixels, `bands`
+/// bands, with the TOML `extra` (tables, radiometers) merged in.
 fn deep_scene(bands: usize, extra: &str) -> String {
-    format!(
-        r#"
+    minimal()
+        .merge(&format!(
+            r#"
 name = "deep"
-[spectral]
-start_nm = 450.0
-end_nm = 550.0
-bands = {bands}
-[sun]
-zenith_deg = 20.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-iop = {{ a = 0.3, b = 0.6 }}
-phase = {{ kind = "fournier-forand", bb_ratio = 0.02 }}
-[photons]
-count = 400000
-[tally]
-depths_m = [0.0, 1.0, 2.0, 6.0]
-[sensor]
-kind = "orthographic"
-pixels = [4, 4]
-gsd_m = 1.0
-samples_per_pixel = 8
-[estimate]
-k = 400
-k_expanded = 3200
-max_radius_m = 3.0
-step_m = 0.25
-{extra}
+spectral = {{ start_nm = 450.0, end_nm = 550.0, bands = {bands} }}
+sun = {{ zenith_deg = 20.0 }}
+domain = {{ size_m = [40.0, 40.0] }}
+water = {{ iop = {{ a = 0.3, b = 0.6 }}, phase = {{ kind = "fournier-forand", bb_ratio = 0.02 }} }}
+photons = {{ count = 400000 }}
+tally = {{ depths_m = [0.0, 1.0, 2.0, 6.0] }}
+sensor = {{ kind = "orthographic", pixels = [4, 4], gsd_m = 1.0, samples_per_pixel = 8 }}
+estimate = {{ k = 400, k_expanded = 3200, max_radius_m = 3.0, step_m = 0.25 }}
 "#
-    )
+        ))
+        .and_then(|s| s.merge(extra))
+        .unwrap()
+        .text()
 }
 
 fn render_json(dir: &Path, scene: &str, extra: &[&str]) -> serde_json::Value {
@@ -656,7 +643,11 @@ fn render_outputs_and_errors() {
     );
     // A boundary grid that cannot fit the memory budget is refused up front.
     let grid_scene = dir.path().join("grid.toml");
-    std::fs::write(&grid_scene, deep_scene(2, "boundary_grid_m = 0.05\n")).unwrap();
+    std::fs::write(
+        &grid_scene,
+        deep_scene(2, "estimate = { boundary_grid_m = 0.05 }"),
+    )
+    .unwrap();
     let too_big = littoral(&[
         "render",
         grid_scene.to_str().unwrap(),
@@ -680,41 +671,26 @@ fn render_outputs_and_errors() {
 #[test]
 fn targets_narrower_than_their_surface_search_are_warned_about() {
     let text = |gather: u32| {
-        format!(
-            r#"
+        minimal()
+            .remove("water.iop")
+            .merge(&format!(
+                r#"
 name = "small"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 4
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-chl = 1.0
-[bottom]
-depth_m = 4.0
-reflectance = 0.2
-[[target]]
-kind = "panel"
-center_m = [10.0, 10.0, -2.0]
-size_m = [10.0, 10.0]
-reflectance = 0.5
-[[target]]
-kind = "box"
-center_m = [30.0, 30.0, -3.75]
-size_m = [0.3, 0.3, 0.5]
-reflectance = 0.5
-[photons]
-count = 100000
-[sensor]
-pixels = [2, 2]
-[estimate]
-gather_rays = {gather}
+spectral = {{ start_nm = 450.0, end_nm = 650.0, bands = 4 }}
+domain = {{ size_m = [40.0, 40.0] }}
+water = {{ chl = 1.0 }}
+bottom = {{ depth_m = 4.0, reflectance = 0.2 }}
+target = [
+    {{ kind = "panel", center_m = [10.0, 10.0, -2.0], size_m = [10.0, 10.0], reflectance = 0.5 }},
+    {{ kind = "box", center_m = [30.0, 30.0, -3.75], size_m = [0.3, 0.3, 0.5], reflectance = 0.5 }},
+]
+photons = {{ count = 100000 }}
+sensor = {{ pixels = [2, 2] }}
+estimate = {{ gather_rays = {gather} }}
 "#
-        )
+            ))
+            .unwrap()
+            .text()
     };
     let dir = tempdir();
     let s = Scene::parse(&text(0), Path::new("small.toml"), &Overrides::default()).unwrap();

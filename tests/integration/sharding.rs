@@ -4,39 +4,31 @@
 //! the file named, for a missing, repeated, foreign, truncated or corrupt
 //! shard.
 
-use crate::common::{assert_clean_failure, littoral, p, tempdir};
+use crate::common::{assert_clean_failure, littoral, minimal, p, tempdir};
 use std::path::{Path, PathBuf};
 
 /// A small floor-and-target scene with a sky, so every photon kind occurs.
-const SCENE: &str = r#"
+fn scene_text() -> String {
+    minimal()
+        .remove("water.iop")
+        .merge(
+            r#"
 name = "shards"
 seed = 7
-[spectral]
-start_nm = 420.0
-end_nm = 680.0
-bands = 6
-[sun]
-zenith_deg = 35.0
-irradiance = 1.0
-[sky]
-radiance = 0.03
-[domain]
-size_m = [30.0, 30.0]
-[water]
-chl = 1.0
-[bottom]
-depth_m = 6.0
-reflectance = "sand"
-[[target]]
-kind = "panel"
-center_m = [15.0, 15.0, -3.0]
-size_m = [4.0, 4.0]
-reflectance = 0.4
-[photons]
-count = 120000
-[tally]
-depths_m = [0.0, 2.0]
-"#;
+spectral = { start_nm = 420.0, end_nm = 680.0, bands = 6 }
+sun = { zenith_deg = 35.0 }
+sky = { radiance = 0.03 }
+domain = { size_m = [30.0, 30.0] }
+water = { chl = 1.0 }
+bottom = { depth_m = 6.0, reflectance = "sand" }
+target = [{ kind = "panel", center_m = [15.0, 15.0, -3.0], size_m = [4.0, 4.0], reflectance = 0.4 }]
+photons = { count = 120000 }
+tally = { depths_m = [0.0, 2.0] }
+"#,
+        )
+        .unwrap()
+        .text()
+}
 
 fn ok(out: std::process::Output) {
     assert!(
@@ -75,7 +67,7 @@ fn shards(dir: &Path, scene: &Path, n: u64, extra: &[&str]) -> Vec<PathBuf> {
 fn merged_shards_are_the_single_run_map_byte_for_byte() {
     let dir = tempdir();
     let scene = dir.path().join("s.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    std::fs::write(&scene, scene_text()).unwrap();
     let single = dir.path().join("single.map");
     ok(littoral(&[
         "emit",
@@ -147,7 +139,11 @@ fn merged_shards_are_the_single_run_map_byte_for_byte() {
 fn bad_shard_sets_are_refused_naming_the_file() {
     let dir = tempdir();
     let scene = dir.path().join("s.toml");
-    std::fs::write(&scene, SCENE.replace("count = 120000", "count = 20000")).unwrap();
+    std::fs::write(
+        &scene,
+        scene_text().replace("count = 120000", "count = 20000"),
+    )
+    .unwrap();
     let parts = shards(dir.path(), &scene, 3, &[]);
     let out = dir.path().join("m.map");
     let merge = |files: &[&Path]| {
@@ -162,7 +158,7 @@ fn bad_shard_sets_are_refused_naming_the_file() {
     let other = dir.path().join("o.toml");
     std::fs::write(
         &other,
-        SCENE
+        scene_text()
             .replace("count = 120000", "count = 20000")
             .replace("seed = 7", "seed = 8"),
     )
@@ -222,7 +218,7 @@ fn render_part(scene: &Path, tiles: &str, map: &Path, out: &Path) {
 /// The sharding scene with a small image (3 x 2 tiles of 16 px) and a
 /// radiometer.
 fn render_scene() -> String {
-    SCENE.replace("count = 120000", "count = 60000")
+    scene_text().replace("count = 120000", "count = 60000")
         + "[sensor]\npixels = [40, 24]\ngsd_m = 0.6\n[[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [15.0, 15.0]\n"
 }
 

@@ -5,7 +5,7 @@
 //! surface (a nadir view reflects the zenith's radiance), through a rough
 //! one both ways as a quadrature over the facets says.
 
-use crate::common::{f32s, render_job, tempdir};
+use crate::common::{f32s, minimal_with, render_job, tempdir};
 use littoral::emit::Emitter;
 use littoral::optics::sky::SkyModel;
 use littoral::optics::surface::fresnel_reflectance;
@@ -26,37 +26,20 @@ fn scene(distribution: &str, photons: u64) -> Scene {
 
 /// The TOML of [`scene`].
 fn scene_text(distribution: &str, photons: u64) -> String {
-    format!(
+    minimal_with(&format!(
         r#"
 name = "sky"
-[spectral]
-start_nm = 500.0
-end_nm = 500.0
-bands = 1
-[sun]
-zenith_deg = {SUN_ZENITH_DEG}
-azimuth_deg = 30.0
-irradiance = 1.0
-[sky]
-radiance = {SKY}
-distribution = "{distribution}"
-[surface]
-refractive_index = {N_WATER}
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = 0.5, b = 0.0 }}
-[bottom]
-depth_m = 5.0
-reflectance = 0.0
-[photons]
-count = {photons}
-[sensor]
-pixels = [3, 3]
-[tally]
-depths_m = [0.0]
+spectral = {{ start_nm = 500.0, end_nm = 500.0, bands = 1 }}
+sun = {{ zenith_deg = {SUN_ZENITH_DEG}, azimuth_deg = 30.0 }}
+sky = {{ radiance = {SKY}, distribution = "{distribution}" }}
+surface = {{ refractive_index = {N_WATER} }}
+water = {{ iop = {{ a = 0.5, b = 0.0 }} }}
+bottom = {{ depth_m = 5.0, reflectance = 0.0 }}
+photons = {{ count = {photons} }}
+sensor = {{ pixels = [3, 3] }}
+tally = {{ depths_m = [0.0] }}
 "#
-    )
+    ))
 }
 
 /// The Fresnel reflectance integrated over a sky model: (1/pi) integral of
@@ -146,7 +129,7 @@ fn sky_through_facets(
     g: &dyn Fn(glam::DVec3) -> f64,
 ) -> (f64, f64) {
     use glam::DVec3;
-    use littoral::optics::surface::{reflect, refract, smith_lambda};
+    use littoral::optics::surface::{facet_quadrature, reflect, refract, smith_lambda};
     let from_above = d.z < 0.0;
     let (n1, n2) = if from_above {
         (1.0, N_WATER)
@@ -154,44 +137,25 @@ fn sky_through_facets(
         (N_WATER, 1.0)
     };
     let g1 = |v: DVec3| 1.0 / (1.0 + smith_lambda(v.z.abs(), slope_variance));
-    let s_max = 6.0 * (0.5 * slope_variance).sqrt();
-    const CELLS: usize = 500;
-    let h = 2.0 * s_max / CELLS as f64;
-    let (mut norm, mut single, mut more) = (0.0, 0.0, 0.0);
-    for i in 0..CELLS {
-        let zx = -s_max + (i as f64 + 0.5) * h;
-        for j in 0..CELLS {
-            let zy = -s_max + (j as f64 + 0.5) * h;
-            let m_up = DVec3::new(-zx, -zy, 1.0);
-            let facing = if from_above {
-                -d.dot(m_up)
+    let (mut single, mut more) = (0.0, 0.0);
+    let norm = facet_quadrature(slope_variance, d, 500, |m, w| {
+        let f = fresnel_reflectance(-d.dot(m), n1, n2);
+        let branches = [(Some(reflect(d, m)), f), (refract(d, m, n1, n2), 1.0 - f)];
+        for (k, (out, p)) in branches.into_iter().enumerate() {
+            let Some(out) = out else { continue };
+            let to_sky = (k == 0) == from_above;
+            let away = if (k == 0) == from_above {
+                out.z > 0.0
             } else {
-                d.dot(m_up)
+                out.z < 0.0
             };
-            if facing <= 0.0 {
-                continue;
+            let leave = if away { g1(out) } else { 0.0 };
+            if to_sky {
+                single += w * p * leave * g(out);
             }
-            let w = (-(zx * zx + zy * zy) / slope_variance).exp() * facing;
-            norm += w;
-            let m = if from_above { m_up } else { -m_up }.normalize();
-            let f = fresnel_reflectance(-d.dot(m), n1, n2);
-            let branches = [(Some(reflect(d, m)), f), (refract(d, m, n1, n2), 1.0 - f)];
-            for (k, (out, p)) in branches.into_iter().enumerate() {
-                let Some(out) = out else { continue };
-                let to_sky = (k == 0) == from_above;
-                let away = if (k == 0) == from_above {
-                    out.z > 0.0
-                } else {
-                    out.z < 0.0
-                };
-                let leave = if away { g1(out) } else { 0.0 };
-                if to_sky {
-                    single += w * p * leave * g(out);
-                }
-                more += w * p * (1.0 - leave);
-            }
+            more += w * p * (1.0 - leave);
         }
-    }
+    });
     (single / norm, more / norm)
 }
 

@@ -5,7 +5,7 @@
 //! one fate, and the map keeps photons travelling up apart from the rest,
 //! the copies of a split path carrying their share of its power.
 
-use crate::common::{all_photons, tempdir};
+use crate::common::{all_photons, minimal, tempdir};
 use littoral::emit::tally::{Totals, EOU, EU, LU};
 use littoral::emit::trace::FATE_UNIT;
 use littoral::emit::Emitter;
@@ -19,34 +19,19 @@ use std::path::Path;
 /// Deep water with a forward-peaked phase function (upwelling light is a
 /// few per cent of the downwelling), or the same over a grey floor.
 fn deep(split: u32, photons: u64, floor: bool) -> Scene {
-    let bottom = if floor {
-        "[bottom]\ndepth_m = 4.0\nreflectance = 0.3\n"
-    } else {
-        ""
-    };
-    let text = format!(
+    let mut text = minimal().merge(&format!(
         r#"
 seed = 11
-[spectral]
-start_nm = 500.0
-end_nm = 500.0
-bands = 1
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [10.0, 10.0]
-[water]
-iop = {{ a = 0.1, b = 0.4 }}
-phase = {{ kind = "fournier-forand", bb_ratio = 0.0183 }}
-{bottom}
-[photons]
-count = {photons}
-upward_split = {split}
-[tally]
-depths_m = [0.0, 1.0, 3.0]
+spectral = {{ start_nm = 500.0, end_nm = 500.0, bands = 1 }}
+water = {{ iop = {{ a = 0.1, b = 0.4 }}, phase = {{ kind = "fournier-forand", bb_ratio = 0.0183 }} }}
+photons = {{ count = {photons}, upward_split = {split} }}
+tally = {{ depths_m = [0.0, 1.0, 3.0] }}
 "#
-    );
+    ));
+    if floor {
+        text = text.and_then(|t| t.merge("bottom = { depth_m = 4.0, reflectance = 0.3 }"));
+    }
+    let text = text.unwrap().text();
     Scene::parse(&text, Path::new("split.toml"), &Overrides::default())
         .unwrap_or_else(|e| panic!("{e}\n{text}"))
 }

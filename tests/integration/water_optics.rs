@@ -5,6 +5,7 @@
 //! gets. The water's refractive index per band (Quan & Fry 1995): emission
 //! transmits each band by its own Fresnel factor.
 
+use crate::common::minimal;
 use littoral::emit::tally::{Totals, ED, EU};
 use littoral::emit::Emitter;
 use littoral::scene::{Overrides, Scene};
@@ -12,23 +13,22 @@ use std::path::Path;
 
 /// A one-file scene in `dir` with `water` as its `[water]` table body.
 fn scene_in(dir: &Path, bands: &str, water: &str, photons: u64) -> littoral::Result<Scene> {
-    let text = format!(
-        r#"
+    let text = minimal()
+        .remove("spectral")
+        .remove("water")
+        .merge(&format!(
+            r#"
+sun = {{ zenith_deg = 0.0 }}
+photons = {{ count = {photons} }}
+tally = {{ depths_m = [0.0, 1.0, 3.0] }}
 [spectral]
 {bands}
-[sun]
-zenith_deg = 0.0
-irradiance = 1.0
-[domain]
-size_m = [10.0, 10.0]
 [water]
 {water}
-[photons]
-count = {photons}
-[tally]
-depths_m = [0.0, 1.0, 3.0]
 "#
-    );
+        ))
+        .unwrap()
+        .text();
     let path = dir.join("scene.toml");
     std::fs::write(&path, &text).unwrap();
     Scene::parse(&text, &path, &Overrides::default())
@@ -207,11 +207,20 @@ fn bad_iop_tables_are_refused_with_the_file_and_band() {
 fn each_band_crosses_the_surface_at_its_own_index() {
     let dir = tempfile::tempdir().unwrap();
     let text = |extra: &str| {
-        format!(
-            "[spectral]\nstart_nm = 400.0\nend_nm = 700.0\nbands = 3\n[sun]\nzenith_deg = 75.0\n\
-             irradiance = 1.0\n[surface]\n{extra}\n[domain]\nsize_m = [10.0, 10.0]\n[water]\n\
-             iop = {{ a = 0.1, b = 0.0 }}\n[photons]\ncount = 1500000\n[tally]\ndepths_m = [0.0]\n"
-        )
+        minimal()
+            .merge(&format!(
+                r#"
+spectral = {{ start_nm = 400.0, end_nm = 700.0, bands = 3 }}
+sun = {{ zenith_deg = 75.0 }}
+water = {{ iop = {{ a = 0.1, b = 0.0 }} }}
+photons = {{ count = 1500000 }}
+tally = {{ depths_m = [0.0] }}
+[surface]
+{extra}
+"#
+            ))
+            .unwrap()
+            .text()
     };
     let path = dir.path().join("s.toml");
     let s = Scene::parse(

@@ -375,32 +375,15 @@ fn modes_parse_and_print() {
 /// A 20 m x 10 m domain, floor at 5 m, a 2 x 2 x 1 m box spanning
 /// x 9..11, y 4..6, z -4.5..-3.5.
 fn box_scene(edges: &str) -> Scene {
-    let toml = format!(
+    let toml = crate::testing::minimal_with(&format!(
         r#"
-[spectral]
-start_nm = 500.0
-end_nm = 500.0
-bands = 1
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [20.0, 10.0]
-edges = "{edges}"
-[water]
-iop = {{ a = 0.1, b = 0.1 }}
-[bottom]
-depth_m = 5.0
-reflectance = 0.1
-[[target]]
-kind = "box"
-center_m = [10.0, 5.0, -4.0]
-size_m = [2.0, 2.0, 1.0]
-reflectance = 0.2
-[photons]
-count = 1000
+spectral = {{ start_nm = 500.0, end_nm = 500.0, bands = 1 }}
+domain = {{ size_m = [20.0, 10.0], edges = "{edges}" }}
+water = {{ iop = {{ a = 0.1, b = 0.1 }} }}
+bottom = {{ depth_m = 5.0, reflectance = 0.1 }}
+target = [{{ kind = "box", center_m = [10.0, 5.0, -4.0], size_m = [2.0, 2.0, 1.0], reflectance = 0.2 }}]
 "#
-    );
+    ));
     Scene::parse(&toml, Path::new("t.toml"), &Overrides::default())
         .unwrap_or_else(|e| panic!("{e}"))
 }

@@ -423,45 +423,24 @@ fn bundle_quadrature(s: &SeaSurface, d: DVec3) -> (f64, f64, f64, f64) {
     let n_w = s.n_water;
     let from_above = d.z < 0.0;
     let (n1, n2) = if from_above { (1.0, n_w) } else { (n_w, 1.0) };
-    let sigma2 = s.slope_variance;
-    let s_max = 6.0 * (0.5 * sigma2).sqrt();
-    const CELLS: usize = 600;
-    let h = 2.0 * s_max / CELLS as f64;
-    let (mut norm, mut r1, mut t1, mut r0, mut t0) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for i in 0..CELLS {
-        let zx = -s_max + (i as f64 + 0.5) * h;
-        for j in 0..CELLS {
-            let zy = -s_max + (j as f64 + 0.5) * h;
-            let m_up = DVec3::new(-zx, -zy, 1.0);
-            let facing = if from_above {
-                -d.dot(m_up)
-            } else {
-                d.dot(m_up)
-            };
-            if facing <= 0.0 {
-                continue;
-            }
-            let w = (-(zx * zx + zy * zy) / sigma2).exp() * facing;
-            norm += w;
-            let m = if from_above { m_up } else { -m_up }.normalize();
-            let cos_i = -d.dot(m);
-            let f = fresnel_reflectance(cos_i, n1, n2);
-            let r = reflect(d, m);
-            // Away from the surface on the ray's own side, or on the other.
-            let r_away = if from_above { r.z > 0.0 } else { r.z < 0.0 };
-            if r_away {
-                r1 += w * f * s.masking(r);
-                r0 += w * f;
-            }
-            if let Some(t) = refract(d, m, n1, n2) {
-                let t_away = if from_above { t.z < 0.0 } else { t.z > 0.0 };
-                if t_away {
-                    t1 += w * (1.0 - f) * s.masking(t);
-                    t0 += w * (1.0 - f);
-                }
+    let (mut r1, mut t1, mut r0, mut t0) = (0.0, 0.0, 0.0, 0.0);
+    let norm = facet_quadrature(s.slope_variance, d, 600, |m, w| {
+        let f = fresnel_reflectance(-d.dot(m), n1, n2);
+        let r = reflect(d, m);
+        // Away from the surface on the ray's own side, or on the other.
+        let r_away = if from_above { r.z > 0.0 } else { r.z < 0.0 };
+        if r_away {
+            r1 += w * f * s.masking(r);
+            r0 += w * f;
+        }
+        if let Some(t) = refract(d, m, n1, n2) {
+            let t_away = if from_above { t.z < 0.0 } else { t.z > 0.0 };
+            if t_away {
+                t1 += w * (1.0 - f) * s.masking(t);
+                t0 += w * (1.0 - f);
             }
         }
-    }
+    });
     (r1 / norm, t1 / norm, r0 / norm, t0 / norm)
 }
 

@@ -86,6 +86,13 @@ impl PathTracer<'_> {
     /// by light sampling, roulette, and the next direction drawn by the
     /// phase function (or guided toward the sun) with the disc it finds
     /// weighed by MIS; `events` counts the scattering.
+    ///
+    /// It stays one function: its stages share the direction density
+    /// (`dir_pdf`, the mixture of the phase function and guiding) and the
+    /// path's band weights, and their order is what makes it unbiased: the
+    /// sun's light sampling is weighed against the direction drawn after
+    /// it, and roulette falls between the vertex's own estimate and the
+    /// continuation.
     pub(super) fn at_collision(
         &self,
         pos: Vec3,

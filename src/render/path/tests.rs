@@ -6,24 +6,19 @@ use std::path::Path;
 /// from the violet, where the gradient sets the extinction, to 780 nm,
 /// where pure water's absorption does (and sets the majorant).
 fn gradient_scene() -> Scene {
-    let text = r#"
+    let text = &crate::testing::minimal_scene()
+        .remove("spectral")
+        .remove("water")
+        .merge(
+            r#"
 name = "gradient"
-[spectral]
-centers_nm = [410.0, 550.0, 780.0]
-fwhm_nm = [10.0, 10.0, 10.0]
-out_of_range = "clamp"
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-chl = 1.0
-cdom_440 = 0.05
-gradient = { axis = "x", chl = [5.0, 0.5], cdom_440 = [0.3, 0.03] }
-[photons]
-count = 1000
-"#;
+spectral = { centers_nm = [410.0, 550.0, 780.0], fwhm_nm = [10.0, 10.0, 10.0], out_of_range = "clamp" }
+domain = { size_m = [40.0, 40.0] }
+water = { chl = 1.0, cdom_440 = 0.05, gradient = { axis = "x", chl = [5.0, 0.5], cdom_440 = [0.3, 0.03] } }
+"#,
+        )
+        .unwrap()
+        .text();
     Scene::parse(text, Path::new("gradient.toml"), &Overrides::default()).unwrap()
 }
 
@@ -88,28 +83,18 @@ fn residual_ratio_tracking_is_unbiased_and_quiet_where_c_is_level() {
 /// along a slanted ray from inside a turbid layer to the surface.
 #[test]
 fn layered_transmittance_is_exact() {
-    let text = r#"
+    let text = &crate::testing::minimal_scene()
+        .remove("water")
+        .merge(
+            r#"
 name = "layers"
-[spectral]
-start_nm = 450.0
-end_nm = 650.0
-bands = 3
-[sun]
-zenith_deg = 30.0
-irradiance = 1.0
-[domain]
-size_m = [40.0, 40.0]
-[water]
-chl = 0.5
-cdom_440 = 0.05
-[[water.layer]]
-top_m = 2.0
-bottom_m = 4.0
-chl = 8.0
-cdom_440 = 0.2
-[photons]
-count = 1000
-"#;
+spectral = { start_nm = 450.0, end_nm = 650.0, bands = 3 }
+domain = { size_m = [40.0, 40.0] }
+water = { chl = 0.5, cdom_440 = 0.05, layer = [{ top_m = 2.0, bottom_m = 4.0, chl = 8.0, cdom_440 = 0.2 }] }
+"#,
+        )
+        .unwrap()
+        .text();
     let scene = Scene::parse(text, Path::new("layers.toml"), &Overrides::default()).unwrap();
     let tracer = PathTracer::new(&scene);
     let nb = scene.bands.len();
