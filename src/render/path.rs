@@ -58,14 +58,21 @@
 //! error of nadir Lu 3.4x (2.04 % -> 0.60 % over 1 M paths; the largest
 //! path's share of the total 1.6 % -> 0.3 %), and the mean rose 3.9 %
 //! toward the emission tally. Paths stop after `MAX_EVENTS` events, like
-//! photons do.
+//! photons do. **Splitting.** A path whose weight the choice between
+//! guided and unguided directions has raised above `SPLIT_ABOVE` goes on
+//! as that many copies, each with its share (`PathScratch::split`): the
+//! mixture's 1 / (1 - `GUIDE_FRACTION`) per forward scattering far from
+//! the sun had made paths of weight 10–50 whose sun estimates, once drawn
+//! into the forward peak, were the heaviest tail left.
 //!
 //! Above the water, sensor rays meet the surface as `air_sea::from_air`
 //! has them, with the photon-map integrator.
 //!
-//! **Known limits.** With a forward-peaked phase function the estimate is
-//! heavy-tailed: paths that turn toward the sun see its bright aureole
-//! (see `benches/README.md` for the per-path deviations). The rough
+//! **Known limits.** Looking up in the near infrared through water whose
+//! IOPs vary, one path's deviation is still 10–30: the majorant is pure
+//! water's own absorption there, so that band's weight falls at every null
+//! collision (see `benches/README.md` for the per-path deviations, 2–7
+//! elsewhere). The rough
 //! surface is run backwards by the same facet sampling and shadowing that
 //! run it forwards; with Smith's shadowing the single-facet part is
 //! reciprocal (G1 of both directions).
@@ -91,6 +98,14 @@ const ROULETTE_AFTER: u32 = 4;
 /// Share of scattering directions drawn around the direction toward the
 /// sun rather than around the path's own direction.
 const GUIDE_FRACTION: f64 = 0.3;
+/// A path whose weight drawing directions has raised above this is split
+/// (see [`PathScratch::split`]).
+const SPLIT_ABOVE: f64 = 4.0;
+/// The most copies one split makes.
+const MAX_SPLIT: usize = 16;
+/// No split while this many copies wait (a bound on memory, not needed
+/// for correctness: not splitting is always unbiased).
+const MAX_PENDING: usize = 256;
 
 /// The path integrator of one scene.
 pub struct PathTracer<'a> {
@@ -110,6 +125,9 @@ pub struct PathTracer<'a> {
     /// Direction toward the sun in the water (through the mean surface),
     /// around which scattering directions are also drawn; None without sun.
     guide: Option<Vec3>,
+    /// Paths whose guided ratio exceeds this are split ([`SPLIT_ABOVE`];
+    /// infinite: never).
+    split_above: f64,
 }
 
 /// Per-path buffers, one entry per band.
@@ -118,6 +136,33 @@ pub struct PathScratch {
     iops: Vec<Iop>,
     tmp: Vec<Iop>,
     tr: Vec<f64>,
+    /// The product of the direction-sampling ratios (the scattering
+    /// mixture's or the cosine lobe's density over the drawn direction's
+    /// pdf) since the path began or was last split: how far the choice
+    /// between guided and unguided directions has raised its weight.
+    guided: f64,
+    /// Copies made by splitting, waiting to be traced.
+    pending: Vec<Pending>,
+    /// Throughput buffers of traced copies, for reuse.
+    spare: Vec<Vec<f64>>,
+}
+
+/// Where a path is between events.
+#[derive(Clone, Copy)]
+struct PathState {
+    pos: Vec3,
+    dir: Vec3,
+    events: u32,
+    /// On the floor or a target (the self-intersection epsilon applies).
+    on_surface: bool,
+}
+
+/// A copy of a path made by splitting: its state, band throughputs and
+/// guided ratio.
+struct Pending {
+    state: PathState,
+    w: Vec<f64>,
+    guided: f64,
 }
 
 impl crate::parallel::BandScratch for PathScratch {
@@ -136,6 +181,45 @@ impl PathScratch {
             iops: vec![Iop::default(); bands],
             tmp: vec![Iop::default(); bands],
             tr: vec![0.0; bands],
+            guided: 1.0,
+            pending: Vec::new(),
+            spare: Vec::new(),
+        }
+    }
+
+    /// Split the path in `state` into `n` copies when drawing directions
+    /// has raised its weight above `above` (`guided`; `n` that
+    /// rounded up, at most [`MAX_SPLIT`]): each carries 1/n of the
+    /// throughput, this one goes on and the others wait in `pending`.
+    ///
+    /// Why: a direction drawn around the path's own direction weighs its
+    /// phase function over the mixture pdf, 1 / (1 - `GUIDE_FRACTION`)
+    /// when the sun's share of the pdf is negligible, so a path that
+    /// scatters forward many times far from the sun gathers a weight of
+    /// 1.43^k (49 after a dozen events in the built-in scene's water under
+    /// a flat surface), and when it is then drawn toward the sun its sun
+    /// estimates inside the forward peak are a jackpot. The split copies
+    /// share that weight and meet the sun independently. Unbiased for any
+    /// `n`. Only this ratio counts, not the bands' spectral-tracking
+    /// factors, which are not what makes the jackpots (see
+    /// `benches/README.md` for the measured gain and cost).
+    fn split(&mut self, state: PathState, above: f64) {
+        if self.guided <= above || self.guided.is_nan() || self.pending.len() >= MAX_PENDING {
+            return;
+        }
+        let n = (self.guided.ceil() as usize).min(MAX_SPLIT);
+        let k = 1.0 / n as f64;
+        self.w.iter_mut().for_each(|x| *x *= k);
+        self.guided *= k;
+        for _ in 1..n {
+            let mut w = self.spare.pop().unwrap_or_default();
+            w.clear();
+            w.extend_from_slice(&self.w);
+            self.pending.push(Pending {
+                state,
+                w,
+                guided: self.guided,
+            });
         }
     }
 }
@@ -170,6 +254,7 @@ impl<'a> PathTracer<'a> {
             c_min: (0..nb).map(|b| scene.water.minorant(b)).collect(),
             sun: SunBeam::new(scene),
             uniform,
+            split_above: SPLIT_ABOVE,
         }
     }
 
@@ -366,6 +451,7 @@ impl<'a> PathTracer<'a> {
         pos: Vec3,
         n: Vec3,
         w: &mut [f64],
+        guided: &mut f64,
         iops: &mut [Iop],
         rng: &mut Pcg32,
     ) -> Option<Vec3> {
@@ -388,11 +474,13 @@ impl<'a> PathTracer<'a> {
             + GUIDE_FRACTION * self.mixture(q, one_minus(next, axis));
         let k = lambert / pdf;
         w.iter_mut().for_each(|x| *x *= k);
+        *guided *= k;
         Some(next)
     }
 
     /// Radiance per band arriving at `p0` (in water) travelling along
-    /// `-dir`, i.e. what an instrument at p0 looking along `dir` sees.
+    /// `-dir`, i.e. what an instrument at p0 looking along `dir` sees: the
+    /// path and every copy splitting made of it.
     pub fn in_water(
         &self,
         p0: Vec3,
@@ -401,17 +489,43 @@ impl<'a> PathTracer<'a> {
         scratch: &mut PathScratch,
         out: &mut [f64],
     ) {
-        let scene = self.scene;
-        let domain = &scene.domain;
-        let dispersive = scene.dispersive();
         out.iter_mut().for_each(|o| *o = 0.0);
-        let Some(mut pos) = domain.image(p0) else {
+        let Some(pos) = self.scene.domain.image(p0) else {
             return; // outside an open domain: no water there
         };
         scratch.w.iter_mut().for_each(|x| *x = 1.0);
-        let mut dir = dir;
-        let mut events = 0u32;
-        let mut on_surface = false;
+        scratch.guided = 1.0;
+        let mut state = PathState {
+            pos,
+            dir,
+            events: 0,
+            on_surface: false,
+        };
+        loop {
+            self.trace(state, rng, scratch, out);
+            let Some(next) = scratch.pending.pop() else {
+                return;
+            };
+            scratch.w.copy_from_slice(&next.w);
+            scratch.guided = next.guided;
+            scratch.spare.push(next.w);
+            state = next.state;
+        }
+    }
+
+    /// One path (or copy) from `state` with throughputs `scratch.w` until
+    /// it ends, adding its light to `out`; copies it splits into wait in
+    /// `scratch.pending`.
+    fn trace(&self, state: PathState, rng: &mut Pcg32, scratch: &mut PathScratch, out: &mut [f64]) {
+        let scene = self.scene;
+        let domain = &scene.domain;
+        let dispersive = scene.dispersive();
+        let PathState {
+            mut pos,
+            mut dir,
+            mut events,
+            mut on_surface,
+        } = state;
         loop {
             let t_flight = rng.exponential(self.c_bar);
             let t_surface = crate::scene::Domain::surface_distance(pos, dir);
@@ -443,9 +557,7 @@ impl<'a> PathTracer<'a> {
                 if !Self::survive(&mut scratch.w, events, self.importance(dir), rng) {
                     return;
                 }
-                continue;
-            }
-            if t_surface <= t_limit {
+            } else if t_surface <= t_limit {
                 let next = pos + dir * t_surface as f32;
                 pos = Vec3::new(next.x, next.y, 0.0);
                 if let Some(p) = domain.image(pos) {
@@ -459,22 +571,30 @@ impl<'a> PathTracer<'a> {
                 if !Self::survive(&mut scratch.w, events, self.importance(dir), rng) {
                     return;
                 }
-                continue;
-            }
-            if t_edge <= t_limit {
+            } else if t_edge <= t_limit {
                 if !domain.periodic {
                     return;
                 }
                 pos = domain.wrap(pos + dir * t_edge as f32, dir);
                 continue;
+            } else {
+                // A tentative collision.
+                pos += dir * t_flight as f32;
+                match self.at_collision(pos, dir, &mut events, rng, scratch, out) {
+                    Collided::Null => continue,
+                    Collided::Scattered(next) => dir = next,
+                    Collided::End => return,
+                }
             }
-            // A tentative collision.
-            pos += dir * t_flight as f32;
-            match self.at_collision(pos, dir, &mut events, rng, scratch, out) {
-                Collided::Null => {}
-                Collided::Scattered(next) => dir = next,
-                Collided::End => return,
-            }
+            scratch.split(
+                PathState {
+                    pos,
+                    dir,
+                    events,
+                    on_surface,
+                },
+                self.split_above,
+            );
         }
     }
 }

@@ -19,7 +19,14 @@ impl PathTracer<'_> {
     ) -> Option<Vec3> {
         let scene = self.scene;
         let n_w = scene.surface.n_water;
-        let PathScratch { w, iops, tmp, tr } = scratch;
+        let PathScratch {
+            w,
+            iops,
+            tmp,
+            tr,
+            guided,
+            ..
+        } = scratch;
         let (pos, n) = (h.position, h.normal);
         for sun in self.sun.sample(rng).into_iter().flatten() {
             let (s_w, g) = (sun.dir, sun.g);
@@ -36,7 +43,7 @@ impl PathTracer<'_> {
         for (b, x) in w.iter_mut().enumerate() {
             *x *= scene.reflectance(h.surface, pos, b);
         }
-        self.bounce(pos, n, w, iops, rng)
+        self.bounce(pos, n, w, guided, iops, rng)
     }
 
     /// A path meeting the sea surface from below, travelling along `dir`:
@@ -105,7 +112,14 @@ impl PathTracer<'_> {
         let scene = self.scene;
         let n_w = scene.surface.n_water;
         let c_bar = self.c_bar;
-        let PathScratch { w, iops, tmp, tr } = scratch;
+        let PathScratch {
+            w,
+            iops,
+            tmp,
+            tr,
+            guided,
+            ..
+        } = scratch;
         scene.water.iops(pos, iops);
         let (mut s_sum, mut n_sum) = (0.0, 0.0);
         for (x, iop) in w.iter().zip(iops.iter()) {
@@ -194,6 +208,7 @@ impl PathTracer<'_> {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return Collided::End;
         }
+        *guided *= mix(m) / pdf;
         for (x, iop) in w.iter_mut().zip(iops.iter()) {
             let bb = iop.b();
             *x = if bb > 0.0 {

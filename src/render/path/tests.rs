@@ -117,3 +117,89 @@ water = { chl = 0.5, cdom_440 = 0.05, layer = [{ top_m = 2.0, bottom_m = 4.0, ch
         }
     }
 }
+
+/// A split shares the path's throughput among its copies: the copies'
+/// weights sum to the path's, each waits with the path's state and its
+/// share of the guided ratio, and a path below the threshold is left
+/// whole.
+#[test]
+fn splitting_conserves_the_path_weight() {
+    let mut s = PathScratch::new(3);
+    s.w.copy_from_slice(&[6.0, 3.0, 0.5]);
+    s.guided = 5.5;
+    let state = PathState {
+        pos: Vec3::new(1.0, 2.0, -3.0),
+        dir: Vec3::Z,
+        events: 7,
+        on_surface: true,
+    };
+    s.split(state, SPLIT_ABOVE);
+    assert_eq!(s.pending.len(), 5, "5.5 rounds up to 6 copies");
+    for b in 0..3 {
+        let total = s.w[b] + s.pending.iter().map(|p| p.w[b]).sum::<f64>();
+        assert!(
+            (total - [6.0, 3.0, 0.5][b]).abs() < 1e-12,
+            "band {b}: {total}"
+        );
+    }
+    for p in &s.pending {
+        assert_eq!((p.state.pos, p.state.events), (state.pos, 7));
+        assert!(p.state.on_surface && (p.guided - 5.5 / 6.0).abs() < 1e-12);
+    }
+    s.pending.clear();
+    s.guided = 3.9;
+    s.split(state, SPLIT_ABOVE);
+    assert!(s.pending.is_empty() && s.guided == 3.9);
+}
+
+/// Splitting is unbiased and takes the heavy tail off: the nadir radiance
+/// 1 cm under a flat surface in deep Fournier–Forand water (sun 30
+/// degrees; paths scatter forward many times, each raising the weight of
+/// a path drawn around its own direction by 1 / (1 - GUIDE_FRACTION))
+/// read with and without splitting over 200 000 paths each agrees within
+/// four combined standard errors, and splitting lowers the per-path
+/// deviation (measured 9.1 -> 5.8 over four seeds of 131 072 paths;
+/// benches/README.md).
+#[test]
+fn splitting_is_unbiased() {
+    let text = crate::testing::minimal_with(
+        r#"
+spectral = { start_nm = 550.0, end_nm = 550.0, bands = 1 }
+domain = { size_m = [40.0, 40.0] }
+water = { iop = { a = 0.05, b = 0.3 }, phase = { kind = "fournier-forand", bb_ratio = 0.0183 } }
+"#,
+    );
+    let scene = Scene::parse(&text, Path::new("ff.toml"), &Overrides::default()).unwrap();
+    let n = 200_000u64;
+    let read = |split_above: f64| {
+        let mut tracer = PathTracer::new(&scene);
+        tracer.split_above = split_above;
+        let mut scratch = PathScratch::new(1);
+        let mut out = [0.0];
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        for i in 0..n {
+            let mut rng = Pcg32::new(11, i);
+            tracer.in_water(
+                Vec3::new(20.0, 20.0, -0.01),
+                Vec3::NEG_Z,
+                &mut rng,
+                &mut scratch,
+                &mut out,
+            );
+            sum += out[0];
+            sum_sq += out[0] * out[0];
+        }
+        let mean = sum / n as f64;
+        let sd = (sum_sq / n as f64 - mean * mean).max(0.0).sqrt();
+        (mean, sd / (n as f64).sqrt(), sd / mean)
+    };
+    let (split, whole) = (read(SPLIT_ABOVE), read(f64::INFINITY));
+    eprintln!("split {split:?}, whole {whole:?}");
+    let se = split.1.hypot(whole.1);
+    assert!(
+        (split.0 - whole.0).abs() < 4.0 * se,
+        "split {} against whole {} (combined standard error {se})",
+        split.0,
+        whole.0
+    );
+}
