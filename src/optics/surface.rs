@@ -285,24 +285,15 @@ impl SeaSurface {
     /// m~ = (-zx, -zy, 1), by the midpoint rule (400 x 400 cells; exactly
     /// -d.z when no facet within the truncation faces away from the ray).
     pub fn facing_normalisation(&self, d: DVec3) -> f64 {
-        let s_max = 6.0 * (0.5 * self.slope_variance).sqrt();
+        let s2 = self.slope_variance;
+        let s_max = 6.0 * (0.5 * s2).sqrt();
         if d.z.abs() >= (d.x.abs() + d.y.abs()) * s_max {
             return -d.z;
         }
         const CELLS: usize = 400;
         let h = 2.0 * s_max / CELLS as f64;
-        let mut sum = 0.0;
-        for i in 0..CELLS {
-            let zx = -s_max + (i as f64 + 0.5) * h;
-            for j in 0..CELLS {
-                let zy = -s_max + (j as f64 + 0.5) * h;
-                let facing = -d.dot(DVec3::new(-zx, -zy, 1.0));
-                if facing > 0.0 {
-                    sum += self.slope_density(zx, zy) * facing;
-                }
-            }
-        }
-        sum * h * h
+        // The quadrature's weights are the density times pi s2.
+        facet_quadrature(s2, d, CELLS, |_, _| {}) * h * h / (std::f64::consts::PI * s2)
     }
 
     /// The single-facet transmission of a collimated beam from the air

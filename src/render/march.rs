@@ -427,9 +427,10 @@ impl<'a> RayMarcher<'a> {
     /// toward the viewer (about a metre at 2500 photons per m^2 in Chl 10)
     /// is smeared by it over the darker water around, and the wider peak
     /// leaves more of that light's in-scatter to the exact turns. A 1 m
-    /// box 1.5 m down in Chl 10 read 10 % low with 20 degrees and 3 % low
-    /// with 40; applied to every ray looking down, 40 degrees raised the
-    /// built-in scene's deep-water pixel noise from 2.2 % to 3.8 %.
+    /// box 1.5 m down in Chl 10 read 5 % low with 20 degrees and 1.6 % low
+    /// with 30 (40 read a 2 m box at 5.5 m 6 % low in the red); applied to
+    /// every ray looking down, 40 degrees raised the built-in scene's
+    /// deep-water pixel noise from 2.2 % to 3.8 %.
     fn looks_at_target(&self, p0: Vec3, dir: Vec3) -> bool {
         if dir.z >= 0.0 {
             return false;
