@@ -386,6 +386,12 @@ impl WaterModel {
         self.extinction_at_bound(band, ConstituentField::min)
     }
 
+    /// A lower bound of the absorption anywhere in `band` (exact for
+    /// uniform water), by the same argument as [`Self::minorant`].
+    pub fn absorption_minorant(&self, band: usize) -> f64 {
+        self.iop_at_bound(band, ConstituentField::min).a
+    }
+
     /// The extinction in `band` at the concentrations `bound` picks from
     /// the field (its largest or smallest).
     fn extinction_at_bound(
@@ -393,14 +399,24 @@ impl WaterModel {
         band: usize,
         bound: fn(&ConstituentField) -> Constituents,
     ) -> f64 {
+        self.iop_at_bound(band, bound).c()
+    }
+
+    /// The IOPs in `band` at the concentrations `bound` picks from the
+    /// field.
+    fn iop_at_bound(&self, band: usize, bound: fn(&ConstituentField) -> Constituents) -> Iop {
         match self {
-            WaterModel::Explicit { a, b } => a + b,
-            WaterModel::Bands(iops) => iops[band].c(),
+            WaterModel::Explicit { a, b } => Iop {
+                a: *a,
+                b_w: 0.0,
+                b_p: *b,
+            },
+            WaterModel::Bands(iops) => iops[band],
             WaterModel::Constituents {
                 spectra,
                 field,
                 bp_550,
-            } => Self::from_constituents(spectra, &bound(field), *bp_550, band).c(),
+            } => Self::from_constituents(spectra, &bound(field), *bp_550, band),
         }
     }
 

@@ -111,33 +111,38 @@ impl PathTracer<'_> {
     ) -> Collided {
         let scene = self.scene;
         let n_w = scene.surface.n_water;
-        let c_bar = self.c_bar;
+        let mu_bar = self.mu_bar;
         let PathScratch {
             w,
             iops,
             tmp,
             tr,
             guided,
+            flown,
             ..
         } = scratch;
         scene.water.iops(pos, iops);
+        // Each band's null coefficient: the tracking rate less the
+        // extinction collisions carry (all but the absorption `kappa`).
+        let null = |iop: &Iop, kappa: f64| (mu_bar - iop.c() + kappa).max(0.0);
         let (mut s_sum, mut n_sum) = (0.0, 0.0);
-        for (x, iop) in w.iter().zip(iops.iter()) {
+        for ((x, iop), &k) in w.iter().zip(iops.iter()).zip(&self.kappa) {
             s_sum += x * iop.b();
-            n_sum += x * (c_bar - iop.c()).max(0.0);
+            n_sum += x * null(iop, k);
         }
         if s_sum + n_sum <= 0.0 {
             return Collided::End;
         }
         let p_s = s_sum / (s_sum + n_sum);
         if rng.uniform_f64() >= p_s {
-            let k = 1.0 / (c_bar * (1.0 - p_s));
-            for (x, iop) in w.iter_mut().zip(iops.iter()) {
-                *x *= (c_bar - iop.c()).max(0.0) * k;
+            let k = 1.0 / (mu_bar * (1.0 - p_s));
+            for ((x, iop), &kappa) in w.iter_mut().zip(iops.iter()).zip(&self.kappa) {
+                *x *= null(iop, kappa) * k;
             }
             return Collided::Null;
         }
-        let k = 1.0 / (c_bar * p_s);
+        absorb(w, &self.kappa, flown);
+        let k = 1.0 / (mu_bar * p_s);
         for (x, iop) in w.iter_mut().zip(iops.iter()) {
             *x *= iop.b() * k;
         }

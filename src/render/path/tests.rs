@@ -133,7 +133,7 @@ fn splitting_conserves_the_path_weight() {
         events: 7,
         on_surface: true,
     };
-    s.split(state, SPLIT_ABOVE);
+    s.split(state, SPLIT_ABOVE, &[0.0; 3]);
     assert_eq!(s.pending.len(), 5, "5.5 rounds up to 6 copies");
     for b in 0..3 {
         let total = s.w[b] + s.pending.iter().map(|p| p.w[b]).sum::<f64>();
@@ -148,7 +148,7 @@ fn splitting_conserves_the_path_weight() {
     }
     s.pending.clear();
     s.guided = 3.9;
-    s.split(state, SPLIT_ABOVE);
+    s.split(state, SPLIT_ABOVE, &[0.0; 3]);
     assert!(s.pending.is_empty() && s.guided == 3.9);
 }
 
@@ -202,4 +202,63 @@ water = { iop = { a = 0.05, b = 0.3 }, phase = { kind = "fournier-forand", bb_ra
         split.0,
         whole.0
     );
+}
+
+/// Absorption carried by weight is unbiased and keeps a strongly
+/// absorbing band quiet: the zenith radiance 3 m deep in the gradient
+/// water (pure water's absorption, 2.3 m^-1 at 780 nm, sets the
+/// extinction majorant there) read over 100 000 paths with each band's
+/// smallest absorption carried by weight and without (every band tracked
+/// against the plain extinction majorant) agrees within four combined
+/// standard errors in each band, and one path's relative deviation at
+/// 780 nm is below 5 with it (1.4–1.7 measured; 29 without, when the
+/// band met a null collision wherever the visible bands did).
+#[test]
+fn absorption_by_weight_is_unbiased_and_quiet_in_the_near_infrared() {
+    let scene = gradient_scene();
+    let nb = scene.bands.len();
+    let n = 100_000u64;
+    let read = |control: bool| {
+        let mut tracer = PathTracer::new(&scene);
+        if !control {
+            tracer.kappa.iter_mut().for_each(|k| *k = 0.0);
+            tracer.mu_bar = tracer.c_bar;
+        }
+        let mut scratch = PathScratch::new(nb);
+        let mut out = vec![0.0; nb];
+        let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+        for i in 0..n {
+            let mut rng = Pcg32::new(5, i);
+            tracer.in_water(
+                Vec3::new(10.0, 20.0, -3.0),
+                Vec3::Z,
+                &mut rng,
+                &mut scratch,
+                &mut out,
+            );
+            for b in 0..nb {
+                sum[b] += out[b];
+                sum_sq[b] += out[b] * out[b];
+            }
+        }
+        (0..nb)
+            .map(|b| {
+                let mean = sum[b] / n as f64;
+                let sd = (sum_sq[b] / n as f64 - mean * mean).max(0.0).sqrt();
+                (mean, sd / (n as f64).sqrt(), sd / mean)
+            })
+            .collect::<Vec<_>>()
+    };
+    let (with, without) = (read(true), read(false));
+    for b in 0..nb {
+        eprintln!("band {b}: with {:?}, without {:?}", with[b], without[b]);
+        let se = with[b].1.hypot(without[b].1);
+        assert!(
+            (with[b].0 - without[b].0).abs() < 4.0 * se,
+            "band {b}: {} against {} (combined standard error {se})",
+            with[b].0,
+            without[b].0
+        );
+    }
+    assert!(with[2].2 < 5.0, "780 nm: per-path deviation {}", with[2].2);
 }
