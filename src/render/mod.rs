@@ -605,13 +605,18 @@ fn read_radiometer(
             (r.position_m[1] + jy) as f32,
             -r.depth_m as f32,
         );
+        let view = if r.half_angle_deg > 0.0 {
+            within_field_of_view(r.view, r.half_angle_deg, &mut rng)
+        } else {
+            r.view
+        };
         if r.depth_m > 0.0 {
-            light.in_water(p, r.view, &mut rng, &mut one)?;
+            light.in_water(p, view, &mut rng, &mut one)?;
         } else {
             light.camera(
                 camera::CameraRay {
                     origin: p,
-                    direction: r.view,
+                    direction: view,
                 },
                 &mut rng,
                 &mut one,
@@ -634,6 +639,18 @@ fn read_radiometer(
         vov,
         largest_share,
     })
+}
+
+/// A direction within `half_angle_deg` of `axis`, drawn with density
+/// proportional to the cosine of its angle from the axis (uniform on the
+/// disc of radius sin(half angle) in the plane across it): what a flat
+/// detector behind a circular aperture averages.
+fn within_field_of_view(axis: Vec3, half_angle_deg: f64, rng: &mut Pcg32) -> Vec3 {
+    let r = half_angle_deg.to_radians().sin() * rng.uniform_f64().sqrt();
+    let phi = 2.0 * std::f64::consts::PI * rng.uniform_f64();
+    let (t, b) = axis.as_dvec3().any_orthonormal_pair();
+    let d = axis.as_dvec3() * (1.0 - r * r).sqrt() + t * (r * phi.cos()) + b * (r * phi.sin());
+    d.normalize().as_vec3()
 }
 
 #[cfg(test)]

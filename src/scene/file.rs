@@ -89,6 +89,9 @@ pub struct RadiometerFile {
     /// Horizontal position (default: domain centre).
     #[serde(default, deserialize_with = "exact::opt")]
     pub position_m: Option<[f64; 2]>,
+    /// Half-angle of the field of view around `view` (degrees; default 0,
+    /// a single direction).
+    pub half_angle_deg: Option<f64>,
 }
 
 /// A viewing direction: "nadir", "zenith" or a vector.

@@ -191,6 +191,11 @@ pub struct Radiometer {
     /// travelling the opposite way).
     pub view: Vec3,
     pub position_m: [f64; 2],
+    /// Half-angle of the field of view around `view` (degrees; 0: one
+    /// direction). The reading is the field's radiance averaged with the
+    /// weight cos(angle from `view`), as a flat detector behind a circular
+    /// aperture sees it and as the emission's Lu and Ld tallies count it.
+    pub half_angle_deg: f64,
 }
 
 /// A validated scene.

@@ -587,6 +587,17 @@ fn radiometers_lie_in_the_water_of_the_domain() {
     accepted(&slope.replace("[1.0, 5.0]", "[8.0, 5.0]"));
     accepted(&r(2.9, "[0.0, 10.0]"));
     accepted(&r(-2.0, "[5.0, 5.0]"));
+    // A field of view is a half-angle from 0 up to (not including) 90.
+    let fov = |h: &str| format!("{}half_angle_deg = {h}\n", r(1.0, "[5.0, 5.0]"));
+    for h in ["-1.0", "90.0", "nan"] {
+        refused_at(
+            &fov(h),
+            "half_angle_deg",
+            "radiometer[0].half_angle_deg",
+            &["below 90 degrees"],
+        );
+    }
+    accepted(&fov("10.0"));
 }
 
 /// Fixed-length arrays of any other length are refused naming the key and

@@ -183,11 +183,19 @@ fn radiometers(
                 ));
             }
         }
+        let half_angle_deg = r.half_angle_deg.unwrap_or(0.0);
+        if !(0.0..90.0).contains(&half_angle_deg) {
+            return Err(ctx.err(
+                &rk("half_angle_deg"),
+                format!("{half_angle_deg} must be at least 0 and below 90 degrees"),
+            ));
+        }
         radiometers.push(Radiometer {
             depth_m: r.depth_m,
             view_name: name,
             view,
             position_m,
+            half_angle_deg,
         });
     }
 
