@@ -4,6 +4,7 @@
 //! combined by the spectral mode.
 
 use super::*;
+use crate::estimate::boundary::vertical_linear_factor;
 
 impl Estimator<'_> {
     pub(super) fn search(&self, k: usize) -> Search {
@@ -303,6 +304,9 @@ impl Estimator<'_> {
         local.clear();
         expanded.clear();
         coarse.clear();
+        // The weight and its vertical first moment at each scale, for the
+        // local-linear level (`vertical_linear_factor`).
+        let (mut moments_local, mut moments_big) = ([0.0f64; 2], [0.0f64; 2]);
         for (i, n) in found.iter().enumerate() {
             let offset = n.photon.position - x;
             if plane.is_some_and(|(normal, tol)| offset.dot(normal).abs() > tol) {
@@ -324,6 +328,8 @@ impl Estimator<'_> {
             let heavy = if by_layer { !is_local } else { split && toward };
             let (band, group) = (n.photon.band, n.photon.group);
             if in_local && !heavy {
+                moments_local[0] += w;
+                moments_local[1] += w * f64::from(offset.z);
                 local.add(band, w);
                 if with_groups {
                     group_local.add(group, band, w);
@@ -332,6 +338,8 @@ impl Estimator<'_> {
             // Two layers: the expanded band sums (a shape where the grid
             // has none) take every photon counted.
             if in_big || by_layer {
+                moments_big[0] += w;
+                moments_big[1] += w * f64::from(offset.z);
                 expanded.add(band, w);
                 if with_groups {
                     group_expanded.add(group, band, w);
@@ -344,13 +352,24 @@ impl Estimator<'_> {
                 }
             }
         }
-        let v_local = small.size(mode, r_local);
+        // The clipped sphere's volume, over the local-linear factor where
+        // a vertical boundary cuts it.
+        let size = |region: &Region, r: f32, [s0, s1]: [f64; 2]| {
+            let v = region.size(mode, r);
+            match (mode, region) {
+                (BoundaryMode::ClippedSphere, Region::Volume(b)) if s0 > 0.0 => {
+                    v / vertical_linear_factor(f64::from(r), b, s1 / s0)
+                }
+                _ => v,
+            }
+        };
+        let v_local = size(&small, r_local, moments_local);
         if v_local <= 0.0 {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());
         }
         let v_big = if two_sizes {
-            big.size(mode, r_big)
+            size(&big, r_big, moments_big)
         } else {
             0.0
         };
