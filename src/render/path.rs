@@ -22,8 +22,9 @@
 //! almost wherever the other bands did; it lived only on paths that
 //! scattered at every tentative collision, and a zenith radiance 3 m deep
 //! in the built-in scene's water read with a per-path deviation of 29 at
-//! 775 nm. Carried by weight, its absorption costs no collisions: 1.4,
-//! with the visible bands unchanged (`benches/README.md`).
+//! 775 nm. Carried by weight, its absorption costs no collisions: 1.3
+//! there, the worst band now the blue at 3.2 (2.8 before); uniform waters
+//! read 10–20 % higher deviations (`benches/README.md`).
 //!
 //! **Scattering.** The new direction is drawn from the mixture `q p_w + (1 -
 //! q) p_p` of the pure-water and particle phase functions, with `q` the
@@ -131,8 +132,9 @@ pub struct PathTracer<'a> {
     /// Extinction majorant over every band and the whole water (1/m): the
     /// rate of residual ratio tracking toward the sun.
     c_bar: f64,
-    /// The rate of tentative collisions (1/m): the largest extinction of
-    /// any band anywhere beyond the absorption `kappa` carries by weight.
+    /// The rate of tentative collisions (1/m): [`MU_PAD`] times the
+    /// largest extinction of any band anywhere beyond the absorption
+    /// `kappa` carries by weight.
     mu_bar: f64,
     /// Each band's smallest absorption anywhere in the water (1/m),
     /// carried by weight along every flight instead of by collisions.
@@ -541,7 +543,7 @@ impl<'a> PathTracer<'a> {
         let Some(pos) = self.scene.domain.image(p0) else {
             return; // outside an open domain: no water there
         };
-        let start = PathState {
+        let mut state = PathState {
             pos,
             dir,
             events: 0,
@@ -550,7 +552,6 @@ impl<'a> PathTracer<'a> {
         scratch.w.iter_mut().for_each(|x| *x = 1.0);
         scratch.guided = 1.0;
         scratch.flown = 0.0;
-        let mut state = start;
         loop {
             self.trace(state, rng, scratch, out);
             let Some(next) = scratch.pending.pop() else {
