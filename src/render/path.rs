@@ -236,8 +236,9 @@ impl PathScratch {
     /// `n`. Only this ratio counts, not the bands' spectral-tracking
     /// factors, which are not what makes the jackpots (see
     /// `benches/README.md` for the measured gain and cost).
-    fn split(&mut self, state: PathState, above: f64, kappa: &[f64]) {
-        self.absorb(kappa);
+    fn split(&mut self, state: PathState, above: f64) {
+        // Splits follow events, which bring the flight's absorption in.
+        debug_assert!(self.flown == 0.0);
         if self.guided <= above || self.guided.is_nan() || self.pending.len() >= MAX_PENDING {
             return;
         }
@@ -651,7 +652,6 @@ impl<'a> PathTracer<'a> {
                     on_surface,
                 },
                 self.split_above,
-                &self.kappa,
             );
         }
     }

@@ -118,6 +118,31 @@ water = { chl = 0.5, cdom_440 = 0.05, layer = [{ top_m = 2.0, bottom_m = 4.0, ch
     }
 }
 
+/// `n` paths of `tracer` from `p0` looking along `dir` (streams `seed`, 0..n):
+/// per band, the mean radiance, its standard error and one path's
+/// relative deviation.
+fn read_paths(tracer: &PathTracer, seed: u64, p0: Vec3, dir: Vec3, n: u64) -> Vec<(f64, f64, f64)> {
+    let nb = tracer.scene.bands.len();
+    let mut scratch = PathScratch::new(nb);
+    let mut out = vec![0.0; nb];
+    let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+    for i in 0..n {
+        let mut rng = Pcg32::new(seed, i);
+        tracer.in_water(p0, dir, &mut rng, &mut scratch, &mut out);
+        for b in 0..nb {
+            sum[b] += out[b];
+            sum_sq[b] += out[b] * out[b];
+        }
+    }
+    (0..nb)
+        .map(|b| {
+            let mean = sum[b] / n as f64;
+            let sd = (sum_sq[b] / n as f64 - mean * mean).max(0.0).sqrt();
+            (mean, sd / (n as f64).sqrt(), sd / mean)
+        })
+        .collect()
+}
+
 /// A split shares the path's throughput among its copies: the copies'
 /// weights sum to the path's, each waits with the path's state and its
 /// share of the guided ratio, and a path below the threshold is left
@@ -133,7 +158,7 @@ fn splitting_conserves_the_path_weight() {
         events: 7,
         on_surface: true,
     };
-    s.split(state, SPLIT_ABOVE, &[0.0; 3]);
+    s.split(state, SPLIT_ABOVE);
     assert_eq!(s.pending.len(), 5, "5.5 rounds up to 6 copies");
     for b in 0..3 {
         let total = s.w[b] + s.pending.iter().map(|p| p.w[b]).sum::<f64>();
@@ -148,7 +173,7 @@ fn splitting_conserves_the_path_weight() {
     }
     s.pending.clear();
     s.guided = 3.9;
-    s.split(state, SPLIT_ABOVE, &[0.0; 3]);
+    s.split(state, SPLIT_ABOVE);
     assert!(s.pending.is_empty() && s.guided == 3.9);
 }
 
@@ -174,24 +199,7 @@ water = { iop = { a = 0.05, b = 0.3 }, phase = { kind = "fournier-forand", bb_ra
     let read = |split_above: f64| {
         let mut tracer = PathTracer::new(&scene);
         tracer.split_above = split_above;
-        let mut scratch = PathScratch::new(1);
-        let mut out = [0.0];
-        let (mut sum, mut sum_sq) = (0.0, 0.0);
-        for i in 0..n {
-            let mut rng = Pcg32::new(11, i);
-            tracer.in_water(
-                Vec3::new(20.0, 20.0, -0.01),
-                Vec3::NEG_Z,
-                &mut rng,
-                &mut scratch,
-                &mut out,
-            );
-            sum += out[0];
-            sum_sq += out[0] * out[0];
-        }
-        let mean = sum / n as f64;
-        let sd = (sum_sq / n as f64 - mean * mean).max(0.0).sqrt();
-        (mean, sd / (n as f64).sqrt(), sd / mean)
+        read_paths(&tracer, 11, Vec3::new(20.0, 20.0, -0.01), Vec3::NEG_Z, n)[0]
     };
     let (split, whole) = (read(SPLIT_ABOVE), read(f64::INFINITY));
     eprintln!("split {split:?}, whole {whole:?}");
@@ -224,30 +232,7 @@ fn absorption_by_weight_is_unbiased_and_quiet_in_the_near_infrared() {
             tracer.kappa.iter_mut().for_each(|k| *k = 0.0);
             tracer.mu_bar = tracer.c_bar;
         }
-        let mut scratch = PathScratch::new(nb);
-        let mut out = vec![0.0; nb];
-        let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
-        for i in 0..n {
-            let mut rng = Pcg32::new(5, i);
-            tracer.in_water(
-                Vec3::new(10.0, 20.0, -3.0),
-                Vec3::Z,
-                &mut rng,
-                &mut scratch,
-                &mut out,
-            );
-            for b in 0..nb {
-                sum[b] += out[b];
-                sum_sq[b] += out[b] * out[b];
-            }
-        }
-        (0..nb)
-            .map(|b| {
-                let mean = sum[b] / n as f64;
-                let sd = (sum_sq[b] / n as f64 - mean * mean).max(0.0).sqrt();
-                (mean, sd / (n as f64).sqrt(), sd / mean)
-            })
-            .collect::<Vec<_>>()
+        read_paths(&tracer, 5, Vec3::new(10.0, 20.0, -3.0), Vec3::Z, n)
     };
     let (with, without) = (read(true), read(false));
     for b in 0..nb {
