@@ -60,6 +60,9 @@ pub enum Error {
     /// The memory budget cannot hold what the operation needs.
     #[error("memory budget of {budget} bytes is too small: {what}")]
     Budget { budget: u64, what: String },
+    /// The caller stopped the run (`Progress::cancelled`).
+    #[error("cancelled")]
+    Cancelled,
 }
 
 impl Error {

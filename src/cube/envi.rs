@@ -99,6 +99,10 @@ pub struct CubeSpec {
     pub description: String,
     /// Units of the values, e.g. `W m-2 sr-1 nm-1` (no braces).
     pub data_units: String,
+    /// The bands' names (`B1`, ...) for the header's `band names` and
+    /// GDAL's band descriptions; empty: each band is named by its centre
+    /// (`443 nm`).
+    pub band_names: Vec<String>,
 }
 
 impl CubeSpec {
@@ -155,6 +159,27 @@ impl CubeSpec {
                 ));
             }
         }
+        if !self.band_names.is_empty() && self.band_names.len() != self.bands.len() {
+            return Err(Error::invalid(
+                "band names",
+                format!(
+                    "{} names for {} bands",
+                    self.band_names.len(),
+                    self.bands.len()
+                ),
+            ));
+        }
+        // A comma would split a name in the header's list.
+        if let Some(bad) = self
+            .band_names
+            .iter()
+            .find(|n| n.trim().is_empty() || n.contains(['{', '}', ',', '\n', '\r']))
+        {
+            return Err(Error::invalid(
+                "band names",
+                format!("'{bad}': a band name must be non-empty, without '{{', '}}', ',' or a line break"),
+            ));
+        }
         self.values().map(|_| ())
     }
 
@@ -166,13 +191,7 @@ impl CubeSpec {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let names = self
-            .bands
-            .centers_nm()
-            .iter()
-            .map(|nm| format!("{nm} nm"))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let names = self.names().join(", ");
         // Red, green and blue for viewers (1-based), when the grid spans them.
         let nearest = |target: f32| {
             let c = self.bands.centers_nm();
@@ -220,6 +239,18 @@ impl CubeSpec {
 }
 
 impl CubeSpec {
+    /// Each band's name: [`CubeSpec::band_names`], or its centre (`443 nm`).
+    fn names(&self) -> Vec<String> {
+        if self.band_names.len() == self.bands.len() {
+            return self.band_names.clone();
+        }
+        self.bands
+            .centers_nm()
+            .iter()
+            .map(|nm| format!("{nm} nm"))
+            .collect()
+    }
+
     /// GDAL's sidecar for the data file (`NAME.bsq.aux.xml`): each band's
     /// unit, which GDAL's ENVI driver (3.6) takes from no header key, only
     /// from this file's `UnitType`. It repeats the description GDAL makes
@@ -228,9 +259,10 @@ impl CubeSpec {
     fn gdal_sidecar(&self) -> String {
         let unit = xml_escape(&self.data_units);
         let mut x = String::from("<PAMDataset>\n");
-        for (b, nm) in self.bands.centers_nm().iter().enumerate() {
+        for (b, (nm, name)) in self.bands.centers_nm().iter().zip(self.names()).enumerate() {
+            let name = xml_escape(&name);
             x.push_str(&format!(
-                "  <PAMRasterBand band=\"{}\">\n    <Description>{nm} nm ({nm} Nanometers)</Description>\n    <UnitType>{unit}</UnitType>\n  </PAMRasterBand>\n",
+                "  <PAMRasterBand band=\"{}\">\n    <Description>{name} ({nm} Nanometers)</Description>\n    <UnitType>{unit}</UnitType>\n  </PAMRasterBand>\n",
                 b + 1
             ));
         }

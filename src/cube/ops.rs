@@ -60,6 +60,7 @@ fn spec_from(
             format!("{description} ({note})")
         },
         data_units: units.unwrap_or("unknown").replace(['{', '}'], ""),
+        band_names: Vec::new(),
     }
 }
 
@@ -258,6 +259,8 @@ pub struct Resampler {
     pub made: Vec<crate::spectral::response::BandWeights>,
     /// Their grid (the sensor's centres and widths).
     pub bands: BandGrid,
+    /// Their names in the sensor's table (`B1`, ...).
+    pub names: Vec<String>,
 }
 
 impl Resampler {
@@ -297,7 +300,11 @@ impl Resampler {
                 .map(|m| sensor.bands[m.band].fwhm_nm as f32)
                 .collect(),
         )?;
-        Ok(Resampler { made, bands })
+        let names = made
+            .iter()
+            .map(|m| sensor.bands[m.band].name.clone())
+            .collect();
+        Ok(Resampler { made, bands, names })
     }
 
     /// `pixels` pixels in the sensor's bands (bands innermost), from
@@ -325,13 +332,15 @@ impl Resampler {
         units: Option<&str>,
     ) -> CubeSpec {
         let note = format!("in the bands of {sensor_name}");
-        spec_from(
+        let mut spec = spec_from(
             description,
             units,
             [samples, lines],
             self.bands.clone(),
             &note,
-        )
+        );
+        spec.band_names = self.names.clone();
+        spec
     }
 }
 

@@ -82,6 +82,7 @@ impl CubeSet {
             bands: scene.bands.clone(),
             description,
             data_units: units.into(),
+            band_names: Vec::new(),
         };
         let spec = |description: String| spec_in(description, RADIANCE_UNITS);
         let extra = crate::cube::georef::envi_header_lines(scene);

@@ -544,7 +544,9 @@ pub fn render_tiles(
     // One loop per pool thread, each taking the next tile in order.
     let results = pool.broadcast(|_| -> Result<()> {
         while let Some(k) = dispatch.take() {
-            let step = render_tile(scene, light, tiles[k], &quicklook).and_then(|t| sink.write(&t));
+            let step = crate::progress::check(progress)
+                .and_then(|()| render_tile(scene, light, tiles[k], &quicklook))
+                .and_then(|t| sink.write(&t));
             if let Err(e) = step {
                 dispatch.stop();
                 return Err(e);

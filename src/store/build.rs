@@ -246,6 +246,9 @@ pub fn build_map(
             (0..batches).into_par_iter().try_for_each(|b| {
                 let range = b * BATCH_INDICES..((b + 1) * BATCH_INDICES).min(n);
                 let len = range.end - range.start;
+                if progress.cancelled() {
+                    return Err(());
+                }
                 let mut out = Vec::with_capacity(len as usize);
                 source.generate(range, &mut out);
                 progress.advance(len);
@@ -257,5 +260,8 @@ pub fn build_map(
     });
     progress.finish();
     let writer = write_result?;
+    // The producers stop early only on a writer's error (reported above)
+    // or when the run is cancelled: a short map is never finished.
+    crate::progress::check(progress)?;
     writer.finish(&source.metadata(), progress)
 }

@@ -124,6 +124,7 @@ fn small_cube_with(dir: &Path, value: impl Fn(usize, usize, usize) -> f32 + Copy
             bands,
             description: "tool test".into(),
             data_units: "W m-2 sr-1 nm-1".into(),
+            band_names: Vec::new(),
         },
     )
     .unwrap();
@@ -378,8 +379,8 @@ fn subset_and_stats() {
 /// `resample` into Sentinel-2A's bands: a band that lies inside one of the
 /// cube's bands reads that band (B3 at 560 nm inside 500-600 nm, B4 at 665
 /// nm inside 600-700 nm), a flat spectrum reads itself in every band, the
-/// bands beyond the cube's 400-700 nm are left out and listed, and an
-/// unknown sensor is refused.
+/// bands beyond the cube's 400-700 nm are left out and listed, the bands
+/// carry the sensor's names, and an unknown sensor is refused.
 #[test]
 fn resample_into_sentinel2_bands() {
     let dir = tempdir();
@@ -403,6 +404,14 @@ fn resample_into_sentinel2_bands() {
     assert_eq!(names, ["B1", "B2", "B3", "B4"], "{summary}");
     let left_out = summary["left_out"].as_array().unwrap();
     assert!(left_out.iter().any(|b| b == "B8A") && left_out.len() == 9);
+    // The header and GDAL's sidecar name the bands as the sensor does.
+    let header = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        header.contains("band names = {B1, B2, B3, B4}\n"),
+        "{header}"
+    );
+    let sidecar = std::fs::read_to_string(out.with_extension("bsq.aux.xml")).unwrap();
+    assert!(sidecar.contains("<Description>B1 ("), "{sidecar}");
     let s2 = littoral::cube::EnviCube::open(&out).unwrap();
     for (band, from) in [(2, 1), (3, 2)] {
         let got = s2.band(band).unwrap();

@@ -311,3 +311,96 @@ fn every_number_in_a_report_has_a_unit() {
         }
     }
 }
+
+/// Asks a run to stop once `after` units of any stage are done.
+struct CancelAfter {
+    after: u64,
+    done: std::sync::atomic::AtomicU64,
+}
+
+impl littoral::progress::Progress for CancelAfter {
+    fn stage(&self, _: &str, _: u64) {}
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn finish(&self) {}
+    fn cancelled(&self) -> bool {
+        self.done.load(std::sync::atomic::Ordering::Relaxed) >= self.after
+    }
+}
+
+/// A run its caller cancels (`Progress::cancelled`, what Ctrl-C does in
+/// Python) stops with `Error::Cancelled` and leaves nothing behind: while
+/// tracing photons into a kept map, while encoding its tiles, and while
+/// rendering. The kept map and the output directory hold no file, and a
+/// map that was already there is left as it was.
+#[test]
+fn a_cancelled_run_stops_and_leaves_nothing() {
+    let s = Setup::new();
+    let scene = s.scene(&scene_text("k = 50", ""));
+    let files = |dir: &Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .map(|d| {
+                d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    let before = files(s.dir.path());
+    // 20 000 photons: tracing reports them in batches, the tiles after.
+    for after in [1, 20_001] {
+        let e = EmitJob {
+            scene: &scene,
+            map: s.map(),
+            report: None,
+            threads: 2,
+            budget: MemoryBudget::new(64 * MIB),
+            scene_seconds: 0.0,
+        }
+        .run(&CancelAfter {
+            after,
+            done: 0.into(),
+        })
+        .unwrap_err();
+        assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+        assert_eq!(files(s.dir.path()), before, "after {after}");
+    }
+    let out = s.dir.path().join("out");
+    let e = RenderJob {
+        scene: &scene,
+        out_dir: out.clone(),
+        map: None,
+        threads: 2,
+        budget: MemoryBudget::new(64 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&CancelAfter {
+        after: 20_000 + 1,
+        done: 0.into(),
+    })
+    .unwrap_err();
+    assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+    assert_eq!(files(&out), Vec::<String>::new());
+    // A kept map is not touched by a render cancelled while it reads it
+    // (the scene's one image tile).
+    s.emit(&scene);
+    let kept = digest(&s.map());
+    let e = RenderJob {
+        scene: &scene,
+        out_dir: out.clone(),
+        map: Some(s.map()),
+        threads: 2,
+        budget: MemoryBudget::new(64 * MIB),
+        scene_seconds: 0.0,
+    }
+    .run(&CancelAfter {
+        after: 0,
+        done: 0.into(),
+    })
+    .unwrap_err();
+    assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+    assert_eq!(digest(&s.map()), kept);
+    assert_eq!(files(&out), Vec::<String>::new());
+}

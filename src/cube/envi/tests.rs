@@ -12,6 +12,7 @@ fn spec(samples: usize, lines: usize, bands: usize) -> CubeSpec {
         bands: BandGrid::even(400.0, 700.0, bands).unwrap(),
         description: "littoral test cube".into(),
         data_units: "W m-2 sr-1 nm-1".into(),
+        band_names: Vec::new(),
     }
 }
 
@@ -164,6 +165,7 @@ fn header_parses_back() {
             bands,
             description: "coastal radiance".into(),
             data_units: "W m-2 sr-1 nm-1".into(),
+            band_names: Vec::new(),
         },
     )
     .unwrap();

@@ -34,6 +34,7 @@ fn round_trips_through_an_exr_reader() {
         bands,
         description: "test".into(),
         data_units: "W m-2 sr-1 nm-1".into(),
+        band_names: Vec::new(),
     };
     let value = |x: usize, y: usize, b: usize| (x + 100 * y) as f32 + 0.25 * b as f32;
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();
@@ -92,6 +93,7 @@ fn unwritable_destination_is_an_error() {
         bands: BandGrid::even(500.0, 510.0, 2).unwrap(),
         description: "test".into(),
         data_units: "W m-2 sr-1 nm-1".into(),
+        band_names: Vec::new(),
     };
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();
     writer.write_tile(0, 0, 2, 2, &[1.0; 8]).unwrap();
@@ -119,6 +121,7 @@ fn layers_round_trip() {
             bands: bands.clone(),
             description: "test".into(),
             data_units: "W m-2 sr-1 nm-1".into(),
+            band_names: Vec::new(),
         };
         let writer = EnviWriter::create(dir.path(), name, spec).unwrap();
         let tile: Vec<f32> = (0..w * h * 2).map(|i| scale * i as f32).collect();
@@ -168,6 +171,7 @@ fn compressions_are_lossless() {
         bands,
         description: "test".into(),
         data_units: "W m-2 sr-1 nm-1".into(),
+        band_names: Vec::new(),
     };
     let value = |x: usize, y: usize, b: usize| 0.01 + 1e-4 * (x + y) as f32 + 1e-3 * b as f32;
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();

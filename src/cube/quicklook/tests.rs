@@ -189,6 +189,7 @@ fn cube_rgb_matches_per_pixel_spectra() {
         bands: grid.clone(),
         description: String::new(),
         data_units: "W m-2 sr-1 nm-1".into(),
+        band_names: Vec::new(),
     };
     let writer = EnviWriter::create(dir.path(), "c", spec).unwrap();
     writer.write_tile(0, 0, w, h, &values).unwrap();

@@ -72,6 +72,7 @@ impl TileQueue {
             let tile = tile?;
             writer.append(&tile, &mut self.entries)?;
             progress.advance(tile.count as u64);
+            crate::progress::check(progress)?;
         }
         Ok(())
     }
