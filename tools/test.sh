@@ -13,7 +13,7 @@
 #      cargo clippy --all-targets and on the Python bindings, -D warnings.
 #
 # A plain `cargo test` runs without any of this; the client tests then say
-# what they skipped (see README "Test").
+# what they skipped (see README "Testing").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
@@ -50,6 +50,7 @@ python -c "import spectral, OpenEXR, numpy" >/dev/null 2>&1 || pip install spect
 
 # 3. The tests. The Python package is built with the test profile, so that
 # it shares the build cargo test just made.
+export LITTORAL_REQUIRE_CLIENTS=1
 cargo test --locked
 say "installing the Python package (pip install ./python)"
 MATURIN_PEP517_ARGS="--profile dev" pip install "./python[test]"

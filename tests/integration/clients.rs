@@ -2,7 +2,7 @@
 //! for the ENVI cubes and OpenEXR's Python binding for the multi-part EXR
 //! (both installed from PyPI by `.ci/run`), against littoral's own reader.
 
-use crate::common::{minimal_with, render_job, tempdir};
+use crate::common::{client, minimal_with, render_job, tempdir};
 use littoral::scene::{Overrides, Scene};
 use std::io::Write;
 use std::path::Path;
@@ -57,6 +57,12 @@ print("ok")
 /// OpenEXR binding reads the EXR's five parts with the same values.
 #[test]
 fn spectral_python_and_openexr_read_the_outputs() {
+    if !client(
+        "Spectral Python, OpenEXR and numpy (PyPI)",
+        &["python3", "-c", "import spectral, OpenEXR, numpy"],
+    ) {
+        return;
+    }
     let dir = tempdir();
     let s = Scene::parse(&scene_text(), Path::new("cl.toml"), &Overrides::default()).unwrap();
     let r = render_job(&s, &dir.path().join("out"), 0);
@@ -90,6 +96,9 @@ fn spectral_python_and_openexr_read_the_outputs() {
 /// no scripts, no links, every image inline.
 #[test]
 fn html_report_opens_in_headless_chromium() {
+    if !client("Chromium (Debian's chromium)", &["chromium", "--version"]) {
+        return;
+    }
     let dir = tempdir();
     let text = format!(
         "{}\n[tally]\ndepths_m = [0.5, 1.5, 3.0]\n\

@@ -134,3 +134,25 @@ pub fn f32s(path: impl AsRef<Path>) -> Vec<f32> {
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }
+
+/// Whether the client program a test reads littoral's outputs with is
+/// installed: `probe` (a command and its arguments) succeeds. Without it
+/// the test says what it skipped and passes, so that a plain `cargo test`
+/// works on a machine without the clients; with LITTORAL_REQUIRE_CLIENTS
+/// set (`tools/test.sh` sets it once it has installed them) it fails.
+pub fn client(what: &str, probe: &[&str]) -> bool {
+    let found = std::process::Command::new(probe[0])
+        .args(&probe[1..])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !found {
+        assert!(
+            std::env::var_os("LITTORAL_REQUIRE_CLIENTS").is_none(),
+            "LITTORAL_REQUIRE_CLIENTS is set but {what} is not installed (tools/test.sh installs it)"
+        );
+        eprintln!("skipped: {what} is not installed (tools/test.sh installs it)");
+    }
+    found
+}
