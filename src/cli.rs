@@ -124,9 +124,17 @@ impl Progress for Bars {
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
         bar.set_style(
             ProgressStyle::with_template(
-                "{msg:>14} [{bar:32}] {human_pos}/{human_len} {per_sec} eta {eta}",
+                "{msg:>14} [{bar:32}] {human_pos}/{human_len} {rate} eta {eta}",
             )
             .expect("valid template")
+            // Whole units per second with thousands marks ("456,107/s"),
+            // where indicatif's `per_sec` prints four decimals.
+            .with_key(
+                "rate",
+                |s: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{}/s", indicatif::HumanCount(s.per_sec() as u64));
+                },
+            )
             .progress_chars("=> "),
         );
         bar.set_message(name.to_string());

@@ -434,13 +434,16 @@ fn resample(
     print(&format!("{}\n", serde_json::to_string_pretty(&summary)?))
 }
 
-/// The directory and cube name of an `--out NAME.hdr` (a `.hdr` file name).
+/// The directory and cube name of an `--out NAME.hdr` (a `.hdr` file
+/// name); the directory is made if it does not exist, as `render --out`
+/// makes its own.
 fn cube_out(out: &std::path::Path) -> AnyResult<(&std::path::Path, String)> {
     match (out.extension().and_then(|e| e.to_str()), out.file_stem()) {
-        (Some(e), Some(stem)) if e.eq_ignore_ascii_case("hdr") => Ok((
-            littoral::output::parent_dir(out),
-            stem.to_string_lossy().into_owned(),
-        )),
+        (Some(e), Some(stem)) if e.eq_ignore_ascii_case("hdr") => {
+            let dir = littoral::output::parent_dir(out);
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, "create", e))?;
+            Ok((dir, stem.to_string_lossy().into_owned()))
+        }
         _ => Err(Error::invalid(
             "--out",
             format!("{}: name the new cube's header, NAME.hdr", out.display()),

@@ -93,7 +93,8 @@ def open(path: PathLike) -> Result:  # noqa: A001 - the package's verb
         except (OSError, ValueError) as e:
             raise _littoral.LittoralError(f"{report_path}: not a littoral report: {e}") from e
     cube = _cube(folder, name, hdr, report)
-    return Result(cube, _radiometers(report), _profiles(report), report, folder)
+    bands = _band_coords(report, cube)
+    return Result(cube, _radiometers(report, bands), _profiles(report, bands), report, folder)
 
 
 def _find_header(path: Path) -> Path:
@@ -257,18 +258,24 @@ def _attrs(h: Dict[str, str], report: Dict[str, Any]) -> Dict[str, Any]:
     return attrs
 
 
-def _band_coords(report: Dict[str, Any]) -> Dict[str, Any]:
+def _band_coords(report: Dict[str, Any], cube: xr.Dataset) -> Dict[str, Any]:
+    """The bands of the point readings: the report's (the emission's), or
+    the cube's when the report has none (the path integrator's)."""
+    if "bands_nm" in report and "fwhm_nm" in report:
+        centres, fwhm = report["bands_nm"], report["fwhm_nm"]
+    else:
+        centres, fwhm = cube["wavelength"].values, cube["fwhm"].values
     return {
-        "wavelength": ("wavelength", np.asarray(report["bands_nm"], dtype=float), {"units": "nm", "standard_name": "radiation_wavelength"}),
-        "fwhm": ("wavelength", np.asarray(report["fwhm_nm"], dtype=float), {"units": "nm"}),
+        "wavelength": ("wavelength", np.asarray(centres, dtype=float), {"units": "nm", "standard_name": "radiation_wavelength"}),
+        "fwhm": ("wavelength", np.asarray(fwhm, dtype=float), {"units": "nm"}),
     }
 
 
-def _radiometers(report: Dict[str, Any]) -> Optional[xr.Dataset]:
+def _radiometers(report: Dict[str, Any], bands: Dict[str, Any]) -> Optional[xr.Dataset]:
     readings = report.get("radiometers") or []
-    if not readings or "bands_nm" not in report:
+    if not readings:
         return None
-    coords = _band_coords(report)
+    coords = dict(bands)
     coords["depth"] = ("radiometer", np.asarray([r["depth_m"] for r in readings], dtype=float), {"units": "m", "positive": "down", "long_name": "depth of the radiometer (negative: above the water)"})
     coords["view"] = ("radiometer", np.asarray([str(r["view"]) for r in readings]), {"long_name": "direction the radiometer looks"})
     pos = np.asarray([r.get("position_m", [np.nan, np.nan]) for r in readings], dtype=float)
@@ -297,16 +304,17 @@ PROFILE_NAMES = {
 }
 
 
-def _profiles(report: Dict[str, Any]) -> Optional[xr.Dataset]:
+def _profiles(report: Dict[str, Any], bands: Dict[str, Any]) -> Optional[xr.Dataset]:
     tally = report.get("tally") or []
-    if not tally or "bands_nm" not in report:
+    if not tally:
         return None
-    coords = _band_coords(report)
+    coords = dict(bands)
     coords["depth"] = ("depth", np.asarray([t["depth_m"] for t in tally], dtype=float), {"units": "m", "positive": "down"})
     data: Dict[str, Any] = {}
+    data["water_fraction"] = ("depth", np.asarray([t.get("water_fraction", 1.0) for t in tally], dtype=float), {"units": "1", "long_name": "share of the domain that is water at the depth"})
     for key, units in PROFILE_UNITS.items():
         if all(key in t for t in tally):
-            data[key] = (("depth", "wavelength"), np.asarray([t[key] for t in tally], dtype=float), {"units": units, "long_name": f"{PROFILE_NAMES[key]}, averaged over the domain"})
+            data[key] = (("depth", "wavelength"), np.asarray([t[key] for t in tally], dtype=float), {"units": units, "long_name": f"{PROFILE_NAMES[key]}, mean over the water present at the depth"})
         if all(f"{key}_stderr" in t for t in tally):
             data[f"{key}_stderr"] = (("depth", "wavelength"), np.asarray([t[f"{key}_stderr"] for t in tally], dtype=float), {"units": units, "long_name": f"standard error of {key}"})
     kd = report.get("kd") or []
@@ -314,4 +322,4 @@ def _profiles(report: Dict[str, Any]) -> Optional[xr.Dataset]:
         coords["layer_top"] = ("layer", np.asarray([k["from_m"] for k in kd], dtype=float), {"units": "m"})
         coords["layer_bottom"] = ("layer", np.asarray([k["to_m"] for k in kd], dtype=float), {"units": "m"})
         data["Kd"] = (("layer", "wavelength"), np.asarray([k["Kd"] for k in kd], dtype=float), {"units": "m-1", "long_name": "diffuse attenuation coefficient of Ed between the layer's depths"})
-    return xr.Dataset(data, coords=coords, attrs={"scene": report.get("scene", ""), "averaging": "each tally is over the whole domain at its depth (emission tallies)"})
+    return xr.Dataset(data, coords=coords, attrs={"scene": report.get("scene", ""), "averaging": "each quantity is the emission's tally at its depth, a mean over the water present there (water_fraction of the domain)"})

@@ -190,7 +190,39 @@ def test_profiles_and_radiometers_are_datasets(small):
     assert p.Ed.dims == ("depth", "wavelength") and list(p.depth.values) == [0.0, 1.0, 2.0]
     assert np.array_equal(p.Ed.values[1], np.asarray(r.report["tally"][1]["Ed"]))
     assert p.Kd.dims == ("layer", "wavelength")
+    # No floor: every depth is all water, and the means are over it.
+    assert list(p.water_fraction.values) == [1.0, 1.0, 1.0]
     rad = r.radiometers
     assert rad.L.dims == ("radiometer", "wavelength")
     assert np.array_equal(rad.L.values[0], np.asarray(r.report["radiometers"][0]["L"]))
     assert str(rad.view.values[0]) == "nadir"
+
+
+def test_the_path_integrator_gives_radiometers_on_the_cubes_bands(small):
+    s = small.with_({"radiometer": [{"depth_m": 0.5, "view": "nadir", "position_m": [5.0, 5.0]}]})
+    r = littoral.render(s, integrator="path", spp=4, progress=False)
+    assert r.report["integrator"] == "path"
+    assert r.profiles is None
+    assert list(r.radiometers.wavelength.values) == list(r.cube.wavelength.values)
+    assert np.all(r.cube.stderr.values > 0)
+    assert np.all(r.radiometers.L.values > 0)
+
+
+def test_a_cube_on_its_own_opens_as_one_variable(tmp_path, small, cli):
+    out = tmp_path / "out"
+    littoral.render(small, out=out, progress=False)
+    subprocess.run(
+        [str(cli / "littoral-cube"), "resample", str(out / "scene.hdr"), "--sensor", "csv:" + str(_gaussians(tmp_path)), "--out", str(tmp_path / "g.hdr")],
+        check=True,
+        capture_output=True,
+    )
+    r = littoral.open(tmp_path / "g.hdr")
+    assert list(r.cube.data_vars) == ["data"] and r.report == {}
+    assert r.cube.data.shape == (2, 12, 16)
+    assert r.radiometers is None and r.profiles is None
+
+
+def _gaussians(d: Path) -> Path:
+    p = d / "g.csv"
+    p.write_text("band,center_nm,fwhm_nm\nblue,480,20\ngreen,551.5,10\n")
+    return p

@@ -54,10 +54,8 @@ pub fn envi_header_lines(scene: &Scene) -> Vec<String> {
         "sun elevation = {}",
         90.0 - scene.sun.zenith_rad.to_degrees()
     ));
-    lines.push(format!(
-        "sun azimuth = {}",
-        scene.sun.azimuth_rad.to_degrees()
-    ));
+    // ENVI's sun azimuth is a compass bearing (clockwise from north).
+    lines.push(format!("sun azimuth = {}", scene.sun.compass_azimuth_deg()));
     lines
 }
 

@@ -22,7 +22,6 @@ use crate::emit::report::EmissionReport;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use base64::Engine;
-use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -242,6 +241,23 @@ fn profiles(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         )?);
     }
     h.push_str("</div>\n");
+    let shares: Vec<String> = e
+        .tally
+        .iter()
+        .map(|d| {
+            format!(
+                "{} m {:.0} %",
+                depth_label(d.depth_m),
+                100.0 * d.water_fraction
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        h,
+        "<p class=\"note\">Each profile is the emission's tally, a mean over the water present at \
+         its depth (the share of the domain that is water: {}); K_d is taken between those means.</p>",
+        esc(&shares.join(", "))
+    );
     let kd: Vec<Curve> =
         e.kd.iter()
             .map(|k| Curve {
@@ -269,7 +285,8 @@ img{image-rendering:pixelated;width:512px;max-width:100%;border:1px solid #ccc}\
 .grid{display:flex;flex-wrap:wrap;gap:8px}svg{border:1px solid #eee}\
 table{border-collapse:collapse;margin:0.6em 0 1.2em 0}td,th{border:1px solid #ccc;\
 padding:2px 8px;text-align:left;font-size:0.9em}caption{text-align:left;font-weight:bold}\
-.note{color:#555;font-size:0.9em}";
+.note{color:#555;font-size:0.9em}figure{margin:0;max-width:724px}.legend{font-size:0.85em;margin:2px 0 6px 70px}\
+.legend span{margin-right:12px;white-space:nowrap}";
 
 /// R_rs at the centre and the quarter points, from the `rrs` product cube,
 /// with the L_t standard-error cube over E_d(0+) as the band.
@@ -380,7 +397,7 @@ fn plot(axes: &Axes, curves: &[Curve]) -> Result<String> {
                 .configure_mesh()
                 .x_desc(axes.x_label)
                 .y_desc(axes.y_label)
-                .y_label_formatter(&|v| format!("{:.0}", -v + 0.0))
+                .y_label_formatter(&|v| depth_label(-v))
                 .x_label_formatter(&|v| format!("{v:.2e}"))
                 .draw()?;
             for (i, c) in curves.iter().enumerate() {
@@ -391,14 +408,8 @@ fn plot(axes: &Axes, curves: &[Curve]) -> Result<String> {
                         .filter(|&(&x, &y)| usable(x, y))
                         .map(|(&x, &y)| (x, -y))
                         .collect();
-                chart
-                    .draw_series(LineSeries::new(pts, colour.stroke_width(2)))?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                    });
+                chart.draw_series(LineSeries::new(pts, colour.stroke_width(2)))?;
             }
-            legend(&mut chart)?;
         } else {
             let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
             chart
@@ -425,34 +436,71 @@ fn plot(axes: &Axes, curves: &[Curve]) -> Result<String> {
                     chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
                 }
                 let line = pts.iter().map(|p| (p.0, p.1));
-                chart
-                    .draw_series(LineSeries::new(line, colour.stroke_width(2)))?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                    });
+                chart.draw_series(LineSeries::new(line, colour.stroke_width(2)))?;
             }
-            legend(&mut chart)?;
         }
         root.present()?;
         Ok(())
     })();
     drawn.map_err(|e| Error::invalid("HTML report", format!("plot '{}': {e}", axes.title)))?;
-    Ok(svg + "\n")
+    Ok(format!(
+        "<figure>{svg}\n{}{}</figure>\n",
+        legend(curves),
+        dropped_note(axes, curves)
+    ))
 }
 
-/// The legend box, top right.
-fn legend<'a, X: Ranged<ValueType = f64>>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
-) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .label_font(("sans-serif", 12))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string().into())
+/// The curves' legend under the plot, in HTML, so that it never covers a
+/// curve.
+fn legend(curves: &[Curve]) -> String {
+    if curves.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from("<figcaption class=\"legend\">");
+    for (i, c) in curves.iter().enumerate() {
+        let RGBColor(r, g, b) = COLOURS[i % COLOURS.len()];
+        let _ = write!(
+            h,
+            "<span><b style=\"color:#{r:02x}{g:02x}{b:02x}\">&#9473;&#9473;</b> {}</span> ",
+            esc(&c.label)
+        );
+    }
+    h.push_str("</figcaption>\n");
+    h
+}
+
+/// On a profile's log axis, what could not be drawn: each curve's depths
+/// where its value is 0 (no light of that band reaches them) or missing.
+fn dropped_note(axes: &Axes, curves: &[Curve]) -> String {
+    if !axes.depth {
+        return String::new();
+    }
+    let mut parts = Vec::new();
+    for c in curves {
+        let depths: Vec<String> =
+            c.x.iter()
+                .zip(&c.y)
+                .filter(|&(&x, &y)| y.is_finite() && !(x.is_finite() && x > 0.0))
+                .map(|(_, &y)| depth_label(y))
+                .collect();
+        if !depths.is_empty() {
+            parts.push(format!("{} at {} m", c.label, depths.join(", ")));
+        }
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<p class=\"note\">Not drawn on the log axis (zero: no light of the band reaches the depth, or none tallied): {}.</p>\n",
+        esc(&parts.join("; "))
+    )
+}
+
+/// A depth tick or value in metres with no more decimals than it needs
+/// (0, 0.5, 1, 12.25), so that neighbouring ticks never read the same.
+fn depth_label(v: f64) -> String {
+    let r = (v * 100.0).round() / 100.0 + 0.0;
+    format!("{r}")
 }
 
 /// The range of `v` with a margin (a log axis keeps its lower bound

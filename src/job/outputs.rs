@@ -370,12 +370,11 @@ pub(super) fn publish_run(
     let integrator = scene.render.integrator;
     let json_name = format!("{}.json", scene.name);
     let html_name = format!("{}.html", scene.name);
-    let ed_above = match &stage {
-        Some(s) => s.emission.above_surface.Ed.clone(),
-        None => (0..scene.bands.len())
-            .map(|b| scene.incident_irradiance(b))
-            .collect(),
-    };
+    // The exact E_d(0+) the R_rs cube divides by; the emission's noisy
+    // tally of it stays in `above_surface.Ed`.
+    let ed_above: Vec<f64> = (0..scene.bands.len())
+        .map(|b| scene.incident_irradiance(b))
+        .collect();
     let (emission, map, reused_map) = match stage {
         Some(s) => (Some(s.emission), Some(s.summary), s.reused),
         None => (None, None, false),
@@ -422,7 +421,7 @@ pub(super) fn publish_run(
             georef: scene.georef,
             geotransform: crate::cube::georef::geotransform(scene),
             sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
-            sun_azimuth_deg: scene.sun.azimuth_rad.to_degrees(),
+            sun_azimuth_deg: scene.sun.compass_azimuth_deg(),
         },
         cache: rendered.cache,
         memory: shares,

@@ -158,8 +158,9 @@ pub struct SensorSummary {
     /// for a pinhole camera.
     #[serde(default)]
     pub geotransform: Option<[f64; 6]>,
-    /// Sun zenith and azimuth (degrees; azimuth toward the sun, clockwise
-    /// from north).
+    /// Sun zenith and azimuth (degrees; the azimuth is the compass bearing
+    /// toward the sun, clockwise from north: `Sun::compass_azimuth_deg`,
+    /// not the scene's `[sun] azimuth_deg`).
     #[serde(default)]
     pub sun_zenith_deg: f64,
     #[serde(default)]
@@ -235,9 +236,12 @@ pub struct RunReport {
     /// True when the map was reused (its provenance matched the scene's).
     pub reused_map: bool,
     pub radiometers: Vec<RadiometerReading>,
-    /// Downwelling irradiance just above the surface per band (W m^-2
-    /// nm^-1), for Rrs = L / Ed: the emission's tally for the photon map,
-    /// the scene's sun and sky for the path integrator.
+    /// Downwelling plane irradiance just above the surface per band (W
+    /// m^-2 nm^-1), exactly: the sun's horizontal irradiance plus the
+    /// sky's, which the R_rs cube divides by (R_rs = L_w / Ed_above_surface)
+    /// and every ratio in the report and the HTML page uses. The emission's
+    /// Monte Carlo tally of the same irradiance, with its standard error,
+    /// is `above_surface.Ed` (photon map only).
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed_above_surface: Vec<f64>,
     pub estimate: EstimateSettings,

@@ -23,6 +23,10 @@ const UNITS: &[(&str, &str)] = &[
     ("above_surface.Eu", SPECTRAL_IRRADIANCE),
     ("above_surface.Eu_stderr", SPECTRAL_IRRADIANCE),
     ("tally[].depth_m", "m"),
+    (
+        "tally[].water_fraction",
+        "1 (share of the domain that is water at the depth)",
+    ),
     ("tally[].Ed", SPECTRAL_IRRADIANCE),
     ("tally[].Ed_stderr", SPECTRAL_IRRADIANCE),
     ("tally[].Eu", SPECTRAL_IRRADIANCE),

@@ -233,7 +233,12 @@ impl Table {
     fn band_average_inner(&self, center_nm: f64, fwhm_nm: f64, band: Option<usize>) -> Result<f64> {
         let band_text = || {
             let index = band.map(|i| format!("band {i} ")).unwrap_or_default();
-            format!("{index}(centre {center_nm} nm, FWHM {fwhm_nm} nm)")
+            // The grid's centres are f32: printed as such (852.7559 nm, not
+            // the f64 852.7559204101563).
+            format!(
+                "{index}(centre {} nm, FWHM {} nm)",
+                center_nm as f32, fwhm_nm as f32
+            )
         };
         let (lo, hi) = self.range_nm();
         if !(fwhm_nm.is_finite() && fwhm_nm > 0.0) {

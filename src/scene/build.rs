@@ -50,6 +50,21 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// [`Ctx::per_band`] for a table littoral ships that every scene with
+    /// constituents needs (pure water, phytoplankton): a band outside it
+    /// is the band grid's doing, so the error names the end of the grid it
+    /// falls beyond (`spectral.start_nm` or `spectral.end_nm`).
+    fn per_band_shipped(&self, table: &Table) -> Result<Vec<f64>> {
+        let (lo, _) = table.range_nm();
+        let below = self
+            .bands
+            .centers_nm()
+            .first()
+            .is_some_and(|&c| f64::from(c) < lo);
+        let end = if below { "start_nm" } else { "end_nm" };
+        self.per_band(table, &[Step::Key("spectral"), Step::Key(end)])
+    }
+
     /// The path of a file the scene names (relative to the scene's
     /// directory), recorded as an input of the scene.
     fn path(&self, name: &str) -> PathBuf {
@@ -186,8 +201,17 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
         f.seed = s;
     }
     if let Some(b) = ov.bands {
+        // Over the scene's own range: its start and end, or the span of its
+        // explicit centres; 400-700 nm only for a scene that gives neither.
+        if let Some(c) = f.spectral.centers_nm.take() {
+            let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if lo.is_finite() && hi.is_finite() {
+                f.spectral.start_nm = Some(lo);
+                f.spectral.end_nm = Some(hi);
+            }
+        }
         f.spectral.bands = Some(b);
-        f.spectral.centers_nm = None;
         f.spectral.fwhm_nm = None;
         f.spectral.start_nm.get_or_insert(400.0);
         f.spectral.end_nm.get_or_insert(700.0);
@@ -262,6 +286,20 @@ fn georef(ctx: &Ctx, f: &SceneFile) -> Result<Georef> {
         return Err(ctx.err(
             &[K("georef"), K("epsg")],
             "must be a WGS 84 / UTM zone, 32601-32660 (north) or 32701-32760 (south); leave it out for a local metric frame",
+        ));
+    }
+    let pinhole = f
+        .sensor
+        .as_ref()
+        .and_then(|s| s.kind)
+        .is_some_and(|k| k == SensorKindName::Pinhole);
+    let given = f.georef.origin_m.is_some() || f.georef.epsg.is_some();
+    if pinhole && given {
+        // A perspective image has no map grid; taking [georef] silently
+        // and writing none would mislead.
+        return Err(ctx.err(
+            &[K("georef")],
+            "a pinhole camera's image has no map grid to georeference: remove [georef], or use sensor.kind = \"orthographic\"",
         ));
     }
     Ok(georef)

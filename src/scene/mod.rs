@@ -7,8 +7,12 @@
 //! resolved against the scene file's directory.
 //!
 //! Conventions: metres, z up, mean sea surface at z = 0, depths positive
-//! downward; the sun's azimuth is the compass direction *toward* the sun,
-//! measured from +x toward +y; spectral irradiance in W m^-2 nm^-1.
+//! downward; x east and y north. The sun's azimuth (`[sun] azimuth_deg`) is
+//! the direction *toward* the sun as a mathematical angle, counter-clockwise
+//! from +x (east) toward +y (north), not a compass bearing: its compass
+//! azimuth (clockwise from north, what ENVI headers and the report's
+//! `sensor.sun_azimuth_deg` give) is 90 degrees minus it
+//! ([`Sun::compass_azimuth_deg`]). Spectral irradiance in W m^-2 nm^-1.
 //!
 //! Not for: tracing light (see `emit`).
 
@@ -48,6 +52,13 @@ impl Sun {
     /// Irradiance on a horizontal plane per band.
     pub fn horizontal_irradiance(&self, band: usize) -> f64 {
         self.irradiance[band] * self.zenith_rad.cos()
+    }
+
+    /// The compass azimuth of the direction toward the sun (degrees
+    /// clockwise from north, in [0, 360)): 90 degrees minus the scene's
+    /// angle, which runs counter-clockwise from east.
+    pub fn compass_azimuth_deg(&self) -> f64 {
+        (90.0 - self.azimuth_rad.to_degrees()).rem_euclid(360.0)
     }
 }
 

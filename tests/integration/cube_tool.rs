@@ -385,7 +385,8 @@ fn subset_and_stats() {
 fn resample_into_sentinel2_bands() {
     let dir = tempdir();
     let hdr = small_cube(dir.path());
-    let out = dir.path().join("s2.hdr");
+    // Into a directory that does not exist yet: it is made.
+    let out = dir.path().join("new").join("s2.hdr");
     let summary: serde_json::Value = serde_json::from_str(&stdout(&cube_tool(&[
         "resample",
         p(&hdr),

@@ -239,3 +239,27 @@ fn derived_cubes_keep_the_map_grid() {
         assert!(wkt.contains("ID[\"EPSG\",32617]"), "{data}: {wkt}");
     }
 }
+
+/// The sun's azimuth goes into the ENVI header and the report as a compass
+/// bearing (clockwise from north), whatever the scene's angle, which runs
+/// counter-clockwise from east: a sun in the east (scene 0) is 90, in the
+/// north (scene 90) 0, in the west 270, in the south-east (scene -45) 135.
+#[test]
+fn the_sun_azimuth_is_written_as_a_compass_bearing() {
+    for (scene_deg, compass) in [(0.0, 90.0), (90.0, 0.0), (180.0, 270.0), (-45.0, 135.0)] {
+        let dir = tempdir();
+        let text = littoral::scene::text::SceneText::parse(&scene(""))
+            .unwrap()
+            .set("sun.azimuth_deg", scene_deg)
+            .text();
+        let s = Scene::parse(&text, Path::new("geo.toml"), &Overrides::default()).unwrap();
+        assert_eq!(s.sun.compass_azimuth_deg(), compass);
+        let r = render_job(&s, dir.path(), 0);
+        assert_eq!(r.sensor.sun_azimuth_deg, compass);
+        let header = std::fs::read_to_string(&r.outputs.hdr).unwrap();
+        assert!(
+            header.contains(&format!("\nsun azimuth = {compass}\n")),
+            "{scene_deg}: {header}"
+        );
+    }
+}

@@ -232,10 +232,31 @@ fn typed_report_round_trips() {
         assert!(v.get(key).is_some(), "{key}");
     }
     assert_eq!(r.radiometers.len(), 1);
-    assert_eq!(
+    // Ed_above_surface is the exact E_d(0+) (the sun's horizontal
+    // irradiance plus the sky's), the one the R_rs cube divides by; the
+    // emission's tally of it, noisy, is `above_surface.Ed`.
+    let exact: Vec<f64> = (0..3).map(|b| scene.incident_irradiance(b)).collect();
+    assert_eq!(r.Ed_above_surface, exact);
+    assert_ne!(
         r.Ed_above_surface,
         r.emission.as_ref().unwrap().above_surface.Ed
     );
+    let cube = |product: &str| {
+        let f = r
+            .outputs
+            .products
+            .iter()
+            .find(|p| p.product == product)
+            .unwrap();
+        littoral::cube::EnviCube::open(Path::new(&f.hdr)).unwrap()
+    };
+    let (lw, rrs) = (cube("lw"), cube("rrs"));
+    for (b, ed) in exact.iter().enumerate() {
+        for (l, q) in lw.band(b).unwrap().iter().zip(rrs.band(b).unwrap().iter()) {
+            // The README's recipe, R_rs = L_w / Ed_above_surface, to float rounding.
+            assert!((*l as f64 / ed - *q as f64).abs() <= 1e-6 * (*q as f64).abs() + 1e-12);
+        }
+    }
     let m = r.memory;
     assert_eq!(
         m.reserve_bytes + m.boundary_grid_bytes + m.band_shape_grid_bytes + m.tile_cache_bytes,

@@ -172,6 +172,8 @@ fn profiles_and_kd_are_written_as_csv() {
             assert_eq!(row[0], t.depth_m);
             assert_eq!(row[1], emission.bands_nm[b] as f64);
             assert_eq!([row[2], row[6], row[10]], [t.Ed[b], t.Eod[b], t.Lu[b]]);
+            // A flat floor at 3 m: all water at every tally depth.
+            assert_eq!((row[14], t.water_fraction), (1.0, 1.0));
         }
     }
     let kd = table(r.outputs.kd_csv.as_deref().unwrap());
@@ -246,4 +248,77 @@ fn sensor_response_writes_the_cubes_in_the_sensor_bands() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("response") && e.contains("pace-oci"), "{e}");
+}
+
+/// Profiles are means over the water present at each depth: over the
+/// built-in scene's floor, sloping from 0.5 m to 15 m along x, the share
+/// of the domain that is water at depth d is (15 - d) / 14.5 (1 above
+/// 0.5 m), to the sampling grid's 1/256; and a tally's irradiance is that
+/// of the water there. Two scenes over the same deep water, one whose
+/// floor rises to 1 m over the east half (a step), read the same E_d at
+/// 3 m within their standard errors (5 sigma), where the domain mean of
+/// the stepped scene would read it near half.
+#[test]
+fn profiles_are_means_over_the_water_present() {
+    let s = Scene::coastal(&Overrides::default()).unwrap();
+    for (d, want) in [
+        (0.0, 1.0),
+        (0.3, 1.0),
+        (1.0, 14.0 / 14.5),
+        (5.0, 10.0 / 14.5),
+        (14.0, 1.0 / 14.5),
+    ] {
+        let got = littoral::emit::report::water_fraction(&s, d);
+        assert!(
+            (got - want).abs() <= 1.0 / 256.0 + 1e-12,
+            "{d} m: {got} against {want}"
+        );
+    }
+    let dir = tempdir();
+    let grid = |step: bool| {
+        let mut rows = Vec::new();
+        for _ in 0..9 {
+            let row: Vec<&str> = (0..9)
+                .map(|i| if step && i >= 5 { "1.0" } else { "20.0" })
+                .collect();
+            rows.push(row.join(","));
+        }
+        rows.join("\n") + "\n"
+    };
+    let ed_at_3 = |step: bool| {
+        let name = if step { "step" } else { "flat" };
+        std::fs::write(dir.path().join(format!("{name}.csv")), grid(step)).unwrap();
+        let text = minimal_with(&format!(
+            "name = \"{name}\"\n[domain]\nsize_m = [40.0, 40.0]\n[bottom]\nheightfield = \"{name}.csv\"\nreflectance = 0.0\n\
+             [tally]\ndepths_m = [0.5, 3.0]\n[photons]\ncount = 200000\n[sensor]\npixels = [2, 2]\n"
+        ));
+        let s = Scene::parse(
+            &text,
+            &dir.path().join(format!("{name}.toml")),
+            &Overrides::default(),
+        )
+        .unwrap();
+        let r = render_job(&s, &dir.path().join(name), 0);
+        let t = r.emission.unwrap().tally[1].clone();
+        (t.water_fraction, t.Ed, t.Ed_stderr)
+    };
+    let (w_flat, ed_flat, se_flat) = ed_at_3(false);
+    let (w_step, ed_step, se_step) = ed_at_3(true);
+    assert_eq!(w_flat, 1.0);
+    // Columns 0-4 of 9 grid points deep: the floor rises between x = 20
+    // and 25 m, crossing 3 m at x = 20 + 5 * 17 / 19 m.
+    let want = (20.0 + 5.0 * 17.0 / 19.0) / 40.0;
+    assert!(
+        (w_step - want).abs() <= 1.0 / 256.0 + 1e-12,
+        "{w_step} against {want}"
+    );
+    for b in 0..ed_flat.len() {
+        let se = (se_flat[b].powi(2) + se_step[b].powi(2)).sqrt();
+        assert!(
+            (ed_step[b] - ed_flat[b]).abs() <= 5.0 * se,
+            "band {b}: {} against {} (se {se})",
+            ed_step[b],
+            ed_flat[b]
+        );
+    }
 }

@@ -52,7 +52,7 @@ fn bad_scenes_name_the_key_and_line() {
         (format!("{MINIMAL_SCENE}\n[bottom]\ndepth_m = 3.0\nreflectance = \"marble\"\n"), "bottom.reflectance"),
         (format!("{MINIMAL_SCENE}\n[[target]]\nkind = \"box\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 0.5\n"), "target[0].size_m"),
         (format!("{MINIMAL_SCENE}\n[[target]]\nkind = \"panel\"\ncenter_m = [1.0, 1.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 1.5\n"), "target[0].reflectance"),
-        (MINIMAL_SCENE.replace("end_nm = 700.0", "end_nm = 1200.0").replace("iop = { a = 0.1, b = 0.2 }", "chl = 1.0"), "out_of_range"),
+        (MINIMAL_SCENE.replace("end_nm = 700.0", "end_nm = 1200.0").replace("iop = { a = 0.1, b = 0.2 }", "chl = 1.0"), "spectral.end_nm: "),
         (MINIMAL_SCENE.replace("[photons]", "[tally]\ndepths_m = [1.0, -2.0]\n[photons]"), "tally.depths_m[1]"),
         (MINIMAL_SCENE.replace("iop = { a = 0.1, b = 0.2 }", "iop = { a = 0.1, b = 0.2 }\nphase = { kind = \"fournier-forand\", bb_ratio = 0.5 }"), "water.phase.bb_ratio"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nboundary_grid_m = 0.0\n"), "estimate.boundary_grid_m"),
@@ -60,6 +60,7 @@ fn bad_scenes_name_the_key_and_line() {
         (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_down_deg = -1.0\n"), "estimate.forward_peak_down_deg"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nforward_peak_target_deg = 91.0\n"), "estimate.forward_peak_target_deg"),
         (format!("{MINIMAL_SCENE}\n[estimate]\nk = 10\nk_expanded = 5\n"), "estimate.k_expanded"),
+        (format!("{MINIMAL_SCENE}\n[sensor]\nkind = \"pinhole\"\nposition_m = [5.0, 5.0, 10.0]\nlook_at_m = [5.0, 5.0, 0.0]\n[georef]\nepsg = 32617\n"), "georef: a pinhole camera's image has no map grid"),
     ];
     for (text, needle) in cases {
         let e = parse_err(&text);
@@ -787,4 +788,27 @@ fn counts_ranges_and_names() {
     refused_at(&named("a/b"), "name", "name", &["path separators"]);
     refused_at(&named(".."), "name", "name", &["path separators"]);
     accepted(&named(&"x".repeat(200)));
+}
+
+/// `--bands N` spreads N bands over the scene's own range: the built-in
+/// scene's 400-800 nm, or the span of a scene's explicit centres; 400-700
+/// nm only where the scene gives neither.
+#[test]
+fn a_band_count_override_keeps_the_scenes_range() {
+    let bands = |s: &littoral::scene::Scene| s.bands.centers_nm().to_vec();
+    let o = littoral::scene::Overrides {
+        bands: Some(5),
+        ..Default::default()
+    };
+    let c = bands(&littoral::scene::Scene::coastal(&o).unwrap());
+    assert_eq!((c.len(), c[0], c[4]), (5, 400.0, 800.0));
+    let explicit = littoral::scene::text::SceneText::parse(crate::common::MINIMAL_SCENE)
+        .unwrap()
+        .remove("spectral")
+        .merge("[spectral]\ncenters_nm = [443.0, 490.0, 560.0, 665.0]\nfwhm_nm = [10.0, 10.0, 10.0, 10.0]\n")
+        .unwrap()
+        .text();
+    let s = littoral::scene::Scene::parse(&explicit, std::path::Path::new("x.toml"), &o).unwrap();
+    let c = bands(&s);
+    assert_eq!((c.len(), c[0], c[4]), (5, 443.0, 665.0));
 }

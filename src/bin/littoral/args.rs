@@ -93,7 +93,8 @@ pub struct RenderArgs {
     /// Photons to trace (overrides the scene).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..), allow_hyphen_values = true)]
     pub photons: Option<u64>,
-    /// Bands evenly spaced over 400-700 nm (overrides the scene's grid).
+    /// Bands evenly spaced over the scene's own range (its start_nm-end_nm, or the
+    /// span of its explicit centres), replacing its grid.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..), allow_hyphen_values = true)]
     pub bands: Option<u16>,
     /// Worker threads (0 = one per core); outputs are identical for any number.

@@ -307,17 +307,16 @@ fn layers(ctx: &Ctx, file: &[LayerFile], base: Constituents) -> Result<Constitue
 /// scattering, Bricaud's phytoplankton absorption, and the CDOM, NAP and
 /// particle-scattering shapes.
 fn band_spectra(ctx: &Ctx, w: &WaterFile) -> Result<BandSpectra> {
-    let wk = |k| [K("water"), K(k)];
     let centers: Vec<f64> = ctx.bands.centers_nm().iter().map(|&c| c as f64).collect();
     let (a_phi_a, a_phi_e) = tables::bricaud_a_phi();
     let s_g = w.cdom_slope.unwrap_or(0.015);
     let s_nap = w.nap_slope.unwrap_or(0.011);
     let n_bp = w.bp_slope.unwrap_or(1.0);
     let spectra = BandSpectra {
-        a_w: ctx.per_band(tables::water_absorption(), &wk("chl"))?,
-        b_w: ctx.per_band(tables::seawater_scattering(), &wk("chl"))?,
-        a_phi_a: ctx.per_band(a_phi_a, &wk("chl"))?,
-        a_phi_e: ctx.per_band(a_phi_e, &wk("chl"))?,
+        a_w: ctx.per_band_shipped(tables::water_absorption())?,
+        b_w: ctx.per_band_shipped(tables::seawater_scattering())?,
+        a_phi_a: ctx.per_band_shipped(a_phi_a)?,
+        a_phi_e: ctx.per_band_shipped(a_phi_e)?,
         cdom_shape: centers.iter().map(|l| (-s_g * (l - 440.0)).exp()).collect(),
         nap_shape: centers
             .iter()
