@@ -4,7 +4,10 @@
 //! band centre in nm with a comma as the decimal mark and `nm`
 //! (`S0.550,000000nm`; S0 is the unpolarised emissive component), and the
 //! string attributes `spectralLayoutVersion` = "1.0" and `emissiveUnits`
-//! (the cube's data units, W.m^-2.sr^-1.nm^-1). EXR requires channels in
+//! (the cube's data units, W.m^-2.sr^-1.nm^-1). A layer that is not a
+//! radiance (R_rs, in sr^-1) is reflective in the layout's terms: its
+//! channels are `T.550,000000nm` and it carries no `emissiveUnits`, but a
+//! `units` attribute with its data units. EXR requires channels in
 //! byte order of their names, which is wavelength order while every centre
 //! has the same number of digits; the mapping is computed, not assumed.
 //!
@@ -63,9 +66,15 @@ pub fn tile_px(compression: ExrCompression) -> usize {
     }
 }
 
-/// The spectral-layout channel name of a band centred at `nm`.
+/// The spectral-layout channel name of an emissive band centred at `nm`.
 pub fn channel_name(nm: f64) -> String {
-    format!("S0.{}nm", format!("{nm:.6}").replace('.', ","))
+    channel_name_with("S0", nm)
+}
+
+/// The channel name of a band centred at `nm` under `prefix` (`S0`
+/// emissive, `T` reflective).
+fn channel_name_with(prefix: &str, nm: f64) -> String {
+    format!("{prefix}.{}nm", format!("{nm:.6}").replace('.', ","))
 }
 
 pub use crate::scene::settings::ExrCompression;
@@ -80,6 +89,12 @@ pub struct ExrLayer<'a> {
 }
 
 impl<'a> ExrLayer<'a> {
+    /// True for a layer that is not a radiance (no units, or units
+    /// without W: R_rs in sr^-1): the layout's reflective channels.
+    pub fn reflective(&self) -> bool {
+        self.units.is_some_and(|u| !u.contains('W'))
+    }
+
     /// The layer `name` holding `cube`.
     pub fn of_cube(name: &'a str, cube: &'a EnviCube) -> Self {
         ExrLayer {
@@ -115,7 +130,10 @@ fn layer_header(
         .wavelengths_nm
         .iter()
         .enumerate()
-        .map(|(b, &nm)| (channel_name(nm), b))
+        .map(|(b, &nm)| {
+            let prefix = if layer.reflective() { "T" } else { "S0" };
+            (channel_name_with(prefix, nm), b)
+        })
         .collect();
     named.sort();
     if named.windows(2).any(|p| p[0].0 == p[1].0) {
@@ -153,10 +171,15 @@ fn layer_header(
         text("spectralLayoutVersion")?,
         AttributeValue::Text(text("1.0")?),
     );
+    let key = if layer.reflective() {
+        "units"
+    } else {
+        "emissiveUnits"
+    };
     header
         .own_attributes
         .other
-        .insert(text("emissiveUnits")?, AttributeValue::Text(text(&units)?));
+        .insert(text(key)?, AttributeValue::Text(text(&units)?));
     Ok((header, order))
 }
 

@@ -401,10 +401,16 @@ pub(super) fn publish_run(
             bsq: published(&staging, &c.files.bsq),
         })
         .collect();
+    let bands = emission.is_none().then(|| report::RunBands {
+        scene: scene.name.clone(),
+        bands_nm: scene.bands.centers_nm().to_vec(),
+        fwhm_nm: scene.bands.fwhm_nm().to_vec(),
+    });
     let report = RunReport {
         integrator,
         Ed_above_surface: ed_above,
         emission,
+        bands,
         map,
         reused_map,
         warnings: warnings

@@ -221,6 +221,14 @@ pub struct RenderTimings {
     pub total: f64,
 }
 
+/// The scene's name and band grid, as the emission report gives them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunBands {
+    pub scene: String,
+    pub bands_nm: Vec<f32>,
+    pub fwhm_nm: Vec<f32>,
+}
+
 /// The report of `littoral render`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
@@ -230,6 +238,13 @@ pub struct RunReport {
     /// The emission report of the photon map (none for the path integrator).
     #[serde(flatten)]
     pub emission: Option<EmissionReport>,
+    /// The scene's name and bands for a report without an emission report
+    /// (the path integrator's), written where the emission report writes
+    /// them (`scene`, `bands_nm`, `fwhm_nm`) so that every report's JSON
+    /// has them. Written only: a typed read leaves it `None` (the emission
+    /// report, or the cube's header, carries the same).
+    #[serde(flatten, skip_deserializing, skip_serializing_if = "Option::is_none")]
+    pub bands: Option<RunBands>,
     /// The photon map (none for the path integrator).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map: Option<MapSummary>,

@@ -44,11 +44,16 @@ parts = {p.name(): p for p in f.parts}
 for layer, name in [("radiance", ""), ("stderr", ".stderr"), ("lw", ".lw"),
                     ("surface", ".surface"), ("rrs", ".rrs")]:
     p = parts[layer]
-    chans = sorted(p.channels.keys(), key=lambda c: float(c[3:-2].replace(",", ".")))
+    # R_rs is reflective in the spectral layout (T.), the radiances emissive (S0.).
+    prefix = "T." if layer == "rrs" else "S0."
+    assert all(c.startswith(prefix) for c in p.channels), (layer, list(p.channels))
+    assert ("emissiveUnits" in p.header) == (layer != "rrs"), layer
+    chans = sorted(p.channels.keys(), key=lambda c: float(c[len(prefix):-2].replace(",", ".")))
     assert len(chans) == nb, chans
     for b, c in enumerate(chans):
         assert np.array_equal(p.channels[c].pixels, cubes[name][:, :, b]), (layer, c)
 assert parts["radiance"].header["spectralLayoutVersion"] == "1.0"
+assert parts["rrs"].header["units"] == "sr-1", parts["rrs"].header
 print("ok")
 "#;
 

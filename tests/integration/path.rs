@@ -187,8 +187,8 @@ radiometer = [
 }
 
 /// The path integrator needs no photon map, writes the cube, the
-/// standard-error cube and the report, and gives the same bytes for one
-/// thread and two.
+/// standard-error cube and the report (naming the scene and its bands),
+/// and gives the same bytes for one thread and two.
 #[test]
 fn path_render_is_identical_for_any_thread_count() {
     let dir = tempdir();
@@ -201,6 +201,14 @@ fn path_render_is_identical_for_any_thread_count() {
         assert_eq!(r.integrator, IntegratorMode::Path);
         assert!(r.emission.is_none() && r.map.is_none());
         assert_eq!(r.Ed_above_surface.len(), 3);
+        // Its JSON names the scene and its bands as a photon map's does.
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&r.outputs.json).unwrap()).unwrap();
+        assert_eq!(json["scene"], s.name.as_str());
+        let nm: Vec<f64> = serde_json::from_value(json["bands_nm"].clone()).unwrap();
+        let want: Vec<f64> = s.bands.centers_nm().iter().map(|&c| c as f64).collect();
+        assert_eq!(nm, want);
+        assert_eq!(json["fwhm_nm"].as_array().unwrap().len(), 3);
         let se = r
             .outputs
             .stderr_hdr
