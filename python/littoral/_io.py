@@ -18,9 +18,9 @@ PathLike = Union[str, "os.PathLike[str]"]
 #: Cube files of a run named NAME, by data variable: (file suffix, long
 #: name, CF standard name or None, units).
 CUBES = {
-    "L_t": ("", "total radiance at the sensor", "upwelling_radiance_per_unit_wavelength_in_air", "W m-2 sr-1 nm-1"),
-    "L_w": (".lw", "water-leaving radiance", "upwelling_radiance_per_unit_wavelength_in_air_emerging_from_sea_water", "W m-2 sr-1 nm-1"),
-    "L_surface": (".surface", "radiance reflected by the sea surface (L_t - L_w)", "upwelling_radiance_per_unit_wavelength_in_air_reflected_by_sea_water", "W m-2 sr-1 nm-1"),
+    "L_t": ("", "total radiance at the sensor", "surface_upwelling_radiance_per_unit_wavelength_in_air", "W m-2 sr-1 nm-1"),
+    "L_w": (".lw", "water-leaving radiance", "surface_upwelling_radiance_per_unit_wavelength_in_air_emerging_from_sea_water", "W m-2 sr-1 nm-1"),
+    "L_surface": (".surface", "radiance reflected by the sea surface (L_t - L_w)", "surface_upwelling_radiance_per_unit_wavelength_in_air_reflected_by_sea_water", "W m-2 sr-1 nm-1"),
     "R_rs": (".rrs", "remote-sensing reflectance L_w / E_d(0+)", "surface_ratio_of_upwelling_radiance_emerging_from_sea_water_to_downwelling_radiative_flux_in_air", "sr-1"),
     "stderr": (".stderr", "standard error of L_t", None, "W m-2 sr-1 nm-1"),
 }

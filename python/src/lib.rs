@@ -179,17 +179,20 @@ fn scene_bands(
     Ok((centres, fwhm))
 }
 
-/// What the worker thread reports and the Python thread reads.
+/// What the worker thread reports and the Python thread reads: every
+/// stage begun (so that one begun and ended between two polls is still
+/// reported) and the units done in the latest.
 struct Shared {
-    stage: Mutex<(String, u64)>,
+    stages: Mutex<Vec<(String, u64)>>,
     done: AtomicU64,
     cancelled: AtomicBool,
 }
 
 impl Progress for Shared {
     fn stage(&self, name: &str, total: u64) {
-        *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = (name.to_string(), total);
+        let mut stages = self.stages.lock().unwrap_or_else(|e| e.into_inner());
         self.done.store(0, Ordering::Relaxed);
+        stages.push((name.to_string(), total));
     }
     fn advance(&self, n: u64) {
         self.done.fetch_add(n, Ordering::Relaxed);
@@ -208,11 +211,13 @@ fn run_detached<T: Send>(
     work: impl FnOnce(&dyn Progress) -> littoral::Result<T> + Send,
 ) -> PyResult<T> {
     let shared = Shared {
-        stage: Mutex::new((String::new(), 0)),
+        stages: Mutex::new(Vec::new()),
         done: AtomicU64::new(0),
         cancelled: AtomicBool::new(false),
     };
     let mut raised: Option<PyErr> = None;
+    // Stages before this index were reported as complete.
+    let mut reported = 0;
     let result = std::thread::scope(|s| {
         let worker = s.spawn(|| work(&shared));
         loop {
@@ -229,13 +234,22 @@ fn run_detached<T: Send>(
                 let mut step = py.check_signals();
                 if step.is_ok() {
                     if let Some(cb) = &callback {
-                        let (name, total) = shared
-                            .stage
-                            .lock()
-                            .unwrap_or_else(|e| e.into_inner())
-                            .clone();
-                        let done = shared.done.load(Ordering::Relaxed);
-                        step = cb.call1(py, (name, done, total, finished)).map(|_| ());
+                        let (stages, done) = {
+                            let s = shared.stages.lock().unwrap_or_else(|e| e.into_inner());
+                            (s.clone(), shared.done.load(Ordering::Relaxed))
+                        };
+                        let last = stages.len().saturating_sub(1);
+                        for (i, (name, total)) in stages.iter().enumerate().skip(reported) {
+                            // A stage that ended since the last poll, as
+                            // complete; the latest as it stands.
+                            let now = if i < last {
+                                (name.as_str(), *total, *total, false)
+                            } else {
+                                (name.as_str(), done, *total, finished)
+                            };
+                            step = step.and_then(|()| cb.call1(py, now).map(|_| ()));
+                        }
+                        reported = last;
                     }
                 }
                 if let Err(e) = step {

@@ -226,3 +226,9 @@ def _gaussians(d: Path) -> Path:
     p = d / "g.csv"
     p.write_text("band,center_nm,fwhm_nm\nblue,480,20\ngreen,551.5,10\n")
     return p
+
+
+def test_the_progress_bar_draws_each_stage(small, capsys):
+    littoral.render(small.with_({"photons.count": 20000}), progress=True)
+    err = capsys.readouterr().err
+    assert "trace photons" in err and "render tiles" in err
