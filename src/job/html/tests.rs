@@ -44,7 +44,11 @@ fn a_plot_is_svg_with_its_labels_and_skips_non_finite_points() {
         &[curve],
     )
     .unwrap();
-    assert!(svg.starts_with("<svg"), "{}", &svg[..80.min(svg.len())]);
+    assert!(
+        svg.starts_with("<figure><svg"),
+        "{}",
+        &svg[..80.min(svg.len())]
+    );
     assert!(svg.contains("pixel (1, 2)") && svg.contains("wavelength (nm)"));
     assert!(!svg.contains("NaN") && !svg.contains("inf"));
     let empty = plot(
@@ -63,4 +67,47 @@ fn a_plot_is_svg_with_its_labels_and_skips_non_finite_points() {
     )
     .unwrap();
     assert!(empty.contains("no finite values"));
+}
+
+/// Depth ticks carry the decimals they need and no more (no two ticks of
+/// one axis read the same); the legend is HTML under the plot, off the
+/// curves; a profile that reaches 0 (no light of the band at that depth)
+/// is named in a note, since a log axis cannot draw it.
+#[test]
+fn depth_plots_label_ticks_legends_and_what_they_cannot_draw() {
+    assert_eq!(depth_label(0.0), "0");
+    assert_eq!(depth_label(-0.0), "0");
+    assert_eq!(depth_label(0.5), "0.5");
+    assert_eq!(depth_label(2.0), "2");
+    assert_eq!(depth_label(12.25), "12.25");
+    let curves = [
+        Curve {
+            label: "500 nm".into(),
+            x: vec![1.0, 0.5, 0.25],
+            y: vec![0.0, 1.0, 2.0],
+            err: None,
+        },
+        Curve {
+            label: "800 nm".into(),
+            x: vec![0.3, 0.0, 0.0],
+            y: vec![0.0, 1.0, 2.0],
+            err: None,
+        },
+    ];
+    let html = plot(
+        &Axes {
+            title: "E_d against depth",
+            x_label: "E_d",
+            y_label: "depth (m)",
+            depth: true,
+        },
+        &curves,
+    )
+    .unwrap();
+    let svg_end = html.find("</svg>").unwrap();
+    let legend = html.find("<figcaption class=\"legend\">").unwrap();
+    assert!(legend > svg_end, "the legend follows the plot");
+    assert!(html[legend..].contains("500 nm") && html[legend..].contains("800 nm"));
+    assert!(html.contains("800 nm at 1, 2 m"), "{html}");
+    assert!(!html.contains("500 nm at"));
 }
