@@ -45,7 +45,7 @@ if [[ ! -x $venv/bin/python ]]; then
 fi
 export PATH="$PWD/$venv/bin:$PATH"
 export PYO3_PYTHON="$PWD/$venv/bin/python"
-pip() { python -m pip -q --disable-pip-version-check "$@"; }
+pip() { python -m pip -q --disable-pip-version-check --root-user-action=ignore "$@"; }
 python -c "import spectral, OpenEXR, numpy" >/dev/null 2>&1 || pip install spectral OpenEXR numpy
 
 # 3. The tests. The Python package is built with the test profile, so that
