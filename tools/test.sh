@@ -4,7 +4,8 @@
 # missing, then runs every test.
 #
 #   1. Debian packages (as root): GDAL (gdal-bin) and Chromium, which read
-#      the outputs and open the HTML report; Slurm and munge, brought up as
+#      the outputs and open the HTML report; python3-venv where Python
+#      cannot make a virtual environment; Slurm and munge, brought up as
 #      a single-node cluster by .ci/slurm-up.sh for the `littoral plan` test.
 #   2. A Python virtual environment ($LITTORAL_VENV, default .venv) with
 #      Spectral Python, OpenEXR and numpy for the client tests, and the
@@ -23,6 +24,8 @@ say() { echo "test.sh: $*"; }
 missing=()
 command -v gdalinfo >/dev/null 2>&1 || missing+=(gdal-bin)
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+# Debian's own Python makes virtual environments only with python3-venv.
+python3 -c "import ensurepip, venv" >/dev/null 2>&1 || missing+=(python3-venv)
 if ((${#missing[@]})); then
   if [[ $(id -u) -ne 0 ]]; then
     say "error: install ${missing[*]} (apt-get, as root) and run again" >&2
