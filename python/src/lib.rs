@@ -289,14 +289,8 @@ fn render(
     map: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let o = self::overrides(py, overrides)?;
-    let budget = MemoryBudget::parse("mem_budget", mem_budget).map_err(|e| to_py(py, e))?;
-    check_threads(py, threads)?;
-    let started = std::time::Instant::now();
-    let scene = py
-        .detach(|| Scene::parse(text, &origin, &o))
-        .map_err(|e| to_py(py, e))?;
-    let scene_seconds = started.elapsed().as_secs_f64();
+    let (scene, budget, scene_seconds) =
+        run_inputs(py, text, &origin, overrides, mem_budget, threads)?;
     let report = run_detached(py, progress, |p| {
         RenderJob {
             scene: &scene,
@@ -327,14 +321,8 @@ fn emit(
     report: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let o = self::overrides(py, overrides)?;
-    let budget = MemoryBudget::parse("mem_budget", mem_budget).map_err(|e| to_py(py, e))?;
-    check_threads(py, threads)?;
-    let started = std::time::Instant::now();
-    let scene = py
-        .detach(|| Scene::parse(text, &origin, &o))
-        .map_err(|e| to_py(py, e))?;
-    let scene_seconds = started.elapsed().as_secs_f64();
+    let (scene, budget, scene_seconds) =
+        run_inputs(py, text, &origin, overrides, mem_budget, threads)?;
     let r = run_detached(py, progress, |p| {
         EmitJob {
             scene: &scene,
@@ -347,6 +335,28 @@ fn emit(
         .run(p)
     })?;
     Ok(r.json())
+}
+
+/// What a run needs before it starts, checked as the command line checks
+/// it: the scene (parsed without the GIL) with its overrides, the memory
+/// budget, `threads` within the machine's cap, and the seconds the scene
+/// took to load.
+fn run_inputs(
+    py: Python<'_>,
+    text: &str,
+    origin: &std::path::Path,
+    overrides: &str,
+    mem_budget: &str,
+    threads: usize,
+) -> PyResult<(Scene, MemoryBudget, f64)> {
+    let o = self::overrides(py, overrides)?;
+    let budget = MemoryBudget::parse("mem_budget", mem_budget).map_err(|e| to_py(py, e))?;
+    check_threads(py, threads)?;
+    let started = std::time::Instant::now();
+    let scene = py
+        .detach(|| Scene::parse(text, origin, &o))
+        .map_err(|e| to_py(py, e))?;
+    Ok((scene, budget, started.elapsed().as_secs_f64()))
 }
 
 /// `threads` within the machine's cap, as `--threads` checks it.
