@@ -41,14 +41,15 @@ export LITTORAL_REQUIRE_SLURM=1
 
 # 2. Python: a virtual environment (a stock Debian Python refuses a bare
 # pip install), first on PATH so that the client tests' python3 is its.
-venv=${LITTORAL_VENV:-.venv}
+venv=$(realpath -m "${LITTORAL_VENV:-.venv}")
 if [[ ! -x $venv/bin/python ]]; then
   say "making the virtual environment $venv"
   python3 -m venv "$venv"
 fi
-export PATH="$PWD/$venv/bin:$PATH"
-export PYO3_PYTHON="$PWD/$venv/bin/python"
-pip() { python -m pip -q --disable-pip-version-check --root-user-action=ignore "$@"; }
+export PATH="$venv/bin:$PATH"
+export PYO3_PYTHON="$venv/bin/python"
+export PIP_ROOT_USER_ACTION=ignore PIP_DISABLE_PIP_VERSION_CHECK=1
+pip() { python -m pip -q "$@"; }
 python -c "import spectral, OpenEXR, numpy" >/dev/null 2>&1 || pip install spectral OpenEXR numpy
 
 # 3. The tests. The Python package is built with the test profile, so that
