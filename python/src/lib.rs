@@ -81,11 +81,6 @@ fn to_py(py: Python<'_>, e: Error) -> PyErr {
     err
 }
 
-/// A `SceneError` about the scene text itself (no file behind it).
-fn scene_text_err(py: Python<'_>, e: Error) -> PyErr {
-    to_py(py, e)
-}
-
 /// The overrides a call passes, from their JSON (`{"photons": 1000,
 /// "integrator": "path", ...}`, names as on the command line).
 fn overrides(py: Python<'_>, json: &str) -> PyResult<Overrides> {
@@ -110,21 +105,21 @@ fn scene_set(py: Python<'_>, text: &str, key: &str, value: &str) -> PyResult<Str
             Error::invalid(key, format!("not a value a scene can hold: {e}")),
         )
     })?;
-    let scene = SceneText::parse(text).map_err(|e| scene_text_err(py, e))?;
+    let scene = SceneText::parse(text).map_err(|e| to_py(py, e))?;
     Ok(scene.set(key, value).text())
 }
 
 /// `text` without the dotted `key`.
 #[pyfunction]
 fn scene_remove(py: Python<'_>, text: &str, key: &str) -> PyResult<String> {
-    let scene = SceneText::parse(text).map_err(|e| scene_text_err(py, e))?;
+    let scene = SceneText::parse(text).map_err(|e| to_py(py, e))?;
     Ok(scene.remove(key).text())
 }
 
 /// The value at the dotted `key` of `text` as JSON, or `None`.
 #[pyfunction]
 fn scene_get(py: Python<'_>, text: &str, key: &str) -> PyResult<Option<String>> {
-    let scene = SceneText::parse(text).map_err(|e| scene_text_err(py, e))?;
+    let scene = SceneText::parse(text).map_err(|e| to_py(py, e))?;
     Ok(scene
         .get(key)
         .map(|v| serde_json::to_string(v).expect("a TOML value is JSON")))

@@ -389,39 +389,30 @@ fn a_cancelled_run_stops_and_leaves_nothing() {
         assert_eq!(files(s.dir.path()), before, "after {after}");
     }
     let out = s.dir.path().join("out");
-    let e = RenderJob {
-        scene: &scene,
-        out_dir: out.clone(),
-        map: None,
-        threads: 2,
-        budget: MemoryBudget::new(64 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&CancelAfter {
-        after: 20_000 + 1,
-        done: 0.into(),
-    })
-    .unwrap_err();
-    assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+    // A render cancelled after `after` units, keeping its map at `map`.
+    let cancelled_render = |map: Option<PathBuf>, after: u64| {
+        let e = RenderJob {
+            scene: &scene,
+            out_dir: out.clone(),
+            map,
+            threads: 2,
+            budget: MemoryBudget::new(64 * MIB),
+            scene_seconds: 0.0,
+        }
+        .run(&CancelAfter {
+            after,
+            done: 0.into(),
+        })
+        .unwrap_err();
+        assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+    };
+    cancelled_render(None, 20_000 + 1);
     assert_eq!(files(&out), Vec::<String>::new());
     // A kept map is not touched by a render cancelled while it reads it
     // (the scene's one image tile).
     s.emit(&scene);
     let kept = digest(&s.map());
-    let e = RenderJob {
-        scene: &scene,
-        out_dir: out.clone(),
-        map: Some(s.map()),
-        threads: 2,
-        budget: MemoryBudget::new(64 * MIB),
-        scene_seconds: 0.0,
-    }
-    .run(&CancelAfter {
-        after: 0,
-        done: 0.into(),
-    })
-    .unwrap_err();
-    assert!(matches!(e, littoral::Error::Cancelled), "{e}");
+    cancelled_render(Some(s.map()), 0);
     assert_eq!(digest(&s.map()), kept);
     assert_eq!(files(&out), Vec::<String>::new());
 }

@@ -789,26 +789,3 @@ fn counts_ranges_and_names() {
     refused_at(&named(".."), "name", "name", &["path separators"]);
     accepted(&named(&"x".repeat(200)));
 }
-
-/// `--bands N` spreads N bands over the scene's own range: the built-in
-/// scene's 400-800 nm, or the span of a scene's explicit centres; 400-700
-/// nm only where the scene gives neither.
-#[test]
-fn a_band_count_override_keeps_the_scenes_range() {
-    let bands = |s: &littoral::scene::Scene| s.bands.centers_nm().to_vec();
-    let o = littoral::scene::Overrides {
-        bands: Some(5),
-        ..Default::default()
-    };
-    let c = bands(&littoral::scene::Scene::coastal(&o).unwrap());
-    assert_eq!((c.len(), c[0], c[4]), (5, 400.0, 800.0));
-    let explicit = littoral::scene::text::SceneText::parse(crate::common::MINIMAL_SCENE)
-        .unwrap()
-        .remove("spectral")
-        .merge("[spectral]\ncenters_nm = [443.0, 490.0, 560.0, 665.0]\nfwhm_nm = [10.0, 10.0, 10.0, 10.0]\n")
-        .unwrap()
-        .text();
-    let s = littoral::scene::Scene::parse(&explicit, std::path::Path::new("x.toml"), &o).unwrap();
-    let c = bands(&s);
-    assert_eq!((c.len(), c[0], c[4]), (5, 443.0, 665.0));
-}
