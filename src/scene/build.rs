@@ -195,6 +195,13 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
         }
     })?;
     if let Some(p) = ov.photons {
+        // The command line's count is at fault, not the file's line.
+        if p == 0 || p > MAX_PHOTONS {
+            return Err(Error::invalid(
+                "--photons",
+                format!("{p} photons: must be from 1 to {MAX_PHOTONS} (10^12); split the work over more runs"),
+            ));
+        }
         f.photons.count = p;
     }
     if let Some(s) = ov.seed {

@@ -427,6 +427,15 @@ fn targets_lie_in_the_water_of_the_domain() {
         &["below the floor"],
     );
     accepted(&slope.replace("[1.0, 5.0, -4.0]", "[9.0, 5.0, -4.0]"));
+    // Partly sunk into the slope: the floor under its footprint runs from
+    // 4.6 to 5.4 m, its top at 5 m. Buried everywhere below 5.4 m.
+    accepted(&slope.replace("[1.0, 5.0, -4.0]", "[5.0, 5.0, -5.0]"));
+    refused_at(
+        &slope.replace("[1.0, 5.0, -4.0]", "[5.0, 5.0, -5.5]"),
+        "center_m",
+        "target[0].center_m",
+        &["entirely below the floor", "at most 5.400 m"],
+    );
     // Without a floor, any depth is water.
     accepted(&format!(
         "{MINIMAL_SCENE}{}",
@@ -528,6 +537,40 @@ fn the_image_lies_inside_the_domain() {
     accepted(&s("pixels = [40, 20]\ngsd_m = 0.25"));
     accepted(&s("pixels = [4, 4]\ngsd_m = 1.0\ncenter_m = [2.0, 8.0]"));
     accepted(&s("pixels = [640, 3]"));
+}
+
+/// A pinhole camera's image must meet the water inside the domain: its
+/// centre (else `look_at_m` is at fault) and its corners (else `fov_deg`).
+#[test]
+fn the_pinhole_view_lies_inside_the_domain() {
+    let s = |sensor: &str| {
+        format!("{MINIMAL_SCENE}[sensor]\nkind = \"pinhole\"\npixels = [8, 8]\n{sensor}\n")
+    };
+    let above = "position_m = [5.0, 5.0, 10.0]";
+    accepted(&s(&format!(
+        "{above}\nlook_at_m = [5.0, 5.0, 0.0]\nfov_deg = 30.0"
+    )));
+    refused_at(
+        &s(&format!("{above}\nlook_at_m = [900.0, 5.0, 0.0]")),
+        "look_at_m",
+        "sensor.look_at_m",
+        &["centre meets the water at x", "outside the domain"],
+    );
+    // 10 m up, a 60-degree view spans 11.5 m: wider than the 10 m domain.
+    refused_at(
+        &s(&format!(
+            "{above}\nlook_at_m = [5.0, 5.0, 0.0]\nfov_deg = 60.0"
+        )),
+        "fov_deg",
+        "sensor.fov_deg",
+        &["corner", "outside the domain"],
+    );
+    refused_at(
+        &s("position_m = [5.0, 1.0, 1.0]\nlook_at_m = [5.0, 9.0, 0.0]\nfov_deg = 120.0"),
+        "fov_deg",
+        "sensor.fov_deg",
+        &["above the horizon"],
+    );
 }
 
 /// A tally depth below the deepest point of the floor is refused (no light
@@ -728,7 +771,7 @@ fn counts_ranges_and_names() {
         &["never finish", "at most 1000000000000"],
     );
     accepted(&m.replace("count = 1000", "count = 1000000000000"));
-    // The command-line override is checked too.
+    // The command-line override is checked too, and blamed, not the file.
     let o = Overrides {
         photons: Some(u64::MAX),
         ..Overrides::default()
@@ -737,7 +780,7 @@ fn counts_ranges_and_names() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("photons.count") && e.contains("never finish"),
+        e.contains("--photons") && e.contains("split the work") && !e.contains("bad.toml"),
         "{e}"
     );
     let water = |v: &str| m.replace("iop = { a = 0.1, b = 0.2 }", v);

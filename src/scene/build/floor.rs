@@ -214,26 +214,27 @@ pub(super) fn place_targets(
             let steps = if lo.z > tol { &ck } else { &key };
             return Err(ctx.err(steps, what("part of it is above the water (z > 0)")));
         }
-        // The shallowest floor over a 5 x 5 grid of the footprint (none
-        // without a floor).
+        // The deepest floor over a 5 x 5 grid of the footprint (none
+        // without a floor): a target whose top lies below it is buried
+        // everywhere; one partly sunk into a slope is legitimate.
         const N: usize = 5;
-        let mut shallowest = f64::INFINITY;
+        let mut deepest = f64::NEG_INFINITY;
         for a in 0..N {
             for b in 0..N {
                 let x = lo.x + (hi.x - lo.x) * a as f64 / (N - 1) as f64;
                 let y = lo.y + (hi.y - lo.y) * b as f64 / (N - 1) as f64;
                 let (x, y) = (x.clamp(0.0, sx), y.clamp(0.0, sy));
                 if let Some(d) = geometry.floor_depth_at(x as f32, y as f32) {
-                    shallowest = shallowest.min(d as f64);
+                    deepest = deepest.max(d as f64);
                 }
             }
         }
         let top = -hi.z;
-        if shallowest.is_finite() && top > shallowest + tol {
+        if deepest.is_finite() && top > deepest + tol {
             return Err(ctx.err(
                 &ck,
                 what(&format!(
-                    "it lies entirely below the floor (its top is {top:.3} m deep, the floor under it at most {shallowest:.3} m)"
+                    "it lies entirely below the floor (its top is {top:.3} m deep, the floor under it at most {deepest:.3} m)"
                 )),
             ));
         }

@@ -74,11 +74,13 @@ pub(super) fn sensor_and_radiometers(
                 if !finite_in(fov_deg, 0.01, 170.0) {
                     return Err(ctx.err(&sk("fov_deg"), "must be between 0.01 and 170 degrees"));
                 }
-                SensorKind::Pinhole {
+                let kind = SensorKind::Pinhole {
                     position,
                     look_at,
                     fov_deg,
-                }
+                };
+                pinhole_footprint(ctx, &kind, domain, pixels)?;
+                kind
             }
         };
     // A csv: response is read relative to the scene, like every file it
@@ -238,4 +240,62 @@ fn footprint(
         "center_m"
     };
     Err(ctx.err(&sk(key), what))
+}
+
+/// A pinhole camera's view: the centre and the four corners of its image
+/// must meet the water inside the domain (camera rays are not wrapped at
+/// periodic edges, and a ray above the horizon sees no water). The centre
+/// outside blames `look_at_m`; a corner outside, `fov_deg`.
+fn pinhole_footprint(
+    ctx: &Ctx,
+    kind: &SensorKind,
+    domain: &Domain,
+    pixels: [usize; 2],
+) -> Result<()> {
+    let sensor = Sensor {
+        kind: kind.clone(),
+        pixels,
+        samples_per_pixel: 1,
+        response: None,
+    };
+    let [sx, sy] = domain.size_m;
+    let [w, h] = pixels;
+    // (pixel, offset) of the image's centre and its corners.
+    let centre = (
+        w / 2,
+        h / 2,
+        if w % 2 == 0 { 0.0 } else { 0.5 },
+        if h % 2 == 0 { 0.0 } else { 0.5 },
+    );
+    let points = [
+        ("centre", centre),
+        ("top-left corner", (0, 0, 0.0, 0.0)),
+        ("top-right corner", (w - 1, 0, 1.0, 0.0)),
+        ("bottom-left corner", (0, h - 1, 0.0, 1.0)),
+        ("bottom-right corner", (w - 1, h - 1, 1.0, 1.0)),
+    ];
+    for (name, (px, py, u, v)) in points {
+        let r = crate::render::camera::ray(&sensor, px, py, u, v);
+        let key = if name == "centre" {
+            "look_at_m"
+        } else {
+            "fov_deg"
+        };
+        let at = if r.direction.z < 0.0 {
+            let t = -r.origin.z / r.direction.z;
+            Some(r.origin + r.direction * t)
+        } else {
+            None
+        };
+        let what = match at {
+            None => format!("the image's {name} looks above the horizon and sees no water"),
+            Some(p) if p.x < 0.0 || p.y < 0.0 || p.x as f64 > sx || p.y as f64 > sy => format!(
+                "the image's {name} meets the water at x {:.1}, y {:.1} m, outside the domain (x 0 to {sx}, y 0 to {sy} m; camera rays are not wrapped at periodic edges)",
+                p.x, p.y
+            ),
+            Some(_) => continue,
+        };
+        return Err(ctx.err(&[K("sensor"), K(key)], what));
+    }
+    Ok(())
 }

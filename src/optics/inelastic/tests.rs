@@ -1,0 +1,145 @@
+use super::*;
+use crate::rng::Pcg32;
+
+#[test]
+fn the_coefficient_follows_bartlett() {
+    assert!((raman_coefficient(488.0) - 2.6e-4).abs() < 1e-12);
+    // (488 / 400)^5.5 = 2.9848...
+    let r = raman_coefficient(400.0) / raman_coefficient(488.0);
+    assert!((r - (488.0f64 / 400.0).powf(5.5)).abs() < 1e-12);
+    assert!((r - 2.9848).abs() < 1e-3, "{r}");
+}
+
+#[test]
+fn the_phase_function_is_the_published_one_and_normalised() {
+    let rho = RAMAN_DEPOLARISATION;
+    let p = raman_phase();
+    let published = |mu: f64| {
+        3.0 / (16.0 * std::f64::consts::PI) * (1.0 + 3.0 * rho) / (1.0 + 2.0 * rho)
+            * (1.0 + (1.0 - rho) / (1.0 + 3.0 * rho) * mu * mu)
+    };
+    let n = 20_000;
+    let mut integral = 0.0;
+    for i in 0..n {
+        let mu = -1.0 + 2.0 * (i as f64 + 0.5) / n as f64;
+        assert!((p.eval(mu) - published(mu)).abs() < 1e-12 * published(mu).max(1.0));
+        integral += 2.0 * std::f64::consts::PI * p.eval(mu) * 2.0 / n as f64;
+    }
+    assert!((integral - 1.0).abs() < 1e-6, "{integral}");
+}
+
+#[test]
+fn the_shift_density_is_normalised_and_sampled_as_it_reads() {
+    // Integral over 2000..5000 cm^-1 and the mean 3383.75 cm^-1.
+    let (mut total, mut first) = (0.0, 0.0);
+    let step = 0.5;
+    let mut dk = 2000.0;
+    while dk < 5000.0 {
+        let f = shift_density(dk + 0.5 * step);
+        total += f * step;
+        first += f * (dk + 0.5 * step) * step;
+        dk += step;
+    }
+    assert!((total - 1.0).abs() < 1e-9, "{total}");
+    let mean: f64 = WALRAFEN.iter().map(|&(w, mu, _)| w * mu).sum();
+    assert!((mean - 3383.75).abs() < 1e-9);
+    assert!((first - mean).abs() < 1e-6, "{first}");
+    // Samples: histogram against the density, chi-square over 30 bins.
+    let mut rng = Pcg32::new(7, 0);
+    let n = 200_000;
+    let (lo, hi, bins) = (2800.0, 4000.0, 30);
+    let mut counts = vec![0u64; bins];
+    for _ in 0..n {
+        let x = sample_shift(rng.uniform_f64(), rng.normal());
+        if (lo..hi).contains(&x) {
+            counts[((x - lo) / (hi - lo) * bins as f64) as usize] += 1;
+        }
+    }
+    let w = (hi - lo) / bins as f64;
+    let mut chi2 = 0.0;
+    for (i, &c) in counts.iter().enumerate() {
+        // Expected count by Simpson's rule over the bin.
+        let a = lo + i as f64 * w;
+        let p =
+            w / 6.0 * (shift_density(a) + 4.0 * shift_density(a + 0.5 * w) + shift_density(a + w));
+        let e = p * n as f64;
+        chi2 += (c as f64 - e).powi(2) / e;
+    }
+    // 30 degrees of freedom: the 0.999 quantile is 59.7.
+    assert!(chi2 < 59.7, "chi2 {chi2}");
+}
+
+/// The closed-form transfer against drawing photons: λ' uniform in the
+/// excitation band's cell, Δk from Walrafen's sum, each landing photon
+/// weighted by λ'/λ (its energy) times Δ_e / Δ_m.
+#[test]
+fn the_band_transfer_matches_drawn_photons() {
+    let bands = BandGrid::even(400.0, 700.0, 31).unwrap();
+    let r = RamanBands::new(&bands);
+    let cells = &r.cells;
+    let nb = bands.len();
+    let mut rng = Pcg32::new(11, 0);
+    let n = 100_000;
+    for e in [0usize, 9, 20] {
+        let (lo, hi) = cells[e];
+        let mut sum = vec![0.0; nb];
+        let mut sum2 = vec![0.0; nb];
+        let mut out = 0u64;
+        for _ in 0..n {
+            let nm = lo + (hi - lo) * rng.uniform_f64();
+            let em = emission_nm(nm, sample_shift(rng.uniform_f64(), rng.normal()));
+            match cells.iter().position(|&(a, b)| em >= a && em < b) {
+                Some(m) => {
+                    let x = nm / em * (hi - lo) / (cells[m].1 - cells[m].0);
+                    sum[m] += x;
+                    sum2[m] += x * x;
+                }
+                None => out += 1,
+            }
+        }
+        for m in 0..nb {
+            let mean = sum[m] / n as f64;
+            let se = ((sum2[m] / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            let t = r.transfer(e, m);
+            assert!(
+                (t - mean).abs() <= 4.0 * se + 1e-4 * t + 2e-5,
+                "e {e} m {m}: closed form {t}, drawn {mean} +- {se}"
+            );
+        }
+        let lost = out as f64 / n as f64;
+        let se = (lost * (1.0 - lost) / n as f64).sqrt().max(1.0 / n as f64);
+        assert!(
+            (r.lost[e] - lost).abs() <= 4.0 * se,
+            "e {e}: lost {} against drawn {lost}",
+            r.lost[e]
+        );
+    }
+    // 400 nm light lands near 463 nm; 600 nm light near 759 nm, beyond the grid.
+    assert!(r.lost[0] < 1e-6 && r.lost[20] > 0.99, "{:?}", r.lost);
+}
+
+#[test]
+fn bands_fed_from_below_the_grid_say_so() {
+    let bands = BandGrid::even(400.0, 700.0, 31).unwrap();
+    let r = RamanBands::new(&bands);
+    // 420 nm is excited near 366 nm, 600 nm near 494 nm.
+    assert!(r.missing[2] > 0.999, "{}", r.missing[2]);
+    assert!(r.missing[20] < 1e-9, "{}", r.missing[20]);
+    // The gain of a band fed from within the grid: b_R at the mean
+    // excitation wavelength (498.7 nm for 600 nm), times (λ'/λ)^3: λ'/λ
+    // for the energy, (λ'/λ)^2 for the excitation interval that maps onto
+    // the band's cell (dλ/dλ' = (λ/λ')^2).
+    let ex = 1e7 / (1e7 / 600.0 + 3383.75);
+    let expected = raman_coefficient(ex) * (ex / 600.0f64).powi(3);
+    let g = r.gain[20];
+    assert!((g / expected - 1.0).abs() < 0.03, "{g} against {expected}");
+}
+
+#[test]
+fn overlapping_bands_share_their_overlap() {
+    let bands = BandGrid::explicit(vec![500.0, 505.0, 530.0], vec![10.0, 10.0, 4.0]).unwrap();
+    let c = band_cells(&bands);
+    assert_eq!(c[0], (495.0, 502.5));
+    assert_eq!(c[1], (502.5, 510.0));
+    assert_eq!(c[2], (528.0, 532.0));
+}
