@@ -53,6 +53,12 @@ pub struct Emitter<'s> {
 
 impl<'s> Emitter<'s> {
     pub fn new(scene: &'s Scene) -> Result<Self> {
+        if scene.raman.is_some() {
+            return Err(crate::Error::invalid(
+                "water.raman",
+                "Raman scattering is rendered by the path integrator only (render --integrator path); photon emission does not move light between bands yet",
+            ));
+        }
         let nb = scene.bands.len();
         let w: Vec<f64> = scene.bands.fwhm_nm().iter().map(|&f| f as f64).collect();
         let mut weights = Vec::with_capacity(2 * nb);

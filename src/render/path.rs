@@ -89,8 +89,9 @@
 use super::air_sea::sky_radiance;
 use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
+use crate::optics::inelastic::RamanBands;
 use crate::optics::iop::Iop;
-use crate::optics::phase::{cosine_hemisphere, Mixture};
+use crate::optics::phase::{cosine_hemisphere, Mixture, PhaseFunction};
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
@@ -119,6 +120,12 @@ const MAX_SPLIT: usize = 16;
 /// of 6.3 at 3 m, 4.3 with 1.5, 3.4 with 2 and 3 (2.9 against the plain
 /// extinction majorant, where the near infrared paid instead).
 const MU_PAD: f64 = 2.0;
+/// How many times its share of the collision rate a Raman event is drawn
+/// with (the Raman source is a few 1e-4 of it: drawn as it is, the
+/// Raman-scattered light rests on one path in hundreds).
+const RAMAN_BOOST: f64 = 50.0;
+/// The largest probability of a Raman event at one collision.
+const RAMAN_MAX_SHARE: f64 = 0.1;
 /// No split while this many copies wait (a bound on memory, not needed
 /// for correctness: not splitting is always unbiased).
 const MAX_PENDING: usize = 256;
@@ -152,6 +159,9 @@ pub struct PathTracer<'a> {
     /// Paths whose guided ratio exceeds this are split ([`SPLIT_ABOVE`];
     /// infinite: never).
     split_above: f64,
+    /// Water Raman scattering, with its phase function, when the scene
+    /// has it.
+    raman: Option<(&'a RamanBands, PhaseFunction)>,
 }
 
 /// Per-path buffers, one entry per band.
@@ -167,6 +177,10 @@ pub struct PathScratch {
     guided: f64,
     /// Distance flown (m) whose absorption `kappa` is not yet in `w`.
     flown: f64,
+    /// The sensor band every contribution of this path goes to since it
+    /// met a Raman event (None before: each band's own). From then on
+    /// `w` holds the throughputs of the excitation bands that feed it.
+    target: Option<usize>,
     /// Copies made by splitting, waiting to be traced.
     pending: Vec<Pending>,
     /// Throughput buffers of traced copies, for reuse.
@@ -189,6 +203,7 @@ struct Pending {
     state: PathState,
     w: Vec<f64>,
     guided: f64,
+    target: Option<usize>,
 }
 
 impl crate::parallel::BandScratch for PathScratch {
@@ -209,6 +224,7 @@ impl PathScratch {
             tr: vec![0.0; bands],
             guided: 1.0,
             flown: 0.0,
+            target: None,
             pending: Vec::new(),
             spare: Vec::new(),
         }
@@ -254,6 +270,7 @@ impl PathScratch {
                 state,
                 w,
                 guided: self.guided,
+                target: self.target,
             });
         }
     }
@@ -280,6 +297,14 @@ impl<'a> PathTracer<'a> {
                 .zip(&kappa)
                 .map(|(c, k)| (c - k).max(1e-3 * c))
                 .fold(0.0f64, f64::max);
+        // Raman events are drawn at tentative collisions: with absorption
+        // carried by weight, water that hardly scatters would meet almost
+        // none where its light lives. At least the bands' mean extinction.
+        let mu_bar = if scene.raman.is_some() {
+            mu_bar.max(majorants.iter().sum::<f64>() / nb as f64)
+        } else {
+            mu_bar
+        };
         let uniform = scene.water.is_uniform().then(|| {
             let mut v = vec![Iop::default(); nb];
             scene.water.iops(Vec3::new(0.0, 0.0, -1.0), &mut v);
@@ -306,6 +331,10 @@ impl<'a> PathTracer<'a> {
             sun: SunBeam::new(scene),
             uniform,
             split_above: SPLIT_ABOVE,
+            raman: scene
+                .raman
+                .as_ref()
+                .map(|r| (r, crate::optics::inelastic::raman_phase())),
         }
     }
 
@@ -553,6 +582,7 @@ impl<'a> PathTracer<'a> {
         scratch.w.iter_mut().for_each(|x| *x = 1.0);
         scratch.guided = 1.0;
         scratch.flown = 0.0;
+        scratch.target = None;
         loop {
             self.trace(state, rng, scratch, out);
             let Some(next) = scratch.pending.pop() else {
@@ -560,6 +590,7 @@ impl<'a> PathTracer<'a> {
             };
             scratch.w.copy_from_slice(&next.w);
             scratch.guided = next.guided;
+            scratch.target = next.target;
             scratch.spare.push(next.w);
             state = next.state;
         }
@@ -619,7 +650,9 @@ impl<'a> PathTracer<'a> {
                 if let Some(p) = domain.image(pos) {
                     pos = p;
                 }
-                let Some(next) = self.at_surface(dir, dispersive, rng, &mut scratch.w, out) else {
+                let Some(next) =
+                    self.at_surface(dir, dispersive, rng, &mut scratch.w, scratch.target, out)
+                else {
                     return;
                 };
                 dir = next;
@@ -655,6 +688,14 @@ impl<'a> PathTracer<'a> {
             );
         }
     }
+}
+
+/// Add light `x` of band `b` to `out`: to its own band, or to the sensor
+/// band `target` a Raman event fixed (light of excitation band `b` feeds
+/// it).
+#[inline]
+fn add(out: &mut [f64], target: Option<usize>, b: usize, x: f64) {
+    out[target.unwrap_or(b)] += x;
 }
 
 /// Multiply the band throughputs `w` by their absorption `kappa` (1/m)

@@ -385,6 +385,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
         .expect("the pure-water q is valid");
     let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
+    let raman = water::raman(&ctx, &f.water, &water)?;
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
@@ -436,6 +437,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         water,
         particle_phase,
         water_phase,
+        raman,
         bottom,
         target_reflectance,
         target_extents: extents,

@@ -26,6 +26,11 @@ impl Scene {
             .value("store_direct", self.store_direct)
             .value("upward_split", self.upward_split)
             .value("tally_depths_m", &self.tally_depths);
+        // Only when on, so that the maps of scenes without it keep their
+        // digests.
+        if self.raman.is_some() {
+            b.value("raman", true);
+        }
         let parts: [(&str, String); 12] = [
             ("band_grid", format!("{:?}", self.bands)),
             ("sun", format!("{:?}", self.sun)),

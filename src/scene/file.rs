@@ -281,6 +281,8 @@ pub struct WaterFile {
     pub layer: Vec<LayerFile>,
     /// CSV of a regular 3-D grid of constituents.
     pub grid: Option<String>,
+    /// Water Raman scattering (`optics::inelastic`); default false.
+    pub raman: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

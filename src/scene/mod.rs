@@ -229,6 +229,8 @@ pub struct Scene {
     pub particle_phase: PhaseFunction,
     /// Phase function of pure-water scattering.
     pub water_phase: PhaseFunction,
+    /// Water Raman scattering between the bands (`[water] raman`), or None.
+    pub raman: Option<crate::optics::inelastic::RamanBands>,
     pub bottom: Option<Bottom>,
     /// Lambertian reflectance per band of each target (surface id 1 + index).
     pub target_reflectance: Vec<Vec<f64>>,

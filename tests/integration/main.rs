@@ -11,6 +11,7 @@ mod corruption;
 mod cube_tool;
 mod determinism;
 mod georef;
+mod inelastic;
 mod job;
 mod memory;
 mod oracle;

@@ -25,8 +25,10 @@ impl PathTracer<'_> {
             tmp,
             tr,
             guided,
+            target,
             ..
         } = scratch;
+        let target = *target;
         let (pos, n) = (h.position, h.normal);
         for sun in self.sun.sample(rng).into_iter().flatten() {
             let (s_w, g) = (sun.dir, sun.g);
@@ -36,7 +38,12 @@ impl PathTracer<'_> {
                 for b in 0..out.len() {
                     let r = scene.reflectance(h.surface, pos, b);
                     let t = sun.crossing.band_factor(scene.water_index[b], n_w);
-                    out[b] += w[b] * r / PI * cos_n * g * t * self.sun_h[b] * tr[b];
+                    add(
+                        out,
+                        target,
+                        b,
+                        w[b] * r / PI * cos_n * g * t * self.sun_h[b] * tr[b],
+                    );
                 }
             }
         }
@@ -56,6 +63,7 @@ impl PathTracer<'_> {
         dispersive: bool,
         rng: &mut Pcg32,
         w: &mut [f64],
+        target: Option<usize>,
         out: &mut [f64],
     ) -> Option<Vec3> {
         let scene = self.scene;
@@ -63,11 +71,11 @@ impl PathTracer<'_> {
         if scene.surface.slope_variance <= 0.0 {
             let g = refract(dir.as_dvec3(), DVec3::NEG_Z, n_w, 1.0)
                 .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
-            for b in 0..out.len() {
+            for (b, x) in w.iter_mut().enumerate() {
                 let n = scene.water_index[b];
                 let r = fresnel_reflectance(dir.z as f64, n, 1.0);
-                out[b] += w[b] * (1.0 - r) * (n * n) * g * self.sky_l[b];
-                w[b] *= r;
+                add(out, target, b, *x * (1.0 - r) * (n * n) * g * self.sky_l[b]);
+                *x *= r;
             }
             return Some(Vec3::new(dir.x, dir.y, -dir.z));
         }
@@ -79,9 +87,9 @@ impl PathTracer<'_> {
         }
         if ev.transmitted {
             let g = scene.sky.model.relative(ev.direction);
-            for b in 0..out.len() {
+            for (b, x) in w.iter().enumerate() {
                 let n = scene.water_index[b];
-                out[b] += w[b] * (n * n) * g * self.sky_l[b];
+                add(out, target, b, x * (n * n) * g * self.sky_l[b]);
             }
             return None;
         }
@@ -119,8 +127,10 @@ impl PathTracer<'_> {
             tr,
             guided,
             flown,
+            target,
             ..
         } = scratch;
+        let target_now = *target;
         scene.water.iops(pos, iops);
         // Each band's null coefficient: the tracking rate less the
         // extinction collisions carry (all but the absorption `kappa`).
@@ -130,19 +140,39 @@ impl PathTracer<'_> {
             s_sum += x * iop.b();
             n_sum += x * null(iop, k);
         }
+        // Water Raman scattering: the Raman source of the bands the path
+        // carries is a third kind of event, drawn with a probability
+        // `RAMAN_BOOST` times its share of the collision rate (at most
+        // `RAMAN_MAX_SHARE`); the other two keep their odds among the rest.
+        let p_r = match &self.raman {
+            Some((r, _)) => {
+                let r_sum: f64 = w.iter().zip(&r.gain).map(|(x, g)| x * g).sum();
+                if r_sum > 0.0 {
+                    (RAMAN_BOOST * r_sum / (s_sum + n_sum + r_sum)).min(RAMAN_MAX_SHARE)
+                } else {
+                    0.0
+                }
+            }
+            None => 0.0,
+        };
+        if p_r > 0.0 && rng.uniform_f64() < p_r {
+            let k = 1.0 / (mu_bar * p_r);
+            return self.raman_event(pos, dir, k, events, rng, w, target, tmp, tr, flown, out);
+        }
         if s_sum + n_sum <= 0.0 {
             return Collided::End;
         }
         let p_s = s_sum / (s_sum + n_sum);
+        let keep = 1.0 - p_r;
         if rng.uniform_f64() >= p_s {
-            let k = 1.0 / (mu_bar * (1.0 - p_s));
+            let k = 1.0 / (mu_bar * (1.0 - p_s) * keep);
             for ((x, iop), &kappa) in w.iter_mut().zip(iops.iter()).zip(&self.kappa) {
                 *x *= null(iop, kappa) * k;
             }
             return Collided::Null;
         }
         absorb(w, &self.kappa, flown);
-        let k = 1.0 / (mu_bar * p_s);
+        let k = 1.0 / (mu_bar * p_s * keep);
         for (x, iop) in w.iter_mut().zip(iops.iter()) {
             *x *= iop.b() * k;
         }
@@ -179,12 +209,13 @@ impl PathTracer<'_> {
                 let bb = iop.b();
                 if bb > 0.0 && tr[b] > 0.0 {
                     let t = sun.crossing.band_factor(scene.water_index[b], n_w);
-                    out[b] += w[b] * (iop.b_w * fw + iop.b_p * fp) / bb
+                    let l = w[b] * (iop.b_w * fw + iop.b_p * fp) / bb
                         * sun.g
                         * t
                         * mis
                         * self.sun_h[b]
                         * tr[b];
+                    add(out, target_now, b, l);
                 }
             }
         }
@@ -229,10 +260,115 @@ impl PathTracer<'_> {
             let mis = pdf / (pdf + light_pdf);
             for b in 0..out.len() {
                 let t = crossing.band_factor(scene.water_index[b], n_w);
-                out[b] += w[b] * l_over_e * t * mis * self.sun_h[b] * tr[b];
+                add(
+                    out,
+                    target_now,
+                    b,
+                    w[b] * l_over_e * t * mis * self.sun_h[b] * tr[b],
+                );
             }
         }
         Collided::Scattered(next)
+    }
+}
+
+impl PathTracer<'_> {
+    /// A Raman event at `pos` of a path travelling along `dir` whose band
+    /// throughputs are `w`, `k` = 1 / (rate x the event's probability):
+    /// the throughputs become those of the excitation bands that feed the
+    /// bands the path carries, the sun is estimated through the Raman
+    /// phase function by light sampling alone (the continuation's own
+    /// direction never counts the sun, so no MIS weight is needed), and
+    /// the path goes on in a direction drawn from that phase function.
+    ///
+    /// A path that has met no Raman event carries every sensor band; its
+    /// first one draws the band it will feed from then on (`target`, in
+    /// proportion to each band's throughput times its Raman gain) and
+    /// divides by that choice's probability, since the excitation
+    /// throughputs of different sensor bands cannot share one vector.
+    /// Later events feed the same band.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn raman_event(
+        &self,
+        pos: Vec3,
+        dir: Vec3,
+        k: f64,
+        events: &mut u32,
+        rng: &mut Pcg32,
+        w: &mut [f64],
+        target: &mut Option<usize>,
+        tmp: &mut [Iop],
+        tr: &mut [f64],
+        flown: &mut f64,
+        out: &mut [f64],
+    ) -> Collided {
+        let Some((raman, phase)) = &self.raman else {
+            return Collided::End;
+        };
+        let scene = self.scene;
+        let n_w = scene.surface.n_water;
+        absorb(w, &self.kappa, flown);
+        let nb = w.len();
+        let mut excitation = vec![0.0; nb];
+        match *target {
+            None => {
+                let total: f64 = w.iter().zip(&raman.gain).map(|(x, g)| x * g).sum();
+                if !(total > 0.0 && total.is_finite()) {
+                    return Collided::End;
+                }
+                // The sensor band, in proportion to w_m gain_m.
+                let mut u = rng.uniform_f64() * total;
+                let mut m = None;
+                for (b, (x, g)) in w.iter().zip(&raman.gain).enumerate() {
+                    let p = x * g;
+                    if p > 0.0 {
+                        m = Some(b);
+                        if u < p {
+                            break;
+                        }
+                        u -= p;
+                    }
+                }
+                let Some(m) = m else {
+                    return Collided::End;
+                };
+                // w_m b_R(e) T(e, m) k / (w_m gain_m / total).
+                let scale = k * total / raman.gain[m];
+                for (e, x) in excitation.iter_mut().enumerate() {
+                    *x = raman.coefficient[e] * raman.transfer(e, m) * scale;
+                }
+                *target = Some(m);
+            }
+            Some(_) => {
+                for (e, x) in excitation.iter_mut().enumerate() {
+                    let fed: f64 = w
+                        .iter()
+                        .enumerate()
+                        .map(|(b, wb)| wb * raman.transfer(e, b))
+                        .sum();
+                    *x = raman.coefficient[e] * fed * k;
+                }
+            }
+        }
+        w.copy_from_slice(&excitation);
+        let target = *target;
+        for sun in self.sun.sample(rng).into_iter().flatten() {
+            let s_w = sun.dir;
+            self.transmittance(pos, -s_w, rng, tmp, tr);
+            let p = phase.eval_one_minus_cos(one_minus(-s_w, dir));
+            for b in 0..nb {
+                if w[b] > 0.0 && tr[b] > 0.0 {
+                    let t = sun.crossing.band_factor(scene.water_index[b], n_w);
+                    add(out, target, b, w[b] * p * sun.g * t * self.sun_h[b] * tr[b]);
+                }
+            }
+        }
+        *events += 1;
+        if !Self::survive(w, *events, 1.0, rng) {
+            return Collided::End;
+        }
+        let u = [rng.uniform_f64(), rng.uniform_f64()];
+        Collided::Scattered(phase.sample_direction(dir, u))
     }
 }
 

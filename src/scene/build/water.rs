@@ -385,3 +385,30 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
         values: values.into_iter().map(|v| v.unwrap_or_default()).collect(),
     })
 }
+
+/// `[water] raman`: the Raman transfer on the band grid, or None. Its
+/// coefficient is part of the water's absorption (`optics::inelastic`), so
+/// water absorbing less than b_R somewhere in a band is refused.
+pub(super) fn raman(
+    ctx: &Ctx,
+    w: &WaterFile,
+    water: &WaterModel,
+) -> Result<Option<crate::optics::inelastic::RamanBands>> {
+    if !w.raman.unwrap_or(false) {
+        return Ok(None);
+    }
+    let r = crate::optics::inelastic::RamanBands::new(&ctx.bands);
+    for (b, &b_r) in r.coefficient.iter().enumerate() {
+        let a = water.absorption_minorant(b);
+        if a < b_r {
+            return Err(ctx.err(
+                &[K("water"), K("raman")],
+                format!(
+                    "the water absorbs {a:.3e} 1/m at {} nm somewhere, less than the Raman scattering coefficient {b_r:.3e} 1/m that is part of its absorption",
+                    ctx.bands.centers_nm()[b]
+                ),
+            ));
+        }
+    }
+    Ok(Some(r))
+}
