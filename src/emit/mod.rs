@@ -30,7 +30,7 @@ use glam::Vec3;
 use std::ops::Range;
 use std::path::Path;
 use std::sync::{Mutex, OnceLock};
-use tally::{PhotonTally, Totals};
+use tally::{PathTally, Totals};
 use trace::Source;
 
 /// Emits the photons of a scene.
@@ -53,12 +53,6 @@ pub struct Emitter<'s> {
 
 impl<'s> Emitter<'s> {
     pub fn new(scene: &'s Scene) -> Result<Self> {
-        if scene.raman.is_some() {
-            return Err(crate::Error::invalid(
-                "water.raman",
-                "Raman scattering is rendered by the path integrator only (render --integrator path); photon emission does not move light between bands yet",
-            ));
-        }
         let nb = scene.bands.len();
         let w: Vec<f64> = scene.bands.fwhm_nm().iter().map(|&f| f as f64).collect();
         let mut weights = Vec::with_capacity(2 * nb);
@@ -124,11 +118,12 @@ impl<'s> Emitter<'s> {
         k.min(n - 1)
     }
 
-    /// Trace photon `i`; appends what it stores to `out`.
+    /// Trace photon `i`; appends what it stores to `out`, its tallies
+    /// and fates to `tallies`.
     fn trace_one(
         &self,
         i: u64,
-        tally: &mut PhotonTally,
+        tallies: &mut PathTally,
         out: &mut Vec<StagedPhoton>,
     ) -> (usize, trace::Traced) {
         let mut rng = Pcg32::new(self.scene.seed, i);
@@ -140,7 +135,7 @@ impl<'s> Emitter<'s> {
         } else {
             (Source::Sky, k - nb)
         };
-        tally.clear();
+        tallies.clear();
         let t = trace::trace(
             self.scene,
             &self.grid,
@@ -148,8 +143,8 @@ impl<'s> Emitter<'s> {
             &mut rng,
             source,
             band,
-            self.photon_power[band] as f32,
-            tally,
+            &self.photon_power,
+            tallies,
             out,
         );
         (band, t)
@@ -158,10 +153,10 @@ impl<'s> Emitter<'s> {
     /// Trace indices `range`, adding to the run totals.
     fn run(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
         let mut local = Totals::new(self.scene.bands.len(), self.scene.tally_depths.len());
-        let mut tally = PhotonTally::new(self.scene.tally_depths.len());
+        let mut tallies = PathTally::new(self.scene.tally_depths.len());
         for i in range {
-            let (band, t) = self.trace_one(i, &mut tally, out);
-            local.record(band, &t.fates, &tally);
+            let (band, t) = self.trace_one(i, &mut tallies, out);
+            local.record_path(band, &tallies);
             local.stored_volume += t.stored_volume as u64;
             local.stored_surface += t.stored_surface as u64;
             local.truncated += t.truncated as u64;
@@ -206,9 +201,9 @@ impl PhotonSource for Emitter<'_> {
     }
 
     fn sample(&self, range: Range<u64>, out: &mut Vec<StagedPhoton>) {
-        let mut tally = PhotonTally::new(self.scene.tally_depths.len());
+        let mut tallies = PathTally::new(self.scene.tally_depths.len());
         for i in range {
-            self.trace_one(i, &mut tally, out);
+            self.trace_one(i, &mut tallies, out);
         }
     }
 

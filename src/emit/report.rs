@@ -90,7 +90,19 @@ pub struct Energy {
     pub absorbed_surfaces: Vec<f64>,
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub lost_edges: Vec<f64>,
-    /// emitted - (escaped + absorbed + lost), per band.
+    /// Raman scattering (`[water] raman`): power shifted out of each band
+    /// into another of the grid, shifted beyond the grid, and shifted into
+    /// it from shorter bands. Zero without Raman. Power shifted in is less
+    /// than power shifted out by λ'/λ: the rest goes into the water's
+    /// vibration.
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
+    pub raman_out: Vec<f64>,
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
+    pub raman_lost: Vec<f64>,
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
+    pub raman_in: Vec<f64>,
+    /// emitted + Raman in - (escaped + absorbed + lost + Raman out and
+    /// lost), per band.
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub residual: Vec<f64>,
     /// residual / its standard error, per band.
@@ -362,11 +374,26 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
     let absorbed_water = power(&totals.absorbed_water);
     let absorbed_surfaces = power(&totals.absorbed_surfaces);
     let lost_edges = power(&totals.lost_edges);
+    let raman = |v: &[u64]| {
+        let mut p = power(v);
+        p.resize(nb, 0.0);
+        p
+    };
+    let (raman_out, raman_lost, raman_in) = (
+        raman(&totals.raman_out),
+        raman(&totals.raman_lost),
+        raman(&totals.raman_in),
+    );
     let mut residual = Vec::with_capacity(nb);
     let mut sigma = Vec::with_capacity(nb);
     for b in 0..nb {
-        let sinks = escaped[b] + absorbed_water[b] + absorbed_surfaces[b] + lost_edges[b];
-        let res = emitted[b] - sinks;
+        let sinks = escaped[b]
+            + absorbed_water[b]
+            + absorbed_surfaces[b]
+            + lost_edges[b]
+            + raman_out[b]
+            + raman_lost[b];
+        let res = emitted[b] + raman_in[b] - sinks;
         // The band's photon count is binomial: sd = P_b sqrt(N p (1 - p)).
         let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
         let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
@@ -387,6 +414,9 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
         absorbed_water,
         absorbed_surfaces,
         lost_edges,
+        raman_out,
+        raman_lost,
+        raman_in,
         residual,
         closure_sigma_per_band: sigma,
         closure_sigma,

@@ -123,22 +123,97 @@ impl PhotonTally {
     }
 }
 
-/// Where a photon's power ended.
+/// Where a photon's power ended (in the band it travelled in).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Fate {
     Escaped,
     AbsorbedWater,
     AbsorbedSurface,
     LostEdge,
+    /// Raman-scattered into another band of the grid (where it goes on).
+    Shifted,
+    /// Raman-scattered beyond the grid's last band (or between the cells
+    /// of an explicit grid): lost to the bands.
+    ShiftedOut,
 }
 
 impl Fate {
     /// Number of fates.
-    pub const COUNT: usize = 4;
+    pub const COUNT: usize = 6;
 
     /// Index of the fate in per-fate arrays.
     pub fn index(self) -> usize {
         self as usize
+    }
+}
+
+/// What one photon path contributed in one band it travelled in: its
+/// tallies, the weight that ended in each fate there, and the weight that
+/// Raman scattering brought into it (units of 1 / `trace::FATE_UNIT` of a
+/// photon of this band).
+#[derive(Clone, Debug)]
+pub struct BandPart {
+    pub band: usize,
+    pub tally: PhotonTally,
+    pub fates: [u64; Fate::COUNT],
+    pub raman_in: u64,
+}
+
+/// One photon path's parts, one per band it travelled in (one unless
+/// Raman scattering moved it), in the order first met.
+#[derive(Clone, Debug)]
+pub struct PathTally {
+    depths: usize,
+    parts: Vec<BandPart>,
+    used: usize,
+}
+
+impl PathTally {
+    pub fn new(depths: usize) -> Self {
+        PathTally {
+            depths,
+            parts: Vec::new(),
+            used: 0,
+        }
+    }
+
+    /// Empty, keeping the storage.
+    pub fn clear(&mut self) {
+        for p in &mut self.parts[..self.used] {
+            p.tally.clear();
+            p.fates = [0; Fate::COUNT];
+            p.raman_in = 0;
+        }
+        self.used = 0;
+    }
+
+    /// The index of `band`'s part, made if the path has none yet.
+    pub fn part(&mut self, band: usize) -> usize {
+        if let Some(i) = self.parts[..self.used].iter().position(|p| p.band == band) {
+            return i;
+        }
+        if self.used == self.parts.len() {
+            self.parts.push(BandPart {
+                band,
+                tally: PhotonTally::new(self.depths),
+                fates: [0; Fate::COUNT],
+                raman_in: 0,
+            });
+        }
+        self.parts[self.used].band = band;
+        self.used += 1;
+        self.used - 1
+    }
+
+    /// Part `i`.
+    #[inline]
+    pub fn at(&mut self, i: usize) -> &mut BandPart {
+        &mut self.parts[i]
+    }
+
+    /// The parts in use.
+    pub fn parts(&self) -> &[BandPart] {
+        &self.parts[..self.used]
     }
 }
 
@@ -155,6 +230,15 @@ pub struct Totals {
     pub absorbed_water: Vec<u64>,
     pub absorbed_surfaces: Vec<u64>,
     pub lost_edges: Vec<u64>,
+    /// Raman-scattered out of the band into another of the grid, beyond
+    /// the grid, and into the band from shorter ones (the last in the
+    /// receiving band's photons).
+    #[serde(default)]
+    pub raman_out: Vec<u64>,
+    #[serde(default)]
+    pub raman_lost: Vec<u64>,
+    #[serde(default)]
+    pub raman_in: Vec<u64>,
     /// Fixed-point sums of per-photon contributions, [slot][band].
     pub sum: Vec<i128>,
     pub sum_sq: Vec<i128>,
@@ -176,6 +260,9 @@ impl Totals {
             absorbed_water: vec![0; bands],
             absorbed_surfaces: vec![0; bands],
             lost_edges: vec![0; bands],
+            raman_out: vec![0; bands],
+            raman_lost: vec![0; bands],
+            raman_in: vec![0; bands],
             sum: vec![0; slots * bands],
             sum_sq: vec![0; slots * bands],
             traced: 0,
@@ -190,10 +277,42 @@ impl Totals {
     pub fn record(&mut self, band: usize, fates: &[u64; Fate::COUNT], t: &PhotonTally) {
         self.traced += 1;
         self.emitted[band] += 1;
+        self.add_part(band, fates, 0, t);
+    }
+
+    /// Account one finished photon path that started in `band`, its
+    /// parts per band it travelled in.
+    pub fn record_path(&mut self, band: usize, path: &PathTally) {
+        self.traced += 1;
+        self.emitted[band] += 1;
+        for p in path.parts() {
+            self.add_part(p.band, &p.fates, p.raman_in, &p.tally);
+        }
+    }
+
+    /// A path's fates, Raman inflow and tallies in `band`.
+    fn add_part(
+        &mut self,
+        band: usize,
+        fates: &[u64; Fate::COUNT],
+        raman_in: u64,
+        t: &PhotonTally,
+    ) {
+        // Totals read from an older map's report lack the Raman columns.
+        for v in [
+            &mut self.raman_out,
+            &mut self.raman_lost,
+            &mut self.raman_in,
+        ] {
+            v.resize(self.bands, 0);
+        }
         self.escaped[band] += fates[Fate::Escaped.index()];
         self.absorbed_water[band] += fates[Fate::AbsorbedWater.index()];
         self.absorbed_surfaces[band] += fates[Fate::AbsorbedSurface.index()];
         self.lost_edges[band] += fates[Fate::LostEdge.index()];
+        self.raman_out[band] += fates[Fate::Shifted.index()];
+        self.raman_lost[band] += fates[Fate::ShiftedOut.index()];
+        self.raman_in[band] += raman_in;
         let mut add = |slot: usize, x: f64| {
             if x != 0.0 {
                 self.sum[slot * self.bands + band] += fixed(x);
@@ -222,6 +341,14 @@ impl Totals {
         add(&mut self.absorbed_water, &o.absorbed_water);
         add(&mut self.absorbed_surfaces, &o.absorbed_surfaces);
         add(&mut self.lost_edges, &o.lost_edges);
+        for (a, b) in [
+            (&mut self.raman_out, &o.raman_out),
+            (&mut self.raman_lost, &o.raman_lost),
+            (&mut self.raman_in, &o.raman_in),
+        ] {
+            a.resize(a.len().max(b.len()), 0);
+            add(a, b);
+        }
         self.sum.iter_mut().zip(&o.sum).for_each(|(x, y)| *x += y);
         self.sum_sq
             .iter_mut()

@@ -31,7 +31,7 @@
 //! directly.
 
 use super::tally::{
-    in_lu_cone, Fate, PhotonTally, ED, EOD, EOU, EO_HALF_WIDTH_M, EU, LD, LU, MIN_ABS_MU,
+    in_lu_cone, Fate, PathTally, PhotonTally, ED, EOD, EOU, EO_HALF_WIDTH_M, EU, LD, LU, MIN_ABS_MU,
 };
 use crate::optics::majorant::{Collision, MajorantGrid};
 use crate::optics::phase::{cosine_hemisphere, scatter};
@@ -60,22 +60,23 @@ pub enum Source {
     Sky,
 }
 
-/// The outcome of one traced photon path.
+/// The outcome of one traced photon path (its fates and tallies per band
+/// are in the [`PathTally`] it was traced with: in units of 1 /
+/// [`FATE_UNIT`] of a photon of each band, they sum to `FATE_UNIT` plus
+/// what Raman scattering brought in).
 pub struct Traced {
-    /// The path's weight that ended in each [`Fate`] (indexed by
-    /// [`Fate::index`]), in units of 1 / [`FATE_UNIT`]: they sum to
-    /// `FATE_UNIT`.
-    pub fates: [u64; Fate::COUNT],
     pub truncated: bool,
     pub stored_volume: u32,
     pub stored_surface: u32,
 }
 
-/// One branch of a split path: where it is, where it goes, its weight.
+/// One branch of a split path: where it is, where it goes, its band and
+/// weight (relative to a photon of that band).
 #[derive(Clone, Copy)]
 struct Branch {
     pos: Vec3,
     dir: Vec3,
+    band: usize,
     weight: f64,
     /// Still the sun's unscattered light.
     direct: bool,
@@ -84,8 +85,8 @@ struct Branch {
 /// What a path shares between its branches.
 struct Path<'a> {
     scene: &'a Scene,
-    band: usize,
-    power: f32,
+    /// Power per photon of each band (W nm^-1).
+    photon_power: &'a [f64],
     group: u8,
     /// The water's local majorants and IOP bounds.
     grid: &'a MajorantGrid,
@@ -97,7 +98,9 @@ struct Path<'a> {
 }
 
 /// Trace photon `index` of band `band` from `source` through water whose
-/// majorants are `grid`; stored photons go to `out`, tallies to `tally`.
+/// majorants are `grid`, photons of each band carrying `photon_power`;
+/// stored photons go to `out`, tallies and fates to `tallies` (cleared by
+/// the caller).
 #[allow(clippy::too_many_arguments)]
 pub fn trace(
     scene: &Scene,
@@ -106,22 +109,20 @@ pub fn trace(
     rng: &mut Pcg32,
     source: Source,
     band: usize,
-    power: f32,
-    tally: &mut PhotonTally,
+    photon_power: &[f64],
+    tallies: &mut PathTally,
     out: &mut Vec<StagedPhoton>,
 ) -> Traced {
     let d = &scene.domain;
     let (sx, sy) = (d.size_m[0], d.size_m[1]);
     let mut path = Path {
         scene,
-        band,
-        power,
+        photon_power,
         group: crate::photon::group_of_path(index),
         grid,
         split: scene.upward_split.max(1),
         events: 0,
         result: Traced {
-            fates: [0; Fate::COUNT],
             truncated: false,
             stored_volume: 0,
             stored_surface: 0,
@@ -139,43 +140,48 @@ pub fn trace(
         Source::Sun => scene.sun.direction,
         Source::Sky => scene.sky.model.sample_travel(rng),
     };
+    let first = tallies.part(band);
+    let tally = &mut tallies.at(first).tally;
     tally.add_above_down();
     // The surface at this band's refractive index.
     let surface = scene.surface_in(band);
     let ev = surface.interact(dir, rng);
     if !ev.transmitted {
         tally.add_above_up(1.0);
-        path.end(Fate::Escaped, 1.0);
+        end(tallies, band, Fate::Escaped, 1.0);
         return path.result;
     }
     cross_surface_down(scene, tally, ev.direction, 1.0);
     let mut next = Some(Branch {
         pos,
         dir: ev.direction,
+        band,
         weight: 1.0,
         direct: source == Source::Sun,
     });
     while let Some(branch) = next {
-        let (fate, weight) = path.run(branch, rng, tally, out);
-        path.end(fate, weight);
+        let (band, fate, weight) = path.run(branch, rng, tallies, out);
+        end(tallies, band, fate, weight);
         next = path.pending.pop();
     }
     path.result
 }
 
-impl Path<'_> {
-    fn end(&mut self, fate: Fate, weight: f64) {
-        self.result.fates[fate.index()] += (weight * FATE_UNIT as f64).round() as u64;
-    }
+/// Weight `weight` of a photon of `band` ended in `fate`.
+fn end(tallies: &mut PathTally, band: usize, fate: Fate, weight: f64) {
+    let i = tallies.part(band);
+    tallies.at(i).fates[fate.index()] += (weight * FATE_UNIT as f64).round() as u64;
+}
 
+impl Path<'_> {
     fn store(&mut self, b: &Branch, layer: u16, out: &mut Vec<StagedPhoton>) {
         self.events += 1;
         out.push(StagedPhoton::new(
             &Photon {
                 position: b.pos,
                 direction: b.dir,
-                band: self.band as u16,
-                power: (self.power as f64 * b.weight) as f32,
+                band: b.band as u16,
+                power: (self.photon_power[b.band] as f32 as f64 * b.weight) as f32,
                 group: self.group,
             },
             layer,
@@ -191,26 +197,29 @@ impl Path<'_> {
         }
     }
 
-    /// Trace one branch to its end: its fate and weight.
+    /// Trace one branch to its end: the band it ended in, its fate and
+    /// weight.
     fn run(
         &mut self,
         mut b: Branch,
         rng: &mut Pcg32,
-        tally: &mut PhotonTally,
+        tallies: &mut PathTally,
         out: &mut Vec<StagedPhoton>,
-    ) -> (Fate, f64) {
+    ) -> (usize, Fate, f64) {
         let scene = self.scene;
         let depths = &scene.tally_depths;
+        let mut part = tallies.part(b.band);
         loop {
+            let tally = &mut tallies.at(part).tally;
             if self.events >= MAX_EVENTS {
                 self.result.truncated = true;
-                return (Fate::AbsorbedWater, b.weight);
+                return (b.band, Fate::AbsorbedWater, b.weight);
             }
             let tau = rng.exponential(1.0);
             let t_surface = crate::scene::Domain::surface_distance(b.pos, b.dir);
             let t_edge = scene.domain.edge_distance(b.pos, b.dir);
             let t_wall = t_surface.min(t_edge);
-            let flight = self.grid.free_path(self.band, b.pos, b.dir, t_wall, tau);
+            let flight = self.grid.free_path(b.band, b.pos, b.dir, t_wall, tau);
             let (t_flight, cell) = flight.unwrap_or((f64::INFINITY, 0));
             let t_limit = t_flight.min(t_wall);
             let hit = scene
@@ -225,9 +234,9 @@ impl Path<'_> {
                 } else {
                     self.events += 1;
                 }
-                let r = scene.reflectance(h.surface, b.pos, self.band);
+                let r = scene.reflectance(h.surface, b.pos, b.band);
                 if rng.uniform_f64() >= r {
-                    return (Fate::AbsorbedSurface, b.weight);
+                    return (b.band, Fate::AbsorbedSurface, b.weight);
                 }
                 b.dir = cosine_hemisphere(h.normal, rng);
                 b.direct = false;
@@ -247,11 +256,11 @@ impl Path<'_> {
                         tally.add(0, LU, w);
                     }
                 }
-                let ev = scene.surface_in(self.band).interact(b.dir, rng);
+                let ev = scene.surface_in(b.band).interact(b.dir, rng);
                 self.events += 1;
                 if ev.transmitted {
                     tally.add_above_up(b.weight);
-                    return (Fate::Escaped, b.weight);
+                    return (b.band, Fate::Escaped, b.weight);
                 }
                 b.dir = ev.direction;
                 b.direct = false;
@@ -262,7 +271,7 @@ impl Path<'_> {
                 let next = b.pos + b.dir * t_edge as f32;
                 tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
                 if !scene.domain.periodic {
-                    return (Fate::LostEdge, b.weight);
+                    return (b.band, Fate::LostEdge, b.weight);
                 }
                 b.pos = scene.domain.wrap(next, b.dir);
                 continue;
@@ -271,9 +280,30 @@ impl Path<'_> {
             let next = b.pos + b.dir * t_flight as f32;
             tally_segment(depths, tally, b.pos, next, b.dir, b.weight);
             b.pos = next;
-            let xi = rng.uniform_f64() * self.grid.majorant(self.band, cell);
-            let phase = match self.grid.collide(&scene.water, self.band, cell, b.pos, xi) {
-                Collision::Absorbed => return (Fate::AbsorbedWater, b.weight),
+            let xi = rng.uniform_f64() * self.grid.majorant(b.band, cell);
+            let phase = match self.grid.collide(&scene.water, b.band, cell, b.pos, xi) {
+                Collision::Absorbed => {
+                    let Some(raman) = &scene.raman else {
+                        return (b.band, Fate::AbsorbedWater, b.weight);
+                    };
+                    // Raman scattering is the share b_R / a of absorption.
+                    let a = scene.water.iop(b.pos, b.band).a;
+                    if rng.uniform_f64() * a >= raman.coefficient[b.band] {
+                        return (b.band, Fate::AbsorbedWater, b.weight);
+                    }
+                    let Some((band, weight)) = raman_shift(raman, self.photon_power, &b, rng)
+                    else {
+                        return (b.band, Fate::ShiftedOut, b.weight);
+                    };
+                    end(tallies, b.band, Fate::Shifted, b.weight);
+                    part = tallies.part(band);
+                    tallies.at(part).raman_in += (weight * FATE_UNIT as f64).round() as u64;
+                    self.events += 1;
+                    let u = [rng.uniform_f64(), rng.uniform_f64()];
+                    b.dir = crate::optics::inelastic::raman_phase().sample_direction(b.dir, u);
+                    (b.band, b.weight, b.direct) = (band, weight, false);
+                    continue;
+                }
                 Collision::Null => continue,
                 Collision::WaterScatter => &scene.water_phase,
                 Collision::ParticleScatter => &scene.particle_phase,
@@ -352,4 +382,32 @@ fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir:
             tally.add(i, q, w * track / (2.0 * EO_HALF_WIDTH_M));
         }
     }
+}
+
+/// A Raman shift of the photon on branch `b`: the band it lands in and its
+/// weight there (relative to a photon of that band), or None when it
+/// leaves the grid. The excitation wavelength is drawn uniformly in the
+/// band's cell and the shift from Walrafen's Gaussians
+/// (`optics::inelastic`); the photon keeps its count and its energy
+/// scales by λ'/λ, so its spectral power in band m is P_e w (λ'/λ) (Δ_e /
+/// Δ_m), Δ the bands' cells: in expectation the transfer
+/// `RamanBands::transfer` the path integrator reads.
+fn raman_shift(
+    raman: &crate::optics::inelastic::RamanBands,
+    photon_power: &[f64],
+    b: &Branch,
+    rng: &mut Pcg32,
+) -> Option<(usize, f64)> {
+    use crate::optics::inelastic::{emission_nm, sample_shift};
+    let cells = &raman.cells;
+    let (lo, hi) = cells[b.band];
+    let nm = lo + (hi - lo) * rng.uniform_f64();
+    let em = emission_nm(nm, sample_shift(rng.uniform_f64(), rng.normal()));
+    let m = cells.partition_point(|c| c.1 <= em);
+    if m >= cells.len() || em.is_nan() || em < cells[m].0 {
+        return None;
+    }
+    let width = |i: usize| cells[i].1 - cells[i].0;
+    let spectral = b.weight * nm / em * width(b.band) / width(m);
+    Some((m, spectral * photon_power[b.band] / photon_power[m]))
 }

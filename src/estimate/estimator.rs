@@ -68,6 +68,13 @@ pub struct Scratch {
     group_coarse: GroupSums,
     group_expanded: GroupSums,
     shape_groups: Vec<f64>,
+    /// Water Raman scattering: the found photons' weights through the
+    /// Raman phase function and through the elastic one, per band, at the
+    /// local and the expanded scale; then each band's density of both.
+    raman: [BandSums; 4],
+    raman_density: Vec<f64>,
+    elastic_density: Vec<f64>,
+    raman_out: Vec<f64>,
 }
 
 impl Scratch {
@@ -87,6 +94,10 @@ impl Scratch {
             group_coarse: GroupSums::new(bands),
             group_expanded: GroupSums::new(bands),
             shape_groups: vec![0.0; GROUPS * bands],
+            raman: std::array::from_fn(|_| BandSums::new(bands)),
+            raman_density: vec![0.0; bands],
+            elastic_density: vec![0.0; bands],
+            raman_out: vec![0.0; bands],
         }
     }
 }
@@ -109,6 +120,28 @@ pub struct Estimator<'a> {
     /// The IOPs jump at depth boundaries (layers): volume photons are
     /// weighted by the ratio of scattering at the site to theirs.
     layered: bool,
+    /// Water Raman scattering, when the scene has it.
+    pub raman: Option<RamanSource>,
+}
+
+/// Water Raman scattering's source in the photon map (`[water] raman`).
+///
+/// Emission moves photons between bands, so the map holds the light that
+/// Raman scattering shifted wherever it went on; what the estimates add is
+/// the Raman source itself, J_m = sum_e b_R(e) T(e, m) ∫ p_R L_e (the
+/// excitation bands' light Raman-scattered toward the viewer). The direct
+/// sun's part is added in closed form by the march (`rows` times the
+/// sun's in-water irradiance); the diffuse part comes from the elastic
+/// in-scatter estimate of each excitation band e, b_e ∫ p L_e, divided
+/// by b_e and carried from the elastic phase function to the Raman one by
+/// the ratio of the found photons' weights through both, pooled over the
+/// bands that excite m (`window`): a ratio of two sums over the same
+/// photons, so the band shapes of the `grid` mode serve the Raman source
+/// too, and one band's few photons do not make it noisy.
+pub struct RamanSource {
+    /// Per emission band m: (e, b_R(e) T(e, m)) for the bands that excite it.
+    pub rows: Vec<Vec<(usize, f64)>>,
+    pub phase: crate::optics::phase::PhaseFunction,
 }
 
 /// Most voxels of a band-shape grid, and most bytes (the budget charges
@@ -131,6 +164,23 @@ impl<'a> Estimator<'a> {
                 Self::grid_max_distance(scene),
             )?),
         };
+        let raman = scene.raman.as_ref().map(|r| {
+            let nb = r.len();
+            let rows = (0..nb)
+                .map(|m| {
+                    (0..nb)
+                        .filter_map(|e| {
+                            let c = r.coefficient[e] * r.transfer(e, m);
+                            (c > 0.0).then_some((e, c))
+                        })
+                        .collect()
+                })
+                .collect();
+            RamanSource {
+                rows,
+                phase: crate::optics::inelastic::raman_phase(),
+            }
+        });
         let mut est = Estimator {
             scene,
             map,
@@ -139,6 +189,7 @@ impl<'a> Estimator<'a> {
             grid,
             shapes: None,
             layered: scene.water.is_layered(),
+            raman,
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -311,20 +362,25 @@ impl<'a> Estimator<'a> {
         // one layer's scattering into the other.
         let jumps = self.layered;
         let water = &self.scene.water;
-        let weight = |n: &Neighbour| -> (f64, bool) {
+        let raman_phase = self.raman.as_ref().map(|r| &r.phase);
+        let weight = |n: &Neighbour| -> (f64, bool, f64) {
             let band = n.photon.band as usize;
             let fw = mix[band] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
-            let mut w = mixture(phases, fw, cos) * n.photon.power as f64;
+            let power = n.photon.power as f64;
+            let mut w = mixture(phases, fw, cos) * power;
+            let mut raman = raman_phase.map_or(0.0, |p| p.eval(cos) * power);
             if jumps {
                 let there = water.scattering(n.photon.position, band);
-                w *= if there > 0.0 {
+                let k = if there > 0.0 {
                     iops[band].b() / there
                 } else {
                     0.0
                 };
+                w *= k;
+                raman *= k;
             }
-            (w, cos > 0.0)
+            (w, cos > 0.0, raman)
         };
         let view_up = Some(toward_viewer.z > 0.0);
         let classes = if self.shapes.is_some() {
@@ -340,7 +396,38 @@ impl<'a> Estimator<'a> {
         };
         let r = self.estimate(x, classes, &weight, None, view_up, scratch, out);
         scratch.mix = mix;
-        r
+        r?;
+        self.add_raman(iops, scratch, out);
+        Ok(())
+    }
+
+    /// Add the diffuse Raman source to the elastic in-scatter `out` (see
+    /// [`RamanSource`]), from the densities `estimate` left in `scratch`.
+    fn add_raman(&self, iops: &[Iop], scratch: &mut Scratch, out: &mut [f64]) {
+        let Some(raman) = &self.raman else {
+            return;
+        };
+        let Scratch {
+            raman_density,
+            elastic_density,
+            raman_out,
+            ..
+        } = scratch;
+        for (m, row) in raman.rows.iter().enumerate() {
+            let (mut num, mut den, mut sum) = (0.0, 0.0, 0.0);
+            for &(e, c) in row {
+                num += raman_density[e];
+                den += elastic_density[e];
+                let b = iops[e].b();
+                if b > 0.0 {
+                    sum += c * out[e] / b;
+                }
+            }
+            raman_out[m] = if den > 0.0 { sum * num / den } else { 0.0 };
+        }
+        for (o, r) in out.iter_mut().zip(raman_out.iter()) {
+            *o += r;
+        }
     }
 
     /// Radiance per band leaving a Lambertian surface at `x` with unit
@@ -358,13 +445,13 @@ impl<'a> Estimator<'a> {
         out: &mut [f64],
     ) -> Result<()> {
         let scene = self.scene;
-        let weight = |n: &Neighbour| -> (f64, bool) {
+        let weight = |n: &Neighbour| -> (f64, bool, f64) {
             // Only light arriving on this side of the surface counts.
             if n.photon.direction.dot(normal) >= 0.0 {
-                return (0.0, false);
+                return (0.0, false, 0.0);
             }
             let r = scene.reflectance(surface, x, n.photon.band as usize);
-            (r / std::f64::consts::PI * n.photon.power as f64, false)
+            (r / std::f64::consts::PI * n.photon.power as f64, false, 0.0)
         };
         self.estimate(
             x,

@@ -174,13 +174,23 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
     }
     h.push_str("<h2>Energy budget</h2>\n");
     let en = &e.energy;
-    let parts: [(&str, &[f64]); 5] = [
+    let shifted_out: Vec<f64> = en
+        .raman_out
+        .iter()
+        .zip(&en.raman_lost)
+        .map(|(a, b)| a + b)
+        .collect();
+    let mut parts: Vec<(&str, &[f64])> = vec![
         ("escaped", &en.escaped),
         ("absorbed in water", &en.absorbed_water),
         ("absorbed by floor and targets", &en.absorbed_surfaces),
         ("lost at the edges", &en.lost_edges),
-        ("residual", &en.residual),
     ];
+    if en.raman_in.iter().chain(&shifted_out).any(|&p| p != 0.0) {
+        parts.push(("Raman-shifted out", &shifted_out));
+        parts.push(("Raman-shifted in", &en.raman_in));
+    }
+    parts.push(("residual", &en.residual));
     let curves: Vec<Curve> = parts
         .iter()
         .map(|(label, v)| Curve {

@@ -244,7 +244,7 @@ impl Estimator<'_> {
         &self,
         x: Vec3,
         classes: Classes,
-        weight: &dyn Fn(&Neighbour) -> (f64, bool),
+        weight: &dyn Fn(&Neighbour) -> (f64, bool, f64),
         surface: Option<(Vec3, SurfaceId)>,
         view_up: Option<bool>,
         scratch: &mut Scratch,
@@ -262,8 +262,16 @@ impl Estimator<'_> {
             group_coarse,
             group_expanded,
             shape_groups,
+            raman,
+            raman_density,
+            elastic_density,
             ..
         } = scratch;
+        // Raman weights for volume estimates of a scene with Raman.
+        let with_raman = self.raman.is_some() && surface.is_none();
+        if with_raman {
+            raman.iter_mut().for_each(BandSums::clear);
+        }
         let nb = self.scene.bands.len();
         debug_assert!(out.len() == nb || out.len() == CHANNELS * nb);
         let with_groups = out.len() == CHANNELS * nb;
@@ -322,11 +330,25 @@ impl Estimator<'_> {
             if !(in_local || in_big) {
                 continue;
             }
-            let (w, toward) = weight(n);
+            let (w, toward, w_raman) = weight(n);
             // Counted at the expanded scale: the heavy layer's photons, or
             // in one search those travelling toward the viewer.
             let heavy = if by_layer { !is_local } else { split && toward };
             let (band, group) = (n.photon.band, n.photon.group);
+            if with_raman {
+                // [Raman local, elastic local, Raman expanded, elastic expanded].
+                let at = if in_local && !heavy {
+                    Some(0)
+                } else if in_big && heavy {
+                    Some(2)
+                } else {
+                    None
+                };
+                if let Some(k) = at {
+                    raman[k].add(band, w_raman);
+                    raman[k + 1].add(band, w);
+                }
+            }
             if in_local && !heavy {
                 moments_local[0] += w;
                 moments_local[1] += w * f64::from(offset.z);
@@ -373,6 +395,16 @@ impl Estimator<'_> {
         } else {
             0.0
         };
+        if with_raman {
+            // Each scale's sums over its own volume, as the naive estimate
+            // counts them.
+            let v_big = if v_big > 0.0 { v_big } else { f64::INFINITY };
+            let [rl, el, rb, eb] = raman.each_ref().map(BandSums::sums);
+            for e in 0..nb {
+                raman_density[e] = rl[e] / v_local + rb[e] / v_big;
+                elastic_density[e] = el[e] / v_local + eb[e] / v_big;
+            }
+        }
         let groups = with_groups.then_some(Groups {
             local: group_local,
             coarse: group_coarse,

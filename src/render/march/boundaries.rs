@@ -29,6 +29,7 @@ impl RayMarcher<'_> {
             beam,
             iops,
             tmp,
+            ..
         } = buf;
         // Floor or target: direct sun plus the surface photon estimate.
         let n = h.normal;
