@@ -207,6 +207,9 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
     if let Some(s) = ov.seed {
         f.seed = s;
     }
+    if let Some(on) = ov.inelastic {
+        f.water.raman = Some(on);
+    }
     if let Some(b) = ov.bands {
         // Over the scene's own range: its start and end, or the span of its
         // explicit centres; 400-700 nm only for a scene that gives neither.

@@ -306,6 +306,9 @@ pub struct Overrides {
     pub integrator: Option<IntegratorMode>,
     /// `[sensor] samples_per_pixel`.
     pub samples_per_pixel: Option<u32>,
+    /// Inelastic light on or off (`[water] raman`; `--inelastic`).
+    #[serde(default)]
+    pub inelastic: Option<bool>,
 }
 
 impl Scene {

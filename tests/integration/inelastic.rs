@@ -1,6 +1,6 @@
 //! Water Raman scattering in the path integrator against closed forms.
 
-use crate::common::{minimal, minimal_with, render_job, tempdir};
+use crate::common::{minimal, minimal_with, p, render_job, tempdir};
 use littoral::optics::inelastic::{RamanBands, RAMAN_DEPOLARISATION};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
@@ -256,4 +256,46 @@ fn emission_tallies_match_the_path_integrator_with_raman() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// `--inelastic on|off` overrides `[water] raman` (the elastic-only
+/// ablation), on the command line of render and emit alike.
+#[test]
+fn inelastic_light_switches_from_the_command_line() {
+    let with = |text: &str, on: Option<bool>| {
+        let o = Overrides {
+            inelastic: on,
+            ..Overrides::default()
+        };
+        Scene::parse(text, Path::new("raman.toml"), &o)
+            .unwrap()
+            .raman
+            .is_some()
+    };
+    let raman = clear_water(0.0);
+    assert!(with(&raman, None));
+    assert!(!with(&raman, Some(false)));
+    let elastic = raman.replace("raman = true", "raman = false");
+    assert!(!with(&elastic, None));
+    assert!(with(&elastic, Some(true)));
+    // The flag reaches the scene: an emission report of a Raman scene
+    // counts shifted power only when the light is on.
+    let dir = tempdir();
+    let file = dir.path().join("raman.toml");
+    std::fs::write(&file, raman.replace("count = 4000000", "count = 200000")).unwrap();
+    for (flag, shifted) in [("on", true), ("off", false)] {
+        let map = dir.path().join(format!("{flag}.map"));
+        let run =
+            crate::common::littoral(&["emit", p(&file), "--map", p(&map), "--inelastic", flag]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let report: littoral::emit::report::EmissionReport =
+            serde_json::from_slice(littoral::store::MapFile::open(&map).unwrap().metadata())
+                .unwrap();
+        let any = report.energy.raman_out.iter().any(|&x| x > 0.0);
+        assert_eq!(any, shifted, "--inelastic {flag}");
+    }
 }

@@ -64,7 +64,21 @@ impl RenderArgs {
             spectral: self.spectral,
             integrator: self.integrator,
             samples_per_pixel: self.spp,
+            inelastic: self.inelastic.map(OnOff::on),
         }
+    }
+}
+
+/// A switch given on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+impl OnOff {
+    pub fn on(self) -> bool {
+        matches!(self, OnOff::On)
     }
 }
 
@@ -74,6 +88,7 @@ impl EmitArgs {
         littoral::scene::Overrides {
             photons: self.photons,
             seed: self.seed,
+            inelastic: self.inelastic.map(OnOff::on),
             ..Default::default()
         }
     }
@@ -120,6 +135,10 @@ pub struct RenderArgs {
     /// scene's `[sensor] samples_per_pixel`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
     pub spp: Option<u32>,
+    /// Inelastic light (water Raman scattering, `[water] raman`) on or
+    /// off, overriding the scene: `off` is the elastic-only ablation.
+    #[arg(long, value_enum)]
+    pub inelastic: Option<OnOff>,
     /// Render only part I of N of the image tiles into --out (a part
     /// directory), from the photon map at --map; `littoral assemble`
     /// joins the parts. Started again, a part keeps its finished tiles.
@@ -182,6 +201,10 @@ pub struct EmitArgs {
     /// Random seed (overrides the scene).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Inelastic light (water Raman scattering, `[water] raman`) on or
+    /// off, overriding the scene.
+    #[arg(long, value_enum)]
+    pub inelastic: Option<OnOff>,
     /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.
     #[arg(long, default_value = "256MiB")]
     pub mem_budget: String,
