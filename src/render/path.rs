@@ -126,6 +126,9 @@ const MU_PAD: f64 = 2.0;
 const RAMAN_BOOST: f64 = 50.0;
 /// The largest probability of a Raman event at one collision.
 const RAMAN_MAX_SHARE: f64 = 0.1;
+/// Share of Raman events whose sensor band is drawn uniformly over the
+/// bands fed rather than in proportion to their Raman source.
+const RAMAN_UNIFORM_TARGET: f64 = 0.5;
 /// No split while this many copies wait (a bound on memory, not needed
 /// for correctness: not splitting is always unbiased).
 const MAX_PENDING: usize = 256;

@@ -282,9 +282,10 @@ impl PathTracer<'_> {
     /// the path goes on in a direction drawn from that phase function.
     ///
     /// A path that has met no Raman event carries every sensor band; its
-    /// first one draws the band it will feed from then on (`target`, in
-    /// proportion to each band's throughput times its Raman gain) and
-    /// divides by that choice's probability, since the excitation
+    /// first one draws the band it will feed from then on (`target`: half
+    /// the draws in proportion to each band's throughput times its Raman
+    /// gain, half uniform over the bands fed) and divides by that choice's
+    /// probability, since the excitation
     /// throughputs of different sensor bands cannot share one vector.
     /// Later events feed the same band.
     #[allow(clippy::too_many_arguments)]
@@ -316,24 +317,40 @@ impl PathTracer<'_> {
                 if !(total > 0.0 && total.is_finite()) {
                     return Collided::End;
                 }
-                // The sensor band, in proportion to w_m gain_m.
-                let mut u = rng.uniform_f64() * total;
+                // The sensor band: half the draws in proportion to w_m
+                // gain_m, half uniform over the bands fed (a defensive
+                // mixture: a band whose share is small but whose own light
+                // is faint, the near infrared, would otherwise rest on
+                // rare draws of large weight).
+                let fed = w
+                    .iter()
+                    .zip(&raman.gain)
+                    .filter(|&(x, g)| x * g > 0.0)
+                    .count();
+                if fed == 0 {
+                    return Collided::End;
+                }
+                let uniform = rng.uniform_f64() < RAMAN_UNIFORM_TARGET;
+                let mut u = rng.uniform_f64() * if uniform { fed as f64 } else { total };
                 let mut m = None;
                 for (b, (x, g)) in w.iter().zip(&raman.gain).enumerate() {
                     let p = x * g;
                     if p > 0.0 {
                         m = Some(b);
-                        if u < p {
+                        let step = if uniform { 1.0 } else { p };
+                        if u < step {
                             break;
                         }
-                        u -= p;
+                        u -= step;
                     }
                 }
                 let Some(m) = m else {
                     return Collided::End;
                 };
-                // w_m b_R(e) T(e, m) k / (w_m gain_m / total).
-                let scale = k * total / raman.gain[m];
+                let q = (1.0 - RAMAN_UNIFORM_TARGET) * w[m] * raman.gain[m] / total
+                    + RAMAN_UNIFORM_TARGET / fed as f64;
+                // w_m b_R(e) T(e, m) k / q_m.
+                let scale = k * w[m] / q;
                 for (e, x) in excitation.iter_mut().enumerate() {
                     *x = raman.coefficient[e] * raman.transfer(e, m) * scale;
                 }
