@@ -25,6 +25,7 @@ def render(
     seed: Optional[int] = None,
     spp: Optional[int] = None,
     integrator: Optional[str] = None,
+    inelastic: Optional[bool] = None,
     mem_budget: str = "512MiB",
     threads: int = 0,
     map: Optional[PathLike] = None,  # noqa: A002 - as on the command line
@@ -33,8 +34,9 @@ def render(
 ) -> "_io.Result":
     """Render ``scene`` (default: the built-in one), as ``littoral render``.
 
-    - ``photons``, ``bands``, ``seed``, ``spp`` (samples per pixel) and
-      ``integrator`` (``"photon-map"`` or ``"path"``) override the
+    - ``photons``, ``bands``, ``seed``, ``spp`` (samples per pixel),
+      ``integrator`` (``"photon-map"`` or ``"path"``) and ``inelastic``
+      (water Raman scattering on or off, ``[water] raman``) override the
       scene's values, as the command line's flags do; ``None`` keeps them.
     - ``mem_budget`` bounds the run's memory (``"512MiB"``, ``"2GiB"``);
       ``threads`` = 0 uses every core. The result is the same for any
@@ -60,7 +62,14 @@ def render(
     ``.report``.
     """
     scene = scene if scene is not None else Scene.default()
-    overrides = _overrides(photons=photons, bands=bands, seed=seed, samples_per_pixel=spp, integrator=integrator)
+    overrides = _overrides(
+        photons=photons,
+        bands=bands,
+        seed=seed,
+        samples_per_pixel=spp,
+        integrator=integrator,
+        inelastic=inelastic,
+    )
     temp = None
     if out is None:
         temp = tempfile.mkdtemp(prefix="littoral-render-")
@@ -95,6 +104,7 @@ def emit(
     *,
     photons: Optional[int] = None,
     seed: Optional[int] = None,
+    inelastic: Optional[bool] = None,
     report: Optional[PathLike] = None,
     mem_budget: str = "512MiB",
     threads: int = 0,
@@ -102,11 +112,12 @@ def emit(
 ) -> Dict[str, Any]:
     """Trace ``scene``'s photons into the map file ``map`` (``littoral emit``).
 
-    Returns the emission report as a dict (also written to ``report`` when
-    given). A later :func:`render` with the same ``map`` reuses it. Ctrl-C,
+    ``photons``, ``seed`` and ``inelastic`` override the scene as in
+    :func:`render`. Returns the emission report as a dict (also written to
+    ``report`` when given). A later :func:`render` with the same ``map`` reuses it. Ctrl-C,
     errors and ``progress`` behave as in :func:`render`.
     """
-    overrides = _overrides(photons=photons, seed=seed)
+    overrides = _overrides(photons=photons, seed=seed, inelastic=inelastic)
     with _Progress(progress) as callback:
         text = _littoral.emit(
             scene.to_toml(),

@@ -232,3 +232,15 @@ def test_the_progress_bar_draws_each_stage(small, capsys):
     littoral.render(small.with_({"photons.count": 20000}), progress=True)
     err = capsys.readouterr().err
     assert "trace photons" in err and "render tiles" in err
+
+
+def test_inelastic_light_switches_on_and_off(tmp_path, small):
+    # Water Raman scattering shifts power between bands in emission only
+    # when it is on; `inelastic` overrides the scene's `water.raman`.
+    scene = small.with_({"water.raman": True, "photons.count": 100_000})
+    shifted = {}
+    for on in (True, False):
+        report = littoral.emit(scene, tmp_path / f"{on}.map", inelastic=on, progress=False)
+        shifted[on] = sum(report["energy"]["raman_out"])
+    assert shifted[True] > 0.0
+    assert shifted[False] == 0.0
