@@ -167,8 +167,11 @@ impl RenderJob<'_> {
         let scene = self.scene;
         // Everything that can be refused is refused before any photon is traced.
         let mut shares = self.budget.render(scene, self.threads)?;
-        let (_lock, staging, warnings) =
+        let (_lock, staging, mut warnings) =
             prepare_outputs(scene, &self.out_dir, self.map.as_deref())?;
+        if let Some(r) = &scene.raman {
+            warnings.extend(r.missing_warning(scene.bands.centers_nm()));
+        }
         let sink = outputs::CubeSet::create(scene, staging.dir())?;
         let (rendered, stage, t_emit) = match scene.render.integrator {
             IntegratorMode::PhotonMap => {

@@ -258,6 +258,28 @@ impl RamanBands {
         self.bands == 0
     }
 
+    /// A warning naming the bands that lack more than 1 % of their Raman
+    /// light because its excitation lies below the grid's first band, or
+    /// None; `centers_nm` are the bands' centres.
+    pub fn missing_warning(&self, centers_nm: &[f32]) -> Option<String> {
+        let short: Vec<usize> = (0..self.bands)
+            .filter(|&m| self.missing[m] > 0.01)
+            .collect();
+        let (&first, &last) = (short.first()?, short.last()?);
+        let (lo, hi) = short.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &m| {
+            (lo.min(self.missing[m]), hi.max(self.missing[m]))
+        });
+        Some(format!(
+            "water.raman: {} bands from {:.1} to {:.1} nm lack {:.0}-{:.0} % of their Raman light (for a flat excitation spectrum): it is excited below the grid's first band, at {:.1} nm; start the grid lower to include it",
+            short.len(),
+            centers_nm[first],
+            centers_nm[last],
+            lo * 100.0,
+            hi * 100.0,
+            self.cells[0].0
+        ))
+    }
+
     /// Spectral radiance reaching band `m` per unit Raman-scattered in band `e`.
     #[inline]
     pub fn transfer(&self, e: usize, m: usize) -> f64 {

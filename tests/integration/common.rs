@@ -156,3 +156,14 @@ pub fn client(what: &str, probe: &[&str]) -> bool {
     }
     found
 }
+
+/// `text` parsed for the path integrator at `spp` samples per pixel (a
+/// radiometer traces `spp` x 1024 paths).
+pub fn path_scene(text: &str, spp: u32) -> littoral::scene::Scene {
+    let o = littoral::scene::Overrides {
+        samples_per_pixel: Some(spp),
+        integrator: Some(littoral::scene::IntegratorMode::Path),
+        ..littoral::scene::Overrides::default()
+    };
+    littoral::scene::Scene::parse(text, Path::new("path.toml"), &o).unwrap()
+}

@@ -1,23 +1,14 @@
 //! Water Raman scattering in the path integrator against closed forms.
 
-use crate::common::{minimal, minimal_with, p, render_job, tempdir};
+use crate::common::{minimal, minimal_with, p, path_scene, render_job, tempdir};
 use littoral::optics::inelastic::{RamanBands, RAMAN_DEPOLARISATION};
 use littoral::optics::surface::fresnel_reflectance;
-use littoral::scene::{IntegratorMode, Overrides, Scene};
+use littoral::scene::{Overrides, Scene};
 use std::f64::consts::PI;
 use std::path::Path;
 
 const N_WATER: f64 = 1.34;
 const SUN_ZENITH_DEG: f64 = 30.0;
-
-fn path_scene(text: &str, spp: u32) -> Scene {
-    let o = Overrides {
-        samples_per_pixel: Some(spp),
-        integrator: Some(IntegratorMode::Path),
-        ..Overrides::default()
-    };
-    Scene::parse(text, Path::new("raman.toml"), &o).unwrap()
-}
 
 /// The Raman phase function as published: (3 / 16 pi) (1 + 3 rho) / (1 +
 /// 2 rho) [1 + (1 - rho) / (1 + 3 rho) cos^2].
@@ -156,7 +147,17 @@ fn photon_map_matches_the_path_integrator_with_raman() {
     let text = clear_water(0.0);
     let scene = Scene::parse(&text, Path::new("raman.toml"), &Overrides::default()).unwrap();
     let dir = tempdir();
-    let pm = render_job(&scene, dir.path(), 0).radiometers;
+    let report = render_job(&scene, dir.path(), 0);
+    // The run names the bands whose excitation lies below the grid.
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("water.raman:") && w.contains("from 450.0 to")),
+        "{:?}",
+        report.warnings
+    );
+    let pm = report.radiometers;
     let path = littoral::render::radiometers_path(&path_scene(&text, 256), 0).unwrap();
     let fed: Vec<usize> = (0..scene.bands.len())
         .filter(|&b| scene.bands.centers_nm()[b] >= 530.0)

@@ -1,21 +1,12 @@
 //! The path integrator against closed forms and independent Monte Carlo
 //! readings, and its determinism.
 
-use crate::common::{f32s, minimal, minimal_with, render_job, tempdir};
+use crate::common::{f32s, minimal, minimal_with, path_scene as scene, render_job, tempdir};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::render::RadiometerReading;
 use littoral::scene::text::SceneText;
 use littoral::scene::{IntegratorMode, Overrides, Scene};
 use std::path::Path;
-
-fn scene(text: &str, spp: u32) -> Scene {
-    let o = Overrides {
-        samples_per_pixel: Some(spp),
-        integrator: Some(IntegratorMode::Path),
-        ..Overrides::default()
-    };
-    Scene::parse(text, Path::new("path.toml"), &o).unwrap()
-}
 
 /// [`MINIMAL_SCENE`](crate::common::MINIMAL_SCENE) cut to one band at
 /// 550 nm over a 40 m domain seen by one pixel, with `fragment` merged in.

@@ -133,6 +133,18 @@ fn bands_fed_from_below_the_grid_say_so() {
     let expected = raman_coefficient(ex) * (ex / 600.0f64).powi(3);
     let g = r.gain[20];
     assert!((g / expected - 1.0).abs() < 0.03, "{g} against {expected}");
+    // The run says which bands lack Raman light.
+    let w = r.missing_warning(bands.centers_nm()).unwrap();
+    assert!(
+        w.starts_with("water.raman: ")
+            && w.contains("from 400.0 to ")
+            && w.contains("below the grid's first band, at 395.0 nm"),
+        "{w}"
+    );
+    // A grid that starts low enough lacks nothing it shows.
+    let wide = BandGrid::even(350.0, 700.0, 36).unwrap();
+    let r = RamanBands::new(&wide);
+    assert!(r.missing[15] < 0.01, "{}", r.missing[15]);
 }
 
 #[test]
