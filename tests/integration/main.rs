@@ -26,4 +26,5 @@ mod sharding;
 mod sky;
 mod slurm;
 mod splitting;
+mod viewers;
 mod water_optics;
