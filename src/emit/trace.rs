@@ -6,9 +6,13 @@
 //! water varies on), so heterogeneous water is sampled without bias: a
 //! tentative collision is real with probability c(x)/c_maj, then absorption
 //! (a/c), pure-water scattering (b_w/c) or particle scattering (b_p/c) is
-//! chosen; otherwise it is a null collision and the flight goes on. Absorption is analog (the
-//! photon ends). The floor and targets are Lambertian: a photon is absorbed
-//! with probability 1 - R, else reflected into a cosine-weighted direction.
+//! chosen; otherwise it is a null collision and the flight goes on.
+//! Absorption is analog (the photon ends). With `[water] raman` the share
+//! b_R / a of absorption events is Raman scattering instead: the photon
+//! goes on in the longer band its drawn wavelength lands in
+//! (`raman_shift`), and its tallies and fates from then on count in that
+//! band. The floor and targets are Lambertian: a photon is absorbed with
+//! probability 1 - R, else reflected into a cosine-weighted direction.
 //!
 //! **Upward splitting.** A viewer looking down sees upwelling light, which
 //! rests on the few photons travelling up (in deep water a few per cent of
