@@ -374,15 +374,10 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
     let absorbed_water = power(&totals.absorbed_water);
     let absorbed_surfaces = power(&totals.absorbed_surfaces);
     let lost_edges = power(&totals.lost_edges);
-    let raman = |v: &[u64]| {
-        let mut p = power(v);
-        p.resize(nb, 0.0);
-        p
-    };
     let (raman_out, raman_lost, raman_in) = (
-        raman(&totals.raman_out),
-        raman(&totals.raman_lost),
-        raman(&totals.raman_in),
+        power(&totals.raman_out),
+        power(&totals.raman_lost),
+        power(&totals.raman_in),
     );
     let mut residual = Vec::with_capacity(nb);
     let mut sigma = Vec::with_capacity(nb);

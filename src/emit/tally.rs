@@ -233,11 +233,8 @@ pub struct Totals {
     /// Raman-scattered out of the band into another of the grid, beyond
     /// the grid, and into the band from shorter ones (the last in the
     /// receiving band's photons).
-    #[serde(default)]
     pub raman_out: Vec<u64>,
-    #[serde(default)]
     pub raman_lost: Vec<u64>,
-    #[serde(default)]
     pub raman_in: Vec<u64>,
     /// Fixed-point sums of per-photon contributions, [slot][band].
     pub sum: Vec<i128>,
@@ -298,14 +295,6 @@ impl Totals {
         raman_in: u64,
         t: &PhotonTally,
     ) {
-        // Totals read from an older map's report lack the Raman columns.
-        for v in [
-            &mut self.raman_out,
-            &mut self.raman_lost,
-            &mut self.raman_in,
-        ] {
-            v.resize(self.bands, 0);
-        }
         self.escaped[band] += fates[Fate::Escaped.index()];
         self.absorbed_water[band] += fates[Fate::AbsorbedWater.index()];
         self.absorbed_surfaces[band] += fates[Fate::AbsorbedSurface.index()];
@@ -341,14 +330,9 @@ impl Totals {
         add(&mut self.absorbed_water, &o.absorbed_water);
         add(&mut self.absorbed_surfaces, &o.absorbed_surfaces);
         add(&mut self.lost_edges, &o.lost_edges);
-        for (a, b) in [
-            (&mut self.raman_out, &o.raman_out),
-            (&mut self.raman_lost, &o.raman_lost),
-            (&mut self.raman_in, &o.raman_in),
-        ] {
-            a.resize(a.len().max(b.len()), 0);
-            add(a, b);
-        }
+        add(&mut self.raman_out, &o.raman_out);
+        add(&mut self.raman_lost, &o.raman_lost);
+        add(&mut self.raman_in, &o.raman_in);
         self.sum.iter_mut().zip(&o.sum).for_each(|(x, y)| *x += y);
         self.sum_sq
             .iter_mut()
