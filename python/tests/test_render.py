@@ -241,6 +241,6 @@ def test_inelastic_light_switches_on_and_off(tmp_path, small):
     shifted = {}
     for on in (True, False):
         report = littoral.emit(scene, tmp_path / f"{on}.map", inelastic=on, progress=False)
-        shifted[on] = sum(report["energy"]["raman_out"])
+        shifted[on] = sum(report["energy"]["inelastic_out"])
     assert shifted[True] > 0.0
     assert shifted[False] == 0.0

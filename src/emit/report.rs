@@ -90,19 +90,30 @@ pub struct Energy {
     pub absorbed_surfaces: Vec<f64>,
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub lost_edges: Vec<f64>,
-    /// Raman scattering (`[water] raman`): power shifted out of each band
-    /// into another of the grid, shifted beyond the grid, and shifted into
-    /// it from shorter bands. Zero without Raman. Power shifted in is less
-    /// than power shifted out by λ'/λ: the rest goes into the water's
-    /// vibration.
+    /// Inelastic light (`[water] raman`, `[water.fluorescence]`): power
+    /// taken out of each band by Raman scattering and fluorescence that
+    /// was emitted into another band of the grid, emitted beyond the grid,
+    /// and power emitted into it from shorter bands. Zero without
+    /// inelastic light. Power emitted is less than power taken by λ'/λ
+    /// (and the quantum yield): the rest goes into the water's vibration,
+    /// or is absorbed. (Older reports, Raman alone, named them raman_*.)
+    #[serde(default, alias = "raman_out", deserialize_with = "crate::nan_json::f64s")]
+    pub inelastic_out: Vec<f64>,
+    #[serde(default, alias = "raman_lost", deserialize_with = "crate::nan_json::f64s")]
+    pub inelastic_lost: Vec<f64>,
+    #[serde(default, alias = "raman_in", deserialize_with = "crate::nan_json::f64s")]
+    pub inelastic_in: Vec<f64>,
+    /// Power that left the water up through the surface (the
+    /// water-leaving light, without the surface's reflection), and the
+    /// part of it inelastic light had moved into the band: their ratio is
+    /// the inelastic share of the water-leaving light, over the domain
+    /// and every direction. Absent from older reports.
     #[serde(default, deserialize_with = "crate::nan_json::f64s")]
-    pub raman_out: Vec<f64>,
+    pub water_leaving: Vec<f64>,
     #[serde(default, deserialize_with = "crate::nan_json::f64s")]
-    pub raman_lost: Vec<f64>,
-    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
-    pub raman_in: Vec<f64>,
-    /// emitted + Raman in - (escaped + absorbed + lost + Raman out and
-    /// lost), per band.
+    pub water_leaving_inelastic: Vec<f64>,
+    /// emitted + inelastic in - (escaped + absorbed + lost + inelastic
+    /// out and lost), per band.
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub residual: Vec<f64>,
     /// residual / its standard error, per band.
@@ -374,10 +385,14 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
     let absorbed_water = power(&totals.absorbed_water);
     let absorbed_surfaces = power(&totals.absorbed_surfaces);
     let lost_edges = power(&totals.lost_edges);
-    let (raman_out, raman_lost, raman_in) = (
-        power(&totals.raman_out),
-        power(&totals.raman_lost),
-        power(&totals.raman_in),
+    let (inelastic_out, inelastic_lost, inelastic_in) = (
+        power(&totals.inelastic_out),
+        power(&totals.inelastic_lost),
+        power(&totals.inelastic_in),
+    );
+    let (water_leaving, water_leaving_inelastic) = (
+        power(&totals.left_water),
+        power(&totals.left_water_inelastic),
     );
     let mut residual = Vec::with_capacity(nb);
     let mut sigma = Vec::with_capacity(nb);
@@ -386,9 +401,9 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
             + absorbed_water[b]
             + absorbed_surfaces[b]
             + lost_edges[b]
-            + raman_out[b]
-            + raman_lost[b];
-        let res = emitted[b] + raman_in[b] - sinks;
+            + inelastic_out[b]
+            + inelastic_lost[b];
+        let res = emitted[b] + inelastic_in[b] - sinks;
         // The band's photon count is binomial: sd = P_b sqrt(N p (1 - p)).
         let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
         let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
@@ -409,9 +424,11 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
         absorbed_water,
         absorbed_surfaces,
         lost_edges,
-        raman_out,
-        raman_lost,
-        raman_in,
+        inelastic_out,
+        inelastic_lost,
+        inelastic_in,
+        water_leaving,
+        water_leaving_inelastic,
         residual,
         closure_sigma_per_band: sigma,
         closure_sigma,

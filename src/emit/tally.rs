@@ -130,10 +130,11 @@ pub enum Fate {
     AbsorbedWater,
     AbsorbedSurface,
     LostEdge,
-    /// Raman-scattered into another band of the grid (where it goes on).
+    /// Raman-scattered or fluoresced into another band of the grid
+    /// (where it goes on).
     Shifted,
-    /// Raman-scattered beyond the grid's last band (or between the cells
-    /// of an explicit grid): lost to the bands.
+    /// Raman-scattered or fluoresced beyond the grid's last band (or
+    /// between the cells of an explicit grid): lost to the bands.
     ShiftedOut,
 }
 
@@ -149,18 +150,22 @@ impl Fate {
 
 /// What one photon path contributed in one band it travelled in: its
 /// tallies, the weight that ended in each fate there, and the weight that
-/// Raman scattering brought into it (units of 1 / `trace::FATE_UNIT` of a
+/// inelastic light brought into it (units of 1 / `trace::FATE_UNIT` of a
 /// photon of this band).
 #[derive(Clone, Debug)]
 pub struct BandPart {
     pub band: usize,
     pub tally: PhotonTally,
     pub fates: [u64; Fate::COUNT],
-    pub raman_in: u64,
+    pub inelastic_in: u64,
+    /// Weight that left the water up through the surface, and the part
+    /// of it inelastic light had moved (same units).
+    pub left_water: u64,
+    pub left_water_inelastic: u64,
 }
 
 /// One photon path's parts, one per band it travelled in (one unless
-/// Raman scattering moved it), in the order first met.
+/// inelastic light moved it), in the order first met.
 #[derive(Clone, Debug)]
 pub struct PathTally {
     depths: usize,
@@ -182,7 +187,9 @@ impl PathTally {
         for p in &mut self.parts[..self.used] {
             p.tally.clear();
             p.fates = [0; Fate::COUNT];
-            p.raman_in = 0;
+            p.inelastic_in = 0;
+            p.left_water = 0;
+            p.left_water_inelastic = 0;
         }
         self.used = 0;
     }
@@ -197,7 +204,9 @@ impl PathTally {
                 band,
                 tally: PhotonTally::new(self.depths),
                 fates: [0; Fate::COUNT],
-                raman_in: 0,
+                inelastic_in: 0,
+                left_water: 0,
+                left_water_inelastic: 0,
             });
         }
         self.parts[self.used].band = band;
@@ -230,12 +239,19 @@ pub struct Totals {
     pub absorbed_water: Vec<u64>,
     pub absorbed_surfaces: Vec<u64>,
     pub lost_edges: Vec<u64>,
-    /// Raman-scattered out of the band into another of the grid, beyond
+    /// Moved by inelastic light out of the band into another of the grid, beyond
     /// the grid, and into the band from shorter ones (the last in the
     /// receiving band's photons).
-    pub raman_out: Vec<u64>,
-    pub raman_lost: Vec<u64>,
-    pub raman_in: Vec<u64>,
+    pub inelastic_out: Vec<u64>,
+    pub inelastic_lost: Vec<u64>,
+    pub inelastic_in: Vec<u64>,
+    /// Weight that left the water up through the surface (the
+    /// water-leaving light, without the surface's reflection), and the
+    /// part of it inelastic light had moved into the band.
+    #[serde(default)]
+    pub left_water: Vec<u64>,
+    #[serde(default)]
+    pub left_water_inelastic: Vec<u64>,
     /// Fixed-point sums of per-photon contributions, [slot][band].
     pub sum: Vec<i128>,
     pub sum_sq: Vec<i128>,
@@ -257,9 +273,11 @@ impl Totals {
             absorbed_water: vec![0; bands],
             absorbed_surfaces: vec![0; bands],
             lost_edges: vec![0; bands],
-            raman_out: vec![0; bands],
-            raman_lost: vec![0; bands],
-            raman_in: vec![0; bands],
+            inelastic_out: vec![0; bands],
+            inelastic_lost: vec![0; bands],
+            inelastic_in: vec![0; bands],
+            left_water: vec![0; bands],
+            left_water_inelastic: vec![0; bands],
             sum: vec![0; slots * bands],
             sum_sq: vec![0; slots * bands],
             traced: 0,
@@ -274,7 +292,7 @@ impl Totals {
     pub fn record(&mut self, band: usize, fates: &[u64; Fate::COUNT], t: &PhotonTally) {
         self.traced += 1;
         self.emitted[band] += 1;
-        self.add_part(band, fates, 0, t);
+        self.add_part(band, fates, [0; 3], t);
     }
 
     /// Account one finished photon path that started in `band`, its
@@ -283,25 +301,29 @@ impl Totals {
         self.traced += 1;
         self.emitted[band] += 1;
         for p in path.parts() {
-            self.add_part(p.band, &p.fates, p.raman_in, &p.tally);
+            let flows = [p.inelastic_in, p.left_water, p.left_water_inelastic];
+            self.add_part(p.band, &p.fates, flows, &p.tally);
         }
     }
 
-    /// A path's fates, Raman inflow and tallies in `band`.
+    /// A path's fates, its flows (inelastic inflow, weight that left the
+    /// water and the inelastic part of it) and tallies in `band`.
     fn add_part(
         &mut self,
         band: usize,
         fates: &[u64; Fate::COUNT],
-        raman_in: u64,
+        [inelastic_in, left, left_inelastic]: [u64; 3],
         t: &PhotonTally,
     ) {
         self.escaped[band] += fates[Fate::Escaped.index()];
         self.absorbed_water[band] += fates[Fate::AbsorbedWater.index()];
         self.absorbed_surfaces[band] += fates[Fate::AbsorbedSurface.index()];
         self.lost_edges[band] += fates[Fate::LostEdge.index()];
-        self.raman_out[band] += fates[Fate::Shifted.index()];
-        self.raman_lost[band] += fates[Fate::ShiftedOut.index()];
-        self.raman_in[band] += raman_in;
+        self.inelastic_out[band] += fates[Fate::Shifted.index()];
+        self.inelastic_lost[band] += fates[Fate::ShiftedOut.index()];
+        self.inelastic_in[band] += inelastic_in;
+        self.left_water[band] += left;
+        self.left_water_inelastic[band] += left_inelastic;
         let mut add = |slot: usize, x: f64| {
             if x != 0.0 {
                 self.sum[slot * self.bands + band] += fixed(x);
@@ -330,9 +352,11 @@ impl Totals {
         add(&mut self.absorbed_water, &o.absorbed_water);
         add(&mut self.absorbed_surfaces, &o.absorbed_surfaces);
         add(&mut self.lost_edges, &o.lost_edges);
-        add(&mut self.raman_out, &o.raman_out);
-        add(&mut self.raman_lost, &o.raman_lost);
-        add(&mut self.raman_in, &o.raman_in);
+        add(&mut self.inelastic_out, &o.inelastic_out);
+        add(&mut self.inelastic_lost, &o.inelastic_lost);
+        add(&mut self.inelastic_in, &o.inelastic_in);
+        add(&mut self.left_water, &o.left_water);
+        add(&mut self.left_water_inelastic, &o.left_water_inelastic);
         self.sum.iter_mut().zip(&o.sum).for_each(|(x, y)| *x += y);
         self.sum_sq
             .iter_mut()

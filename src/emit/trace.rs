@@ -7,11 +7,11 @@
 //! tentative collision is real with probability c(x)/c_maj, then absorption
 //! (a/c), pure-water scattering (b_w/c) or particle scattering (b_p/c) is
 //! chosen; otherwise it is a null collision and the flight goes on.
-//! Absorption is analog (the photon ends). With `[water] raman` the share
-//! b_R / a of absorption events is Raman scattering instead: the photon
-//! goes on in the longer band its drawn wavelength lands in
-//! (`raman_shift`), and its tallies and fates from then on count in that
-//! band. The floor and targets are Lambertian: a photon is absorbed with
+//! Absorption is analog (the photon ends). With inelastic light (`[water]
+//! raman`, `[water.fluorescence]`) the share c_k / a of absorption events
+//! is process k's instead: the photon goes on in the longer band its drawn
+//! wavelength lands in (`shift`), and its tallies and fates from then on
+//! count in that band. The floor and targets are Lambertian: a photon is absorbed with
 //! probability 1 - R, else reflected into a cosine-weighted direction.
 //!
 //! **Upward splitting.** A viewer looking down sees upwelling light, which
@@ -37,6 +37,7 @@
 use super::tally::{
     in_lu_cone, Fate, PathTally, PhotonTally, ED, EOD, EOU, EO_HALF_WIDTH_M, EU, LD, LU, MIN_ABS_MU,
 };
+use crate::optics::inelastic::{Absorbers, Inelastic, Process};
 use crate::optics::majorant::{Collision, MajorantGrid};
 use crate::optics::phase::{cosine_hemisphere, scatter};
 use crate::photon::{volume_layer, Photon, LAYER_SURFACE};
@@ -84,6 +85,8 @@ struct Branch {
     weight: f64,
     /// Still the sun's unscattered light.
     direct: bool,
+    /// Inelastic light moved it into its band.
+    shifted: bool,
 }
 
 /// What a path shares between its branches.
@@ -162,6 +165,7 @@ pub fn trace(
         band,
         weight: 1.0,
         direct: source == Source::Sun,
+        shifted: false,
     });
     while let Some(branch) = next {
         let (band, fate, weight) = path.run(branch, rng, tallies, out);
@@ -264,6 +268,12 @@ impl Path<'_> {
                 self.events += 1;
                 if ev.transmitted {
                     tally.add_above_up(b.weight);
+                    let p = tallies.at(part);
+                    let w = (b.weight * FATE_UNIT as f64).round() as u64;
+                    p.left_water += w;
+                    if b.shifted {
+                        p.left_water_inelastic += w;
+                    }
                     return (b.band, Fate::Escaped, b.weight);
                 }
                 b.dir = ev.direction;
@@ -287,25 +297,38 @@ impl Path<'_> {
             let xi = rng.uniform_f64() * self.grid.majorant(b.band, cell);
             let phase = match self.grid.collide(&scene.water, b.band, cell, b.pos, xi) {
                 Collision::Absorbed => {
-                    let Some(raman) = &scene.raman else {
+                    let Some(inelastic) = &scene.inelastic else {
                         return (b.band, Fate::AbsorbedWater, b.weight);
                     };
-                    // Raman scattering is the share b_R / a of absorption.
+                    // Each inelastic process is its share c_k / a of
+                    // absorption.
                     let a = scene.water.iop(b.pos, b.band).a;
-                    if rng.uniform_f64() * a >= raman.coefficient[b.band] {
+                    let parts = if inelastic.fluoresces() {
+                        scene.water.absorbers_in(b.pos, b.band)
+                    } else {
+                        Absorbers::default()
+                    };
+                    let mut u = rng.uniform_f64() * a;
+                    let Some(process) = inelastic.processes.iter().find(|p| {
+                        let c = p.coefficient(b.band, &parts);
+                        u -= c;
+                        u < 0.0
+                    }) else {
                         return (b.band, Fate::AbsorbedWater, b.weight);
-                    }
-                    let Some((band, weight)) = raman_shift(raman, self.photon_power, &b, rng)
-                    else {
-                        return (b.band, Fate::ShiftedOut, b.weight);
+                    };
+                    let (band, weight) = match shift(inelastic, process, self.photon_power, &b, rng)
+                    {
+                        Shift::Absorbed => return (b.band, Fate::AbsorbedWater, b.weight),
+                        Shift::Out => return (b.band, Fate::ShiftedOut, b.weight),
+                        Shift::To(band, weight) => (band, weight),
                     };
                     end(tallies, b.band, Fate::Shifted, b.weight);
                     part = tallies.part(band);
-                    tallies.at(part).raman_in += (weight * FATE_UNIT as f64).round() as u64;
+                    tallies.at(part).inelastic_in += (weight * FATE_UNIT as f64).round() as u64;
                     self.events += 1;
                     let u = [rng.uniform_f64(), rng.uniform_f64()];
-                    b.dir = crate::optics::inelastic::raman_phase().sample_direction(b.dir, u);
-                    (b.band, b.weight, b.direct) = (band, weight, false);
+                    b.dir = process.phase.sample_direction(b.dir, u);
+                    (b.band, b.weight, b.direct, b.shifted) = (band, weight, false, true);
                     continue;
                 }
                 Collision::Null => continue,
@@ -388,30 +411,43 @@ fn tally_segment(depths: &[f64], tally: &mut PhotonTally, a: Vec3, b: Vec3, dir:
     }
 }
 
-/// A Raman shift of the photon on branch `b`: the band it lands in and its
-/// weight there (relative to a photon of that band), or None when it
-/// leaves the grid. The excitation wavelength is drawn uniformly in the
-/// band's cell and the shift from Walrafen's Gaussians
-/// (`optics::inelastic`); the photon keeps its count and its energy
-/// scales by λ'/λ, so its spectral power in band m is P_e w (λ'/λ) (Δ_e /
-/// Δ_m), Δ the bands' cells: in expectation the transfer
-/// `RamanBands::transfer` the path integrator reads.
-fn raman_shift(
-    raman: &crate::optics::inelastic::RamanBands,
+/// What an inelastic event made of a photon.
+enum Shift {
+    /// Nothing emitted (fluorescence excited outside its range, or
+    /// emitted at or below the excitation wavelength): absorbed.
+    Absorbed,
+    /// Emitted beyond the grid.
+    Out,
+    /// Emitted into this band with this weight (relative to a photon of
+    /// that band).
+    To(usize, f64),
+}
+
+/// An inelastic event of `process` for the photon on branch `b`. The
+/// excitation wavelength is drawn uniformly in the band's cell and the
+/// emission from the process's spectrum (`optics::inelastic::spectra`),
+/// with the photon count it carries over the band's nominal yield; the
+/// energy scales by λ'/λ, so the spectral power in band m is P_e w n
+/// (λ'/λ) (Δ_e / Δ_m): in expectation the `Process::transfer` the
+/// renderers read.
+fn shift(
+    inelastic: &Inelastic,
+    process: &Process,
     photon_power: &[f64],
     b: &Branch,
     rng: &mut Pcg32,
-) -> Option<(usize, f64)> {
-    use crate::optics::inelastic::{emission_nm, sample_shift};
-    let cells = &raman.cells;
+) -> Shift {
+    let cells = &inelastic.cells;
     let (lo, hi) = cells[b.band];
     let nm = lo + (hi - lo) * rng.uniform_f64();
-    let em = emission_nm(nm, sample_shift(rng.uniform_f64(), rng.normal()));
+    let Some((em, count)) = process.kind.sample(nm, rng) else {
+        return Shift::Absorbed;
+    };
     let m = cells.partition_point(|c| c.1 <= em);
-    if m >= cells.len() || em.is_nan() || em < cells[m].0 {
-        return None;
+    if m >= cells.len() || em < cells[m].0 {
+        return Shift::Out;
     }
     let width = |i: usize| cells[i].1 - cells[i].0;
-    let spectral = b.weight * nm / em * width(b.band) / width(m);
-    Some((m, spectral * photon_power[b.band] / photon_power[m]))
+    let spectral = b.weight * count / process.nominal[b.band] * nm / em * width(b.band) / width(m);
+    Shift::To(m, spectral * photon_power[b.band] / photon_power[m])
 }

@@ -37,7 +37,9 @@ use crate::estimate::spectral::{
     combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
 };
 use crate::geometry::SurfaceId;
+use crate::optics::inelastic::{Absorbers, Inelastic, Kind};
 use crate::optics::iop::Iop;
+use crate::optics::phase::PhaseFunction;
 use crate::photon::{LAYER_SURFACE, LAYER_VOLUME, LAYER_VOLUME_UP, VOLUME_LAYERS};
 use crate::scene::Scene;
 use crate::store::query::{Neighbour, PhotonQuery, Search};
@@ -68,14 +70,22 @@ pub struct Scratch {
     group_coarse: GroupSums,
     group_expanded: GroupSums,
     shape_groups: Vec<f64>,
-    /// Water Raman scattering: the found photons' weights through the
-    /// Raman phase function and through the elastic one, per band, at the
-    /// local and the expanded scale; then each band's density of both.
-    raman: [BandSums; 4],
-    raman_density: Vec<f64>,
+    /// Inelastic light: the found photons' weights through the Raman
+    /// phase function, the isotropic one (fluorescence) and the elastic
+    /// one, per band, at the local scale and at the expanded one
+    /// (`INELASTIC_*` order); then each band's density of the first two
+    /// (`phase_density`) and of the elastic one.
+    inelastic: [BandSums; 6],
+    phase_density: [Vec<f64>; 2],
     elastic_density: Vec<f64>,
-    raman_out: Vec<f64>,
+    inelastic_out: Vec<f64>,
+    /// The water's absorbers at the estimate's point (fluorescence).
+    parts: Vec<Absorbers>,
 }
+
+/// Slots of `Scratch::inelastic` at one scale: Raman phase, isotropic,
+/// elastic; the expanded scale's follow at `+ INELASTIC_SLOTS`.
+pub(super) const INELASTIC_SLOTS: usize = 3;
 
 impl Scratch {
     pub fn new(bands: usize) -> Self {
@@ -94,10 +104,11 @@ impl Scratch {
             group_coarse: GroupSums::new(bands),
             group_expanded: GroupSums::new(bands),
             shape_groups: vec![0.0; GROUPS * bands],
-            raman: std::array::from_fn(|_| BandSums::new(bands)),
-            raman_density: vec![0.0; bands],
+            inelastic: std::array::from_fn(|_| BandSums::new(bands)),
+            phase_density: [vec![0.0; bands], vec![0.0; bands]],
             elastic_density: vec![0.0; bands],
-            raman_out: vec![0.0; bands],
+            inelastic_out: vec![0.0; bands],
+            parts: vec![Absorbers::default(); bands],
         }
     }
 }
@@ -120,28 +131,10 @@ pub struct Estimator<'a> {
     /// The IOPs jump at depth boundaries (layers): volume photons are
     /// weighted by the ratio of scattering at the site to theirs.
     layered: bool,
-    /// Water Raman scattering, when the scene has it.
-    pub raman: Option<RamanSource>,
-}
-
-/// Water Raman scattering's source in the photon map (`[water] raman`).
-///
-/// Emission moves photons between bands, so the map holds the light that
-/// Raman scattering shifted wherever it went on; what the estimates add is
-/// the Raman source itself, J_m = sum_e b_R(e) T(e, m) ∫ p_R L_e (the
-/// excitation bands' light Raman-scattered toward the viewer). The direct
-/// sun's part is added in closed form by the march (`rows` times the
-/// sun's in-water irradiance); the diffuse part comes from the elastic
-/// in-scatter estimate of each excitation band e, b_e ∫ p L_e, divided
-/// by b_e and carried from the elastic phase function to the Raman one by
-/// the ratio of the found photons' weights through both, pooled over the
-/// bands that excite m (`window`): a ratio of two sums over the same
-/// photons, so the band shapes of the `grid` mode serve the Raman source
-/// too, and one band's few photons do not make it noisy.
-pub struct RamanSource {
-    /// Per emission band m: (e, b_R(e) T(e, m)) for the bands that excite it.
-    pub rows: Vec<Vec<(usize, f64)>>,
-    pub phase: crate::optics::phase::PhaseFunction,
+    /// Inelastic light, when the scene has it (see [`Estimator::add_inelastic`]).
+    pub inelastic: Option<&'a Inelastic>,
+    /// The Raman phase function (photon weights for the Raman source).
+    raman_phase: PhaseFunction,
 }
 
 /// Most voxels of a band-shape grid, and most bytes (the budget charges
@@ -164,23 +157,6 @@ impl<'a> Estimator<'a> {
                 Self::grid_max_distance(scene),
             )?),
         };
-        let raman = scene.raman.as_ref().map(|r| {
-            let nb = r.len();
-            let rows = (0..nb)
-                .map(|m| {
-                    (0..nb)
-                        .filter_map(|e| {
-                            let c = r.coefficient[e] * r.transfer(e, m);
-                            (c > 0.0).then_some((e, c))
-                        })
-                        .collect()
-                })
-                .collect();
-            RamanSource {
-                rows,
-                phase: crate::optics::inelastic::raman_phase(),
-            }
-        });
         let mut est = Estimator {
             scene,
             map,
@@ -189,7 +165,8 @@ impl<'a> Estimator<'a> {
             grid,
             shapes: None,
             layered: scene.water.is_layered(),
-            raman,
+            inelastic: scene.inelastic.as_ref(),
+            raman_phase: crate::optics::inelastic::raman_phase(),
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -362,14 +339,20 @@ impl<'a> Estimator<'a> {
         // one layer's scattering into the other.
         let jumps = self.layered;
         let water = &self.scene.water;
-        let raman_phase = self.raman.as_ref().map(|r| &r.phase);
-        let weight = |n: &Neighbour| -> (f64, bool, f64) {
+        let inelastic = self.inelastic.is_some();
+        let raman_phase = &self.raman_phase;
+        let weight = |n: &Neighbour| -> (f64, bool, [f64; 2]) {
             let band = n.photon.band as usize;
             let fw = mix[band] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
             let power = n.photon.power as f64;
             let mut w = mixture(phases, fw, cos) * power;
-            let mut raman = raman_phase.map_or(0.0, |p| p.eval(cos) * power);
+            // Through the Raman phase function and the isotropic one.
+            let mut phases = if inelastic {
+                [raman_phase.eval(cos) * power, power / (4.0 * std::f64::consts::PI)]
+            } else {
+                [0.0; 2]
+            };
             if jumps {
                 let there = water.scattering(n.photon.position, band);
                 let k = if there > 0.0 {
@@ -378,9 +361,9 @@ impl<'a> Estimator<'a> {
                     0.0
                 };
                 w *= k;
-                raman *= k;
+                phases.iter_mut().for_each(|p| *p *= k);
             }
-            (w, cos > 0.0, raman)
+            (w, cos > 0.0, phases)
         };
         let view_up = Some(toward_viewer.z > 0.0);
         let classes = if self.shapes.is_some() {
@@ -397,36 +380,90 @@ impl<'a> Estimator<'a> {
         let r = self.estimate(x, classes, &weight, None, view_up, scratch, out);
         scratch.mix = mix;
         r?;
-        self.add_raman(iops, scratch, out);
+        self.add_inelastic(x, iops, scratch, out);
         Ok(())
     }
 
-    /// Add the diffuse Raman source to the elastic in-scatter `out` (see
-    /// [`RamanSource`]), from the densities `estimate` left in `scratch`.
-    fn add_raman(&self, iops: &[Iop], scratch: &mut Scratch, out: &mut [f64]) {
-        let Some(raman) = &self.raman else {
+    /// Add the diffuse inelastic source at `x` to the elastic in-scatter
+    /// `out`, from the densities `estimate` left in `scratch`.
+    ///
+    /// Emission moves photons between bands, so the map holds the light
+    /// that Raman scattering and fluorescence moved wherever it went on;
+    /// what the estimates add is the inelastic source itself, J_m = sum_k
+    /// sum_e c_k(x, e) T_k(e, m) ∫ p_k L_e (the excitation bands' light
+    /// scattered or re-emitted toward the viewer; `optics::inelastic`).
+    /// The direct sun's part is added in closed form by the march
+    /// ([`Self::inelastic_sun`]); the diffuse part comes from the elastic
+    /// in-scatter estimate of each excitation band e, b_e ∫ p L_e, divided
+    /// by b_e and carried from the elastic phase function to the process's
+    /// (Raman, or isotropic for fluorescence) by the ratio of the found
+    /// photons' weights through both, pooled over the bands that feed m:
+    /// a ratio of two sums over the same photons, so the band shapes of
+    /// the `grid` mode serve the inelastic source too, and one band's few
+    /// photons do not make it noisy.
+    fn add_inelastic(&self, x: Vec3, iops: &[Iop], scratch: &mut Scratch, out: &mut [f64]) {
+        let Some(inelastic) = self.inelastic else {
             return;
         };
         let Scratch {
-            raman_density,
+            phase_density,
             elastic_density,
-            raman_out,
+            inelastic_out,
+            parts,
             ..
         } = scratch;
-        for (m, row) in raman.rows.iter().enumerate() {
-            let (mut num, mut den, mut sum) = (0.0, 0.0, 0.0);
-            for &(e, c) in row {
-                num += raman_density[e];
-                den += elastic_density[e];
-                let b = iops[e].b();
-                if b > 0.0 {
-                    sum += c * out[e] / b;
+        if inelastic.fluoresces() {
+            self.scene.water.absorbers(x, parts);
+        }
+        inelastic_out.iter_mut().for_each(|o| *o = 0.0);
+        for p in &inelastic.processes {
+            let density = &phase_density[phase_slot(p.kind)];
+            for (m, row) in p.rows.iter().enumerate() {
+                let (mut num, mut den, mut sum) = (0.0, 0.0, 0.0);
+                for &(e, c) in row {
+                    num += density[e];
+                    den += elastic_density[e];
+                    let b = iops[e].b();
+                    if b > 0.0 {
+                        sum += c * p.strength(&parts[e]) * out[e] / b;
+                    }
+                }
+                if den > 0.0 {
+                    inelastic_out[m] += sum * num / den;
                 }
             }
-            raman_out[m] = if den > 0.0 { sum * num / den } else { 0.0 };
         }
-        for (o, r) in out.iter_mut().zip(raman_out.iter()) {
+        for (o, r) in out.iter_mut().zip(inelastic_out.iter()) {
             *o += r;
+        }
+    }
+
+    /// The direct sun's inelastic source toward a viewer (per band, into
+    /// `out`) at the point of the last volume estimate made with
+    /// `scratch`: `m_ss` is 1 - cos of the angle between the sun's beam and
+    /// the direction toward the viewer, `e_w[e] t[e]` the beam's
+    /// irradiance there in band e (in the water, times its transmittance).
+    pub fn inelastic_sun(
+        &self,
+        m_ss: f64,
+        e_w: &[f64],
+        t: &[f64],
+        scratch: &Scratch,
+        out: &mut [f64],
+    ) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let Some(inelastic) = self.inelastic else {
+            return;
+        };
+        for p in &inelastic.processes {
+            let phase = p.phase.eval_one_minus_cos(m_ss);
+            for (o, row) in out.iter_mut().zip(&p.rows) {
+                *o += phase
+                    * row
+                        .iter()
+                        .map(|&(e, c)| c * p.strength(&scratch.parts[e]) * e_w[e] * t[e])
+                        .sum::<f64>();
+            }
         }
     }
 
@@ -445,13 +482,13 @@ impl<'a> Estimator<'a> {
         out: &mut [f64],
     ) -> Result<()> {
         let scene = self.scene;
-        let weight = |n: &Neighbour| -> (f64, bool, f64) {
+        let weight = |n: &Neighbour| -> (f64, bool, [f64; 2]) {
             // Only light arriving on this side of the surface counts.
             if n.photon.direction.dot(normal) >= 0.0 {
-                return (0.0, false, 0.0);
+                return (0.0, false, [0.0; 2]);
             }
             let r = scene.reflectance(surface, x, n.photon.band as usize);
-            (r / std::f64::consts::PI * n.photon.power as f64, false, 0.0)
+            (r / std::f64::consts::PI * n.photon.power as f64, false, [0.0; 2])
         };
         self.estimate(
             x,
@@ -533,4 +570,12 @@ impl crate::parallel::BandScratch for Scratch {
 /// Run `f` with this thread's scratch for `bands` bands.
 pub fn with_scratch<R>(bands: usize, f: impl FnOnce(&mut Scratch) -> R) -> R {
     crate::parallel::with_band_scratch(&SCRATCH, bands, f)
+}
+
+/// The slot of `Scratch::phase_density` a process's phase function reads.
+fn phase_slot(kind: Kind) -> usize {
+    match kind {
+        Kind::Raman => 0,
+        Kind::Chlorophyll | Kind::Cdom => 1,
+    }
 }

@@ -175,9 +175,9 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
     h.push_str("<h2>Energy budget</h2>\n");
     let en = &e.energy;
     let shifted_out: Vec<f64> = en
-        .raman_out
+        .inelastic_out
         .iter()
-        .zip(&en.raman_lost)
+        .zip(&en.inelastic_lost)
         .map(|(a, b)| a + b)
         .collect();
     let mut parts: Vec<(&str, &[f64])> = vec![
@@ -186,9 +186,9 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         ("absorbed by floor and targets", &en.absorbed_surfaces),
         ("lost at the edges", &en.lost_edges),
     ];
-    if en.raman_in.iter().chain(&shifted_out).any(|&p| p != 0.0) {
-        parts.push(("Raman-shifted out", &shifted_out));
-        parts.push(("Raman-shifted in", &en.raman_in));
+    if en.inelastic_in.iter().chain(&shifted_out).any(|&p| p != 0.0) {
+        parts.push(("inelastic out (Raman, fluorescence)", &shifted_out));
+        parts.push(("inelastic in", &en.inelastic_in));
     }
     parts.push(("residual", &en.residual));
     let curves: Vec<Curve> = parts
@@ -214,6 +214,28 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         "<p>Energy closure: largest |residual| over the bands {:.2} standard errors.</p>",
         en.closure_sigma
     );
+    if en.water_leaving_inelastic.iter().any(|&p| p > 0.0) {
+        let share = Curve {
+            label: "inelastic share".into(),
+            x: nm.to_vec(),
+            y: en
+                .water_leaving_inelastic
+                .iter()
+                .zip(&en.water_leaving)
+                .map(|(i, w)| if *w > 0.0 { i / w } else { 0.0 })
+                .collect(),
+            err: None,
+        };
+        h.push_str(&plot(
+            &Axes {
+                title: "Inelastic light (Raman, fluorescence) in the water-leaving light, per band",
+                x_label: "wavelength (nm)",
+                y_label: "share of the power leaving the water",
+                depth: false,
+            },
+            &[share],
+        )?);
+    }
     Ok(())
 }
 

@@ -169,8 +169,8 @@ impl RenderJob<'_> {
         let mut shares = self.budget.render(scene, self.threads)?;
         let (_lock, staging, mut warnings) =
             prepare_outputs(scene, &self.out_dir, self.map.as_deref())?;
-        if let Some(r) = &scene.raman {
-            warnings.extend(r.missing_warning(scene.bands.centers_nm()));
+        if let Some(r) = &scene.inelastic {
+            warnings.extend(r.missing_warnings(scene.bands.centers_nm()));
         }
         let sink = outputs::CubeSet::create(scene, staging.dir())?;
         let (rendered, stage, t_emit) = match scene.render.integrator {

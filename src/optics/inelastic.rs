@@ -1,40 +1,50 @@
-//! Inelastic scattering by water: Raman scattering of the O–H stretch band
-//! (about 3400 cm^-1), which moves light from a shorter (excitation)
-//! wavelength λ' to a longer (emission) one λ.
+//! Inelastic light: water Raman scattering, and chlorophyll and CDOM
+//! fluorescence, which move light from a shorter (excitation) wavelength
+//! λ' to a longer (emission) one λ. The emission spectra are in
+//! [`spectra`]; this module puts them on the band grid.
 //!
-//! - **Coefficient.** b_R(λ') = 2.6e-4 (488 / λ')^5.5 m^-1: the value
-//!   HydroLight uses at 488 nm (Bartlett et al. 1998, Applied Optics 37,
-//!   3324, measured (2.7 ± 0.2) × 10^-4) and Bartlett's λ'^-5.5 ± 0.4 for
-//!   the excitation wavelength, normalised to energy.
-//! - **Loss (littoral's choice).** The light Raman scattering removes at
-//!   λ' is taken to be part of the water's absorption a(λ'), not added to
-//!   its extinction: the pure-water absorption tables are measured losses
-//!   of light at the excitation wavelength. A Raman event is drawn as the
-//!   share b_R / a of the light the water absorbs, so turning Raman on does
-//!   not change the elastic transport, and a band's extinction is the same
-//!   with and without it. (Added to the extinction instead, b_R would raise
+//! - **Raman coefficient.** b_R(λ') = 2.6e-4 (488 / λ')^5.5 m^-1: the
+//!   value HydroLight uses at 488 nm (Bartlett et al. 1998, Applied
+//!   Optics 37, 3324, measured (2.7 ± 0.2) × 10^-4) and Bartlett's λ'^-5.5
+//!   ± 0.4 for the excitation wavelength, normalised to energy.
+//! - **Fluorescence coefficients.** Chlorophyll: φ a_φ(x, λ'), the light
+//!   phytoplankton absorb times the quantum yield φ (`[water.fluorescence]
+//!   chl_quantum_yield`, default 0.01). CDOM: a_g(x, λ'), the light CDOM
+//!   absorbs, with Hawes' quantum efficiency (1–2 %) in its spectrum.
+//! - **Loss (littoral's choice).** Every process is part of the water's
+//!   absorption a(λ'), not added to its extinction: the pure-water
+//!   absorption tables are measured losses of light at the excitation
+//!   wavelength, and fluorescence is the re-emission of light phytoplankton
+//!   or CDOM absorbed. An event is drawn as the share c_k / a of the light
+//!   the water absorbs, so turning inelastic light on does not change the
+//!   elastic transport. (Added to the extinction instead, b_R would raise
 //!   pure water's c by about 12 % at 400 nm.) A scene whose absorption
 //!   falls below b_R somewhere is refused.
-//! - **Photons are conserved.** A Raman-scattered photon's energy scales by
-//!   λ' / λ.
-//! - **Phase function.** (3 / 16π) (1 + 3ρ) / (1 + 2ρ) [1 + (1 − ρ) / (1 +
-//!   3ρ) cos²ψ] with depolarisation ρ = 0.17 (Ge et al. 1993): the
-//!   Rayleigh-like form with q = (1 − ρ) / (1 + 3ρ).
-//! - **Redistribution.** The wavenumber shift Δk = 1/λ' − 1/λ is the sum
-//!   of four Gaussians after Walrafen (1967), as HydroLight has it
-//!   (weights 0.41, 0.39, 0.10, 0.10 at 3250, 3425, 3530 and 3625 cm^-1,
-//!   FWHM 210, 175, 140 and 140 cm^-1).
+//! - **Photons are conserved** (times the quantum yield for
+//!   fluorescence): an emitted photon's energy is λ' / λ of the exciting
+//!   one's.
+//! - **Phase functions.** Raman: (3 / 16π) (1 + 3ρ) / (1 + 2ρ) [1 + (1 −
+//!   ρ) / (1 + 3ρ) cos²ψ] with depolarisation ρ = 0.17 (Ge et al. 1993),
+//!   the Rayleigh-like form with q = (1 − ρ) / (1 + 3ρ). Fluorescence is
+//!   isotropic.
 //!
 //! **On the band grid.** Each band stands for the spectral cell of its
 //! FWHM around its centre (cut at the midpoint with a neighbour where two
-//! overlap), with the radiance flat across it. [`RamanBands`] gives, for
-//! each pair of bands, the spectral radiance that reaches band m per unit
-//! Raman-scattered in band e: (Δ_e / Δ_m) E[(λ' / λ) 1(λ in m)] over λ'
-//! uniform in e's cell and Δk from the Walrafen sum, in closed form per
-//! Gaussian. Light shifted beyond the grid's last band is lost (counted in
-//! `lost`); light a band would receive from excitation wavelengths below
-//! the grid's first band is missing, and `missing` says how much of each
-//! band's Raman source that is (for a flat excitation spectrum).
+//! overlap), with the radiance flat across it. A process's coefficient in
+//! band e at x is `scale[e]` times its strength there (Raman 1, chlorophyll
+//! a_φ(x, e), CDOM a_g(x, e); [`Process::strength`]), `scale` being b_R,
+//! φ, or the band's mean CDOM quantum yield. [`Process::transfer`] gives,
+//! per unit of that coefficient, the spectral radiance reaching band m
+//! per unit of light the process takes from band e: (Δ_e / Δ_m) E[(λ' / λ)
+//! 1(λ in m)] over λ' uniform in e's cell, divided by the nominal yield.
+//! Light emitted beyond the grid's last band is lost (`lost`); light a
+//! band would receive from excitation wavelengths below the grid's first
+//! band is missing, and `missing` says how much of each band's source that
+//! is (for a flat excitation spectrum and a flat strength).
+
+pub mod spectra;
+
+pub use spectra::{emission_nm, sample_shift, shift_density, Kind, WALRAFEN};
 
 use crate::optics::phase::PhaseFunction;
 use crate::spectral::BandGrid;
@@ -47,21 +57,15 @@ pub const RAMAN_REFERENCE_NM: f64 = 488.0;
 pub const RAMAN_EXPONENT: f64 = 5.5;
 /// Depolarisation ratio of water's Raman band (Ge et al. 1993).
 pub const RAMAN_DEPOLARISATION: f64 = 0.17;
+/// Default quantum yield of chlorophyll fluorescence (photons emitted per
+/// photon phytoplankton absorb between 370 and 690 nm).
+pub const CHL_QUANTUM_YIELD: f64 = 0.01;
 
-/// Walrafen's (1967) Gaussians of the wavenumber shift: (weight, centre
-/// cm^-1, FWHM cm^-1). The weights sum to 1.
-pub const WALRAFEN: [(f64, f64, f64); 4] = [
-    (0.41, 3250.0, 210.0),
-    (0.39, 3425.0, 175.0),
-    (0.10, 3530.0, 140.0),
-    (0.10, 3625.0, 140.0),
-];
-
-/// Spectral points per band cell in the closed-form transfer.
+/// Spectral points per band cell in the transfer.
 const CELL_POINTS: usize = 16;
 
-/// nm · cm^-1 per 1: wavenumber (cm^-1) = 1e7 / wavelength (nm).
-const NM_CM: f64 = 1.0e7;
+/// Excitation step (nm) of the `missing` shares.
+const MISSING_STEP_NM: f64 = 1.0;
 
 /// The Raman scattering coefficient at excitation wavelength `nm` (1/m).
 pub fn raman_coefficient(nm: f64) -> f64 {
@@ -72,41 +76,6 @@ pub fn raman_coefficient(nm: f64) -> f64 {
 pub fn raman_phase() -> PhaseFunction {
     let rho = RAMAN_DEPOLARISATION;
     PhaseFunction::rayleigh((1.0 - rho) / (1.0 + 3.0 * rho)).expect("q lies in [0, 1]")
-}
-
-/// Standard deviation of a Gaussian of full width at half maximum `fwhm`.
-fn sigma_of(fwhm: f64) -> f64 {
-    fwhm / (2.0 * (2.0 * std::f64::consts::LN_2).sqrt())
-}
-
-/// The density of the wavenumber shift Δk (per cm^-1).
-pub fn shift_density(dk: f64) -> f64 {
-    WALRAFEN
-        .iter()
-        .map(|&(w, mu, fwhm)| {
-            let s = sigma_of(fwhm);
-            w * (-0.5 * ((dk - mu) / s).powi(2)).exp() / (s * (2.0 * std::f64::consts::PI).sqrt())
-        })
-        .sum()
-}
-
-/// A wavenumber shift (cm^-1) drawn from Walrafen's sum: `u` picks the
-/// Gaussian, `z` is a standard normal deviate.
-pub fn sample_shift(u: f64, z: f64) -> f64 {
-    let mut acc = 0.0;
-    for &(w, mu, fwhm) in &WALRAFEN {
-        acc += w;
-        if u < acc {
-            return mu + sigma_of(fwhm) * z;
-        }
-    }
-    let (_, mu, fwhm) = WALRAFEN[WALRAFEN.len() - 1];
-    mu + sigma_of(fwhm) * z
-}
-
-/// The emission wavelength (nm) of excitation `nm` shifted by `dk` cm^-1.
-pub fn emission_nm(nm: f64, dk: f64) -> f64 {
-    NM_CM / (NM_CM / nm - dk)
 }
 
 /// The spectral cell (nm) each band of `bands` stands for: its FWHM
@@ -129,161 +98,305 @@ pub fn band_cells(bands: &BandGrid) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// For one Gaussian (mean `mu`, sd `s`) and the interval [u0, u1]:
-/// P(u0 <= X <= u1) and E[X; u0 <= X <= u1].
-fn gaussian_partial(mu: f64, s: f64, u0: f64, u1: f64) -> (f64, f64) {
-    let cdf = |u: f64| 0.5 * libm::erfc(-(u - mu) / (s * std::f64::consts::SQRT_2));
-    let pdf =
-        |u: f64| (-0.5 * ((u - mu) / s).powi(2)).exp() / (s * (2.0 * std::f64::consts::PI).sqrt());
-    let p = cdf(u1) - cdf(u0);
-    (p, mu * p - s * s * (pdf(u1) - pdf(u0)))
+/// What the water's absorption is made of at a point, in one band (1/m):
+/// the strengths of the fluorescence processes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Absorbers {
+    /// Absorption by phytoplankton, a_φ.
+    pub a_phi: f64,
+    /// Absorption by CDOM, a_g.
+    pub a_g: f64,
 }
 
-/// Raman scattering between the bands of a grid (see the module's notes).
+/// One inelastic process on a band grid (see the module's notes).
 #[derive(Clone, Debug)]
-pub struct RamanBands {
+pub struct Process {
+    pub kind: Kind,
     bands: usize,
-    /// b_R at each band's centre (1/m).
-    pub coefficient: Vec<f64>,
-    /// `transfer[e * bands + m]`: spectral radiance reaching band m per
-    /// unit Raman-scattered in band e, (Δ_e / Δ_m) E[(λ'/λ) 1(λ in m)].
+    /// Per excitation band: the coefficient per unit strength (b_R in
+    /// 1/m for Raman; φ times the share of the band's cell within
+    /// 370-690 nm for chlorophyll; the mean quantum yield over the cell
+    /// for CDOM): the base coefficient times `nominal`.
+    pub scale: Vec<f64>,
+    /// Per excitation band: the photons an event emits (before the cut
+    /// at the excitation wavelength), averaged over the band's cell
+    /// ([`Kind::photon_yield`]). An event's drawn count is divided by it.
+    pub nominal: Vec<f64>,
+    /// `transfer[e * bands + m]` (see [`Process::transfer`]).
     transfer: Vec<f64>,
-    /// Per emission band m: sum over e of b_R(e) `transfer[e][m]` (1/m),
-    /// the coefficient that turns a flat spectral radiance into m's
-    /// Raman source.
-    pub gain: Vec<f64>,
-    /// Per excitation band: the share of its Raman-scattered photons
-    /// shifted beyond the grid's last band.
+    /// Per emission band m: (e, scale[e] transfer(e, m)) for the bands
+    /// that feed it.
+    pub rows: Vec<Vec<(usize, f64)>>,
+    /// Per emission band: sum over e of scale[e] transfer(e, m) times the
+    /// largest strength anywhere in the water (1/m; set by
+    /// [`Inelastic::bound_gains`]): the coefficient that turns a flat
+    /// spectral radiance into m's source, at its largest.
+    pub gain_bound: Vec<f64>,
+    /// Per excitation band: the share of its emitted photons that land
+    /// beyond the grid's last band (or in a gap between cells).
     pub lost: Vec<f64>,
-    /// Per emission band: the share of its Raman source (for a flat
-    /// excitation spectrum) that comes from below the grid's first band
-    /// and is missing.
+    /// Per emission band: the share of its source (for a flat excitation
+    /// spectrum and strength) excited below the grid's first band.
     pub missing: Vec<f64>,
-    /// Each band's spectral cell (nm).
-    pub cells: Vec<(f64, f64)>,
+    pub phase: PhaseFunction,
 }
 
-impl RamanBands {
-    /// The transfer on `bands`.
-    pub fn new(bands: &BandGrid) -> Self {
-        let nb = bands.len();
-        let cells = band_cells(bands);
+impl Process {
+    /// The process `kind` on a grid of `cells` centred at `centers` (nm),
+    /// with the quantum yield `chl_yield` for chlorophyll.
+    fn new(kind: Kind, cells: &[(f64, f64)], centers: &[f32], chl_yield: f64) -> Self {
+        let nb = cells.len();
         let width = |i: usize| cells[i].1 - cells[i].0;
-        let coefficient: Vec<f64> = bands
-            .centers_nm()
+        // Excitation wavelengths are spread over the part of each cell the
+        // process is excited in, weighted by that part's share of the cell.
+        let (r0, r1) = kind.excitation_range();
+        let part = |(lo, hi): (f64, f64)| {
+            let (a, b) = (lo.max(r0), hi.min(r1));
+            let share = ((b - a) / (hi - lo)).max(0.0);
+            let points =
+                (0..CELL_POINTS).map(move |p| a + (b - a) * (p as f64 + 0.5) / CELL_POINTS as f64);
+            (share, points)
+        };
+        // The nominal yield per band: the event rate's scale.
+        let nominal: Vec<f64> = cells
             .iter()
-            .map(|&c| raman_coefficient(c as f64))
+            .map(|&c| {
+                let (share, points) = part(c);
+                if share > 0.0 {
+                    share * points.map(|nm| kind.photon_yield(nm)).sum::<f64>()
+                        / CELL_POINTS as f64
+                } else {
+                    0.0
+                }
+            })
             .collect();
-        // Shifts beyond 8 sd of the outer Gaussians carry nothing.
-        let (dk_lo, dk_hi) = WALRAFEN
+        let scale: Vec<f64> = centers
             .iter()
-            .fold((f64::MAX, f64::MIN), |(lo, hi), &(_, mu, f)| {
-                let s = 8.0 * sigma_of(f);
-                (lo.min(mu - s), hi.max(mu + s))
-            });
+            .zip(&nominal)
+            .map(|(&c, &y)| match kind {
+                Kind::Raman => raman_coefficient(c as f64),
+                Kind::Chlorophyll => chl_yield * y,
+                Kind::Cdom => y,
+            })
+            .collect();
         let mut transfer = vec![0.0; nb * nb];
         let mut lost = vec![0.0; nb];
         for e in 0..nb {
-            let (lo, hi) = cells[e];
-            for p in 0..CELL_POINTS {
-                let nm = lo + (hi - lo) * (p as f64 + 0.5) / CELL_POINTS as f64;
-                let k = NM_CM / nm;
-                let (reach_lo, reach_hi) = (emission_nm(nm, dk_lo), emission_nm(nm, dk_hi));
-                let mut inside = 0.0;
+            if nominal[e] <= 0.0 {
+                continue;
+            }
+            let mut landed = 0.0;
+            let mut emitted = 0.0;
+            let (share, points) = part(cells[e]);
+            for nm in points {
+                let (reach_lo, reach_hi) = kind.reach(nm);
+                emitted += kind.into_interval(nm, reach_lo, reach_hi).0.max(0.0);
                 for m in 0..nb {
                     let (mlo, mhi) = cells[m];
                     if mhi <= reach_lo || mlo >= reach_hi {
                         continue;
                     }
-                    // λ in [mlo, mhi] <=> Δk in [k - 1e7/mlo, k - 1e7/mhi].
-                    let (u0, u1) = (k - NM_CM / mlo, k - NM_CM / mhi);
-                    let mut t = 0.0;
-                    for &(w, mu, fwhm) in &WALRAFEN {
-                        let (pr, mean) = gaussian_partial(mu, sigma_of(fwhm), u0, u1);
-                        inside += w * pr;
-                        // λ'/λ = (k - Δk) / k.
-                        t += w * (pr - mean / k);
+                    let (count, energy) = kind.into_interval(nm, mlo, mhi);
+                    if count > 0.0 {
+                        landed += count;
+                        transfer[e * nb + m] += energy;
                     }
-                    transfer[e * nb + m] += t / CELL_POINTS as f64 * width(e) / width(m);
                 }
-                // Shifted beyond the last band's cell (gaps between cells
-                // of an explicit grid count as lost too).
-                lost[e] += (1.0 - inside).max(0.0) / CELL_POINTS as f64;
             }
+            for m in 0..nb {
+                transfer[e * nb + m] *=
+                    share * width(e) / width(m) / (CELL_POINTS as f64 * nominal[e]);
+            }
+            lost[e] = if emitted > 0.0 {
+                ((emitted - landed) / emitted).max(0.0)
+            } else {
+                0.0
+            };
         }
-        let gain = (0..nb)
-            .map(|m| (0..nb).map(|e| coefficient[e] * transfer[e * nb + m]).sum())
-            .collect();
-        // What each band would receive from below the grid: Δk above
-        // 1e7/λ_min - 1e7/λ... excitation below λ_min = the first cell's
-        // lower edge.
-        let first = cells[0].0;
-        let missing = (0..nb)
+        let rows = (0..nb)
             .map(|m| {
-                let (mlo, mhi) = cells[m];
-                (0..CELL_POINTS)
-                    .map(|p| {
-                        let nm = mlo + (mhi - mlo) * (p as f64 + 0.5) / CELL_POINTS as f64;
-                        // Excitation at 1e7 / (1e7/nm + Δk) < first <=> Δk > 1e7/first - 1e7/nm.
-                        let threshold = NM_CM / first - NM_CM / nm;
-                        WALRAFEN
-                            .iter()
-                            .map(|&(w, mu, f)| {
-                                w * gaussian_partial(mu, sigma_of(f), threshold, f64::INFINITY).0
-                            })
-                            .sum::<f64>()
+                (0..nb)
+                    .filter_map(|e| {
+                        let c = scale[e] * transfer[e * nb + m];
+                        (c > 0.0).then_some((e, c))
                     })
-                    .sum::<f64>()
-                    / CELL_POINTS as f64
+                    .collect()
             })
             .collect();
-        RamanBands {
+        let missing = missing_shares(kind, cells);
+        Process {
+            kind,
             bands: nb,
-            coefficient,
+            gain_bound: vec![0.0; nb],
+            scale,
+            nominal,
             transfer,
-            gain,
+            rows,
             lost,
             missing,
-            cells,
+            phase: match kind {
+                Kind::Raman => raman_phase(),
+                Kind::Chlorophyll | Kind::Cdom => PhaseFunction::isotropic(),
+            },
+        }
+    }
+
+    /// Spectral radiance reaching band `m` per unit of light the process
+    /// takes from band `e`, per unit of its nominal yield.
+    #[inline]
+    pub fn transfer(&self, e: usize, m: usize) -> f64 {
+        self.transfer[e * self.bands + m]
+    }
+
+    /// The process's strength in a band where the water's absorbers are
+    /// `parts` (its coefficient is `scale` times this).
+    #[inline]
+    pub fn strength(&self, parts: &Absorbers) -> f64 {
+        match self.kind {
+            Kind::Raman => 1.0,
+            Kind::Chlorophyll => parts.a_phi,
+            Kind::Cdom => parts.a_g,
+        }
+    }
+
+    /// Its coefficient in band `e` where the absorbers are `parts` (1/m).
+    #[inline]
+    pub fn coefficient(&self, e: usize, parts: &Absorbers) -> f64 {
+        self.scale[e] * self.strength(parts)
+    }
+}
+
+/// For a flat excitation spectrum and strength: the share of each
+/// band's source that `kind` excites below the first cell, by the
+/// excitation rule of [`MISSING_STEP_NM`].
+fn missing_shares(kind: Kind, cells: &[(f64, f64)]) -> Vec<f64> {
+    let first = cells[0].0;
+    let last = cells[cells.len() - 1].1;
+    let start = kind.excitation_range().0;
+    // Raman's own coefficient varies with λ'; fluorescence's strength is
+    // taken flat.
+    let weight = |nm: f64| match kind {
+        Kind::Raman => raman_coefficient(nm),
+        _ => 1.0,
+    };
+    cells
+        .iter()
+        .map(|&(lo, hi)| {
+            let (mut below, mut within) = (0.0, 0.0);
+            let mut nm = start + 0.5 * MISSING_STEP_NM;
+            while nm < hi.min(last) {
+                let (reach_lo, reach_hi) = kind.reach(nm);
+                if hi <= reach_lo || lo >= reach_hi {
+                    nm += MISSING_STEP_NM;
+                    continue;
+                }
+                let energy = kind.into_interval(nm, lo, hi).1 * weight(nm);
+                if nm < first {
+                    below += energy;
+                } else {
+                    within += energy;
+                }
+                nm += MISSING_STEP_NM;
+            }
+            if below + within > 0.0 {
+                below / (below + within)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The inelastic processes of a scene on its band grid.
+#[derive(Clone, Debug)]
+pub struct Inelastic {
+    /// Each band's spectral cell (nm).
+    pub cells: Vec<(f64, f64)>,
+    pub processes: Vec<Process>,
+}
+
+impl Inelastic {
+    /// The processes `kinds` on `bands`, chlorophyll's with quantum yield
+    /// `chl_yield`. The fluorescence processes' gain bounds are zero until
+    /// [`Self::bound_gains`].
+    pub fn new(bands: &BandGrid, kinds: &[Kind], chl_yield: f64) -> Self {
+        let cells = band_cells(bands);
+        let processes = kinds
+            .iter()
+            .map(|&k| Process::new(k, &cells, bands.centers_nm(), chl_yield))
+            .collect();
+        let mut inelastic = Inelastic { cells, processes };
+        inelastic.bound_gains(&vec![Absorbers::default(); bands.len()]);
+        inelastic
+    }
+
+    /// Water Raman scattering alone.
+    pub fn raman(bands: &BandGrid) -> Self {
+        Self::new(bands, &[Kind::Raman], CHL_QUANTUM_YIELD)
+    }
+
+    /// Set each process's gain bound from the water's largest absorbers
+    /// per band, `max_parts`.
+    pub fn bound_gains(&mut self, max_parts: &[Absorbers]) {
+        for p in &mut self.processes {
+            let gains = p
+                .rows
+                .iter()
+                .map(|row| {
+                    row.iter()
+                        .map(|&(e, c)| c * p.strength(&max_parts[e]))
+                        .sum()
+                })
+                .collect();
+            p.gain_bound = gains;
         }
     }
 
     /// Number of bands.
     pub fn len(&self) -> usize {
-        self.bands
+        self.cells.len()
     }
 
     /// Always false: a grid holds at least one band.
     pub fn is_empty(&self) -> bool {
-        self.bands == 0
+        self.cells.is_empty()
     }
 
-    /// A warning naming the bands that lack more than 1 % of their Raman
-    /// light because its excitation lies below the grid's first band, or
-    /// None; `centers_nm` are the bands' centres.
-    pub fn missing_warning(&self, centers_nm: &[f32]) -> Option<String> {
-        let short: Vec<usize> = (0..self.bands)
-            .filter(|&m| self.missing[m] > 0.01)
-            .collect();
-        let (&first, &last) = (short.first()?, short.last()?);
-        let (lo, hi) = short.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &m| {
-            (lo.min(self.missing[m]), hi.max(self.missing[m]))
-        });
-        Some(format!(
-            "water.raman: {} bands from {:.1} to {:.1} nm lack {:.0}-{:.0} % of their Raman light (for a flat excitation spectrum): it is excited below the grid's first band, at {:.1} nm; start the grid lower to include it",
-            short.len(),
-            centers_nm[first],
-            centers_nm[last],
-            lo * 100.0,
-            hi * 100.0,
-            self.cells[0].0
-        ))
+    /// Some process draws on the water's absorbers (fluorescence).
+    pub fn fluoresces(&self) -> bool {
+        self.processes.iter().any(|p| p.kind != Kind::Raman)
     }
 
-    /// Spectral radiance reaching band `m` per unit Raman-scattered in band `e`.
-    #[inline]
-    pub fn transfer(&self, e: usize, m: usize) -> f64 {
-        self.transfer[e * self.bands + m]
+    /// The process of `kind`, if the scene has it.
+    pub fn process(&self, kind: Kind) -> Option<&Process> {
+        self.processes.iter().find(|p| p.kind == kind)
+    }
+
+    /// Warnings naming, per process, the bands that lack more than 1 % of
+    /// their source because it is excited below the grid's first band;
+    /// `centers_nm` are the bands' centres.
+    pub fn missing_warnings(&self, centers_nm: &[f32]) -> Vec<String> {
+        self.processes
+            .iter()
+            .filter_map(|p| {
+                let short: Vec<usize> = (0..self.len()).filter(|&m| p.missing[m] > 0.01).collect();
+                let (&first, &last) = (short.first()?, short.last()?);
+                let (lo, hi) = short.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &m| {
+                    (lo.min(p.missing[m]), hi.max(p.missing[m]))
+                });
+                Some(format!(
+                    "{}: {} bands from {:.1} to {:.1} nm lack {:.0}-{:.0} % of their {} light (for a flat excitation spectrum): it is excited below the grid's first band, at {:.1} nm; start the grid lower to include it",
+                    p.kind.key(),
+                    short.len(),
+                    centers_nm[first],
+                    centers_nm[last],
+                    lo * 100.0,
+                    hi * 100.0,
+                    p.kind.name(),
+                    self.cells[0].0
+                ))
+            })
+            .collect()
     }
 }
 

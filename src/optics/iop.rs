@@ -27,6 +27,7 @@
 //!
 //! Not for: the sampling of free paths (see `emit`).
 
+use crate::optics::inelastic::Absorbers;
 use glam::Vec3;
 
 /// Particle scattering at 550 nm of case-1 water, 0.30 Chl^0.62 (1/m;
@@ -343,6 +344,55 @@ impl WaterModel {
                     };
                 }
             }
+        }
+    }
+
+    /// The absorbers fluorescence draws on (phytoplankton and CDOM) at
+    /// `p` in every band (`out` has one entry per band); zero for water
+    /// given by its IOPs.
+    pub fn absorbers(&self, p: Vec3, out: &mut [Absorbers]) {
+        match self {
+            WaterModel::Constituents { spectra, field, .. } => {
+                let c = field.at(p);
+                for (band, o) in out.iter_mut().enumerate() {
+                    *o = Self::absorbers_of(spectra, &c, band);
+                }
+            }
+            _ => out.iter_mut().for_each(|o| *o = Absorbers::default()),
+        }
+    }
+
+    /// The absorbers at `p` in `band` (see [`Self::absorbers`]).
+    pub fn absorbers_in(&self, p: Vec3, band: usize) -> Absorbers {
+        match self {
+            WaterModel::Constituents { spectra, field, .. } => {
+                Self::absorbers_of(spectra, &field.at(p), band)
+            }
+            _ => Absorbers::default(),
+        }
+    }
+
+    /// The largest absorbers anywhere in `band` (each grows with its
+    /// concentration).
+    pub fn absorbers_max(&self, band: usize) -> Absorbers {
+        match self {
+            WaterModel::Constituents { spectra, field, .. } => {
+                Self::absorbers_of(spectra, &field.max(), band)
+            }
+            _ => Absorbers::default(),
+        }
+    }
+
+    /// a_φ and a_g of concentrations `c` in `band`, as the absorption
+    /// `from_constituents` sums has them.
+    fn absorbers_of(s: &BandSpectra, c: &Constituents, band: usize) -> Absorbers {
+        Absorbers {
+            a_phi: if c.chl > 0.0 {
+                s.a_phi_a[band] * (s.a_phi_e[band] * c.chl.ln()).exp()
+            } else {
+                0.0
+            },
+            a_g: c.cdom_440 * s.cdom_shape[band],
         }
     }
 

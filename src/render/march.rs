@@ -55,8 +55,8 @@ const MIN_TRANSMITTANCE: f64 = 1e-4;
 struct MarchBuffers {
     est: Vec<f64>,
     sun_t: Vec<f64>,
-    /// The direct sun's Raman source per band at the step's sample.
-    raman_sun: Vec<f64>,
+    /// The direct sun's inelastic source per band at the step's sample.
+    inelastic_sun: Vec<f64>,
     beam: Vec<f64>,
     iops: Vec<Iop>,
     tmp: Vec<Iop>,
@@ -256,7 +256,7 @@ impl<'a> RayMarcher<'a> {
         let mut buf = MarchBuffers {
             est: vec![0.0f64; out.len()],
             sun_t: vec![0.0f64; nb],
-            raman_sun: vec![0.0f64; nb],
+            inelastic_sun: vec![0.0f64; nb],
             beam: vec![0.0f64; nb],
             iops: vec![Iop::default(); nb],
             tmp: vec![Iop::default(); nb],
@@ -310,7 +310,7 @@ impl<'a> RayMarcher<'a> {
         let MarchBuffers {
             est,
             sun_t,
-            raman_sun,
+            inelastic_sun,
             iops,
             tmp,
             ..
@@ -332,8 +332,7 @@ impl<'a> RayMarcher<'a> {
         // peak, where a cosine has too few digits.
         let m_ss = 0.5 * (self.sun_w + dir).length_squared() as f64;
         let (pw_ss, pp_ss) = (pw.eval_one_minus_cos(m_ss), pp.eval_one_minus_cos(m_ss));
-        let raman = self.est.raman.as_ref();
-        let pr_ss = raman.map_or(0.0, |r| r.phase.eval_one_minus_cos(m_ss));
+        let inelastic = self.est.inelastic.is_some();
         // Stratified: one jittered sample in each step, weighted by the
         // transmittance to the sample itself (unbiased for the step's
         // integral of T times the source). Single scattering of the sun is
@@ -371,16 +370,11 @@ impl<'a> RayMarcher<'a> {
             self.est
                 .volume_with_iops(x, -dir, at_target, iops, scratch, est)?;
             self.sun_transmittance(x, iops, tmp, sun_t);
-            // The direct sun Raman-scattered toward the viewer, at the
-            // step's sample (see `RamanSource`).
-            if let Some(r) = raman {
-                for (o, row) in raman_sun.iter_mut().zip(&r.rows) {
-                    *o = pr_ss
-                        * row
-                            .iter()
-                            .map(|&(e, c)| c * self.e_w[e] * sun_t[e])
-                            .sum::<f64>();
-                }
+            // The direct sun's inelastic source toward the viewer, at the
+            // step's sample (see `Estimator::add_inelastic`).
+            if inelastic {
+                self.est
+                    .inelastic_sun(m_ss, &self.e_w, sun_t, scratch, inelastic_sun);
             }
             let mut alive = false;
             for b in 0..nb {
@@ -403,7 +397,7 @@ impl<'a> RayMarcher<'a> {
                 } else {
                     f * single
                 };
-                out[b] += f * (est[b] + raman_sun[b]) + single_step;
+                out[b] += f * (est[b] + inelastic_sun[b]) + single_step;
                 for k in (nb + b..out.len()).step_by(nb) {
                     out[k] += f * est[k];
                 }

@@ -89,9 +89,9 @@
 use super::air_sea::sky_radiance;
 use super::sun::{Crossing, SunBeam, SUN_HALF_ANGLE_RAD};
 use crate::emit::trace::MAX_EVENTS;
-use crate::optics::inelastic::RamanBands;
+use crate::optics::inelastic::Inelastic;
 use crate::optics::iop::Iop;
-use crate::optics::phase::{cosine_hemisphere, Mixture, PhaseFunction};
+use crate::optics::phase::{cosine_hemisphere, Mixture};
 use crate::optics::surface::{fresnel_reflectance, refract};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
@@ -120,15 +120,15 @@ const MAX_SPLIT: usize = 16;
 /// of 6.3 at 3 m, 4.3 with 1.5, 3.4 with 2 and 3 (2.9 against the plain
 /// extinction majorant, where the near infrared paid instead).
 const MU_PAD: f64 = 2.0;
-/// How many times its share of the collision rate a Raman event is drawn
-/// with (the Raman source is a few 1e-4 of it: drawn as it is, the
+/// How many times its share of the collision rate an inelastic event is
+/// drawn with (the Raman source is a few 1e-4 of it: drawn as it is, the
 /// Raman-scattered light rests on one path in hundreds).
-const RAMAN_BOOST: f64 = 50.0;
-/// The largest probability of a Raman event at one collision.
-const RAMAN_MAX_SHARE: f64 = 0.1;
-/// Share of Raman events whose sensor band is drawn uniformly over the
-/// bands fed rather than in proportion to their Raman source.
-const RAMAN_UNIFORM_TARGET: f64 = 0.5;
+const INELASTIC_BOOST: f64 = 50.0;
+/// The largest probability of an inelastic event at one collision.
+const INELASTIC_MAX_SHARE: f64 = 0.1;
+/// Share of inelastic events whose sensor band is drawn uniformly over
+/// the bands fed rather than in proportion to their source.
+const INELASTIC_UNIFORM_TARGET: f64 = 0.5;
 /// No split while this many copies wait (a bound on memory, not needed
 /// for correctness: not splitting is always unbiased).
 const MAX_PENDING: usize = 256;
@@ -162,9 +162,13 @@ pub struct PathTracer<'a> {
     /// Paths whose guided ratio exceeds this are split ([`SPLIT_ABOVE`];
     /// infinite: never).
     split_above: f64,
-    /// Water Raman scattering, with its phase function, when the scene
+    /// Inelastic light (Raman scattering, fluorescence), when the scene
     /// has it.
-    raman: Option<(&'a RamanBands, PhaseFunction)>,
+    inelastic: Option<&'a Inelastic>,
+    /// Per band: the largest gain of all inelastic processes together
+    /// anywhere in the water (1/m), the bound inelastic events are drawn
+    /// against.
+    inelastic_bound: Vec<f64>,
 }
 
 /// Per-path buffers, one entry per band.
@@ -181,7 +185,7 @@ pub struct PathScratch {
     /// Distance flown (m) whose absorption `kappa` is not yet in `w`.
     flown: f64,
     /// The sensor band every contribution of this path goes to since it
-    /// met a Raman event (None before: each band's own). From then on
+    /// met an inelastic event (None before: each band's own). From then on
     /// `w` holds the throughputs of the excitation bands that feed it.
     target: Option<usize>,
     /// Copies made by splitting, waiting to be traced.
@@ -300,10 +304,11 @@ impl<'a> PathTracer<'a> {
                 .zip(&kappa)
                 .map(|(c, k)| (c - k).max(1e-3 * c))
                 .fold(0.0f64, f64::max);
-        // Raman events are drawn at tentative collisions: with absorption
-        // carried by weight, water that hardly scatters would meet almost
-        // none where its light lives. At least the bands' mean extinction.
-        let mu_bar = if scene.raman.is_some() {
+        // Inelastic events are drawn at tentative collisions: with
+        // absorption carried by weight, water that hardly scatters would
+        // meet almost none where its light lives. At least the bands' mean
+        // extinction.
+        let mu_bar = if scene.inelastic.is_some() {
             mu_bar.max(majorants.iter().sum::<f64>() / nb as f64)
         } else {
             mu_bar
@@ -334,10 +339,12 @@ impl<'a> PathTracer<'a> {
             sun: SunBeam::new(scene),
             uniform,
             split_above: SPLIT_ABOVE,
-            raman: scene
-                .raman
-                .as_ref()
-                .map(|r| (r, crate::optics::inelastic::raman_phase())),
+            inelastic: scene.inelastic.as_ref(),
+            inelastic_bound: scene.inelastic.as_ref().map_or_else(Vec::new, |r| {
+                (0..nb)
+                    .map(|m| r.processes.iter().map(|p| p.gain_bound[m]).sum())
+                    .collect()
+            }),
         }
     }
 
@@ -694,7 +701,7 @@ impl<'a> PathTracer<'a> {
 }
 
 /// Add light `x` of band `b` to `out`: to its own band, or to the sensor
-/// band `target` a Raman event fixed (light of excitation band `b` feeds
+/// band `target` an inelastic event fixed (light of excitation band `b` feeds
 /// it).
 #[inline]
 fn add(out: &mut [f64], target: Option<usize>, b: usize, x: f64) {

@@ -209,6 +209,9 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
     }
     if let Some(on) = ov.inelastic {
         f.water.raman = Some(on);
+        if !on {
+            f.water.fluorescence = None;
+        }
     }
     if let Some(b) = ov.bands {
         // Over the scene's own range: its start and end, or the span of its
@@ -388,7 +391,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
         .expect("the pure-water q is valid");
     let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
-    let raman = water::raman(&ctx, &f.water, &water)?;
+    let inelastic = water::inelastic(&ctx, &f.water, &water)?;
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
@@ -440,7 +443,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         water,
         particle_phase,
         water_phase,
-        raman,
+        inelastic,
         bottom,
         target_reflectance,
         target_extents: extents,

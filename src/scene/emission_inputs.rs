@@ -11,6 +11,7 @@
 //! exactly (shortest round-trip digits): two scenes that differ only in how
 //! they spell a value (a default written out, `1.0` for `1`) hash alike.
 
+use crate::optics::inelastic::Kind;
 use super::Scene;
 use crate::error::{Error, Result};
 use crate::provenance::{sha256_hex, ProvenanceBuilder};
@@ -28,8 +29,14 @@ impl Scene {
             .value("tally_depths_m", &self.tally_depths);
         // Only when on, so that the maps of scenes without it keep their
         // digests.
-        if self.raman.is_some() {
-            b.value("raman", true);
+        if let Some(inelastic) = &self.inelastic {
+            for p in &inelastic.processes {
+                match p.kind {
+                    Kind::Raman => b.value("raman", true),
+                    Kind::Chlorophyll => b.value("chl_quantum_yield", p.scale.iter().fold(0.0, |m: f64, &x| m.max(x))),
+                    Kind::Cdom => b.value("cdom_fluorescence", true),
+                };
+            }
         }
         let parts: [(&str, String); 12] = [
             ("band_grid", format!("{:?}", self.bands)),

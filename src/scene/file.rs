@@ -283,6 +283,19 @@ pub struct WaterFile {
     pub grid: Option<String>,
     /// Water Raman scattering (`optics::inelastic`); default false.
     pub raman: Option<bool>,
+    /// Chlorophyll and CDOM fluorescence (`optics::inelastic`); none
+    /// without the table.
+    pub fluorescence: Option<FluorescenceFile>,
+}
+
+/// `[water.fluorescence]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluorescenceFile {
+    /// Quantum yield of chlorophyll fluorescence; default 0.01 (0: none).
+    pub chl_quantum_yield: Option<f64>,
+    /// CDOM fluorescence after Hawes (1992); default false.
+    pub cdom: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

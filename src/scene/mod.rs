@@ -229,8 +229,9 @@ pub struct Scene {
     pub particle_phase: PhaseFunction,
     /// Phase function of pure-water scattering.
     pub water_phase: PhaseFunction,
-    /// Water Raman scattering between the bands (`[water] raman`), or None.
-    pub raman: Option<crate::optics::inelastic::RamanBands>,
+    /// Inelastic light between the bands (`[water] raman`,
+    /// `[water.fluorescence]`), or None.
+    pub inelastic: Option<crate::optics::inelastic::Inelastic>,
     pub bottom: Option<Bottom>,
     /// Lambertian reflectance per band of each target (surface id 1 + index).
     pub target_reflectance: Vec<Vec<f64>>,
@@ -306,7 +307,8 @@ pub struct Overrides {
     pub integrator: Option<IntegratorMode>,
     /// `[sensor] samples_per_pixel`.
     pub samples_per_pixel: Option<u32>,
-    /// Inelastic light on or off (`[water] raman`; `--inelastic`).
+    /// Inelastic light on or off (`--inelastic`): on turns Raman
+    /// scattering on, off turns it and fluorescence off.
     #[serde(default)]
     pub inelastic: Option<bool>,
 }

@@ -1,7 +1,7 @@
 //! Water Raman scattering in the path integrator against closed forms.
 
 use crate::common::{minimal, minimal_with, p, path_scene, render_job, tempdir};
-use littoral::optics::inelastic::{RamanBands, RAMAN_DEPOLARISATION};
+use littoral::optics::inelastic::{Inelastic, RAMAN_DEPOLARISATION};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::scene::{Overrides, Scene};
 use std::f64::consts::PI;
@@ -45,7 +45,8 @@ radiometer = [{{ depth_m = {z_r}, view = "nadir", position_m = [20.0, 20.0] }}]
     ));
     let scene = path_scene(&text, 1024);
     let r = &littoral::render::radiometers_path(&scene, 0).unwrap()[0];
-    let raman = RamanBands::new(&scene.bands);
+    let all = Inelastic::raman(&scene.bands);
+    let raman = &all.processes[0];
     let mu0 = SUN_ZENITH_DEG.to_radians().cos();
     let sin_w = (1.0 - mu0 * mu0).sqrt() / N_WATER;
     let mu_w = (1.0 - sin_w * sin_w).sqrt();
@@ -57,7 +58,7 @@ radiometer = [{{ depth_m = {z_r}, view = "nadir", position_m = [20.0, 20.0] }}]
     let expected: Vec<f64> = (0..nb)
         .map(|m| {
             let fed: f64 = (0..nb)
-                .map(|e| raman.coefficient[e] * raman.transfer(e, m))
+                .map(|e| raman.scale[e] * raman.transfer(e, m))
                 .sum();
             fed * p * f_w * column
         })
@@ -227,7 +228,7 @@ fn emission_tallies_match_the_path_integrator_with_raman() {
     );
     // 530 nm and longer are excited within the grid (from 445 nm); 490 nm
     // and shorter from below 420 nm only.
-    for (b, &p) in report.energy.raman_in.iter().enumerate() {
+    for (b, &p) in report.energy.inelastic_in.iter().enumerate() {
         let nm = scene.bands.centers_nm()[b];
         assert!(
             if nm >= 530.0 {
@@ -271,7 +272,7 @@ fn inelastic_light_switches_from_the_command_line() {
         };
         Scene::parse(text, Path::new("raman.toml"), &o)
             .unwrap()
-            .raman
+            .inelastic
             .is_some()
     };
     let raman = clear_water(0.0);
@@ -297,7 +298,7 @@ fn inelastic_light_switches_from_the_command_line() {
         let report: littoral::emit::report::EmissionReport =
             serde_json::from_slice(littoral::store::MapFile::open(&map).unwrap().metadata())
                 .unwrap();
-        let any = report.energy.raman_out.iter().any(|&x| x > 0.0);
+        let any = report.energy.inelastic_out.iter().any(|&x| x > 0.0);
         assert_eq!(any, shifted, "--inelastic {flag}");
     }
 }

@@ -244,7 +244,7 @@ impl Estimator<'_> {
         &self,
         x: Vec3,
         classes: Classes,
-        weight: &dyn Fn(&Neighbour) -> (f64, bool, f64),
+        weight: &dyn Fn(&Neighbour) -> (f64, bool, [f64; 2]),
         surface: Option<(Vec3, SurfaceId)>,
         view_up: Option<bool>,
         scratch: &mut Scratch,
@@ -262,15 +262,16 @@ impl Estimator<'_> {
             group_coarse,
             group_expanded,
             shape_groups,
-            raman,
-            raman_density,
+            inelastic,
+            phase_density,
             elastic_density,
             ..
         } = scratch;
-        // Raman weights for volume estimates of a scene with Raman.
-        let with_raman = self.raman.is_some() && surface.is_none();
-        if with_raman {
-            raman.iter_mut().for_each(BandSums::clear);
+        // Inelastic weights for volume estimates of a scene with inelastic
+        // light.
+        let with_inelastic = self.inelastic.is_some() && surface.is_none();
+        if with_inelastic {
+            inelastic.iter_mut().for_each(BandSums::clear);
         }
         let nb = self.scene.bands.len();
         debug_assert!(out.len() == nb || out.len() == CHANNELS * nb);
@@ -330,23 +331,24 @@ impl Estimator<'_> {
             if !(in_local || in_big) {
                 continue;
             }
-            let (w, toward, w_raman) = weight(n);
+            let (w, toward, w_phases) = weight(n);
             // Counted at the expanded scale: the heavy layer's photons, or
             // in one search those travelling toward the viewer.
             let heavy = if by_layer { !is_local } else { split && toward };
             let (band, group) = (n.photon.band, n.photon.group);
-            if with_raman {
-                // [Raman local, elastic local, Raman expanded, elastic expanded].
+            if with_inelastic {
+                // [Raman, isotropic, elastic] local, then expanded.
                 let at = if in_local && !heavy {
                     Some(0)
                 } else if in_big && heavy {
-                    Some(2)
+                    Some(INELASTIC_SLOTS)
                 } else {
                     None
                 };
                 if let Some(k) = at {
-                    raman[k].add(band, w_raman);
-                    raman[k + 1].add(band, w);
+                    inelastic[k].add(band, w_phases[0]);
+                    inelastic[k + 1].add(band, w_phases[1]);
+                    inelastic[k + 2].add(band, w);
                 }
             }
             if in_local && !heavy {
@@ -395,13 +397,15 @@ impl Estimator<'_> {
         } else {
             0.0
         };
-        if with_raman {
+        if with_inelastic {
             // Each scale's sums over its own volume, as the naive estimate
             // counts them.
             let v_big = if v_big > 0.0 { v_big } else { f64::INFINITY };
-            let [rl, el, rb, eb] = raman.each_ref().map(BandSums::sums);
+            let [rl, il, el, rb, ib, eb] = inelastic.each_ref().map(BandSums::sums);
+            let [raman_density, iso_density] = phase_density;
             for e in 0..nb {
                 raman_density[e] = rl[e] / v_local + rb[e] / v_big;
+                iso_density[e] = il[e] / v_local + ib[e] / v_big;
                 elastic_density[e] = el[e] / v_local + eb[e] / v_big;
             }
         }

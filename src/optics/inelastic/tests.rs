@@ -75,8 +75,9 @@ fn the_shift_density_is_normalised_and_sampled_as_it_reads() {
 #[test]
 fn the_band_transfer_matches_drawn_photons() {
     let bands = BandGrid::even(400.0, 700.0, 31).unwrap();
-    let r = RamanBands::new(&bands);
-    let cells = &r.cells;
+    let all = Inelastic::raman(&bands);
+    let r = &all.processes[0];
+    let cells = &all.cells;
     let nb = bands.len();
     let mut rng = Pcg32::new(11, 0);
     let n = 100_000;
@@ -121,7 +122,8 @@ fn the_band_transfer_matches_drawn_photons() {
 #[test]
 fn bands_fed_from_below_the_grid_say_so() {
     let bands = BandGrid::even(400.0, 700.0, 31).unwrap();
-    let r = RamanBands::new(&bands);
+    let all = Inelastic::raman(&bands);
+    let r = &all.processes[0];
     // 420 nm is excited near 366 nm, 600 nm near 494 nm.
     assert!(r.missing[2] > 0.999, "{}", r.missing[2]);
     assert!(r.missing[20] < 1e-9, "{}", r.missing[20]);
@@ -131,19 +133,20 @@ fn bands_fed_from_below_the_grid_say_so() {
     // the band's cell (dλ/dλ' = (λ/λ')^2).
     let ex = 1e7 / (1e7 / 600.0 + 3383.75);
     let expected = raman_coefficient(ex) * (ex / 600.0f64).powi(3);
-    let g = r.gain[20];
+    let g = r.gain_bound[20];
     assert!((g / expected - 1.0).abs() < 0.03, "{g} against {expected}");
     // The run says which bands lack Raman light.
-    let w = r.missing_warning(bands.centers_nm()).unwrap();
+    let w = all.missing_warnings(bands.centers_nm()).remove(0);
     assert!(
         w.starts_with("water.raman: ")
             && w.contains("from 400.0 to ")
+            && w.contains("of their Raman light")
             && w.contains("below the grid's first band, at 395.0 nm"),
         "{w}"
     );
     // A grid that starts low enough lacks nothing it shows.
     let wide = BandGrid::even(350.0, 700.0, 36).unwrap();
-    let r = RamanBands::new(&wide);
+    let r = &Inelastic::raman(&wide).processes[0];
     assert!(r.missing[15] < 0.01, "{}", r.missing[15]);
 }
 
@@ -154,4 +157,94 @@ fn overlapping_bands_share_their_overlap() {
     assert_eq!(c[0], (495.0, 502.5));
     assert_eq!(c[1], (502.5, 510.0));
     assert_eq!(c[2], (528.0, 532.0));
+}
+
+/// Every process's transfer against drawing its events: λ' uniform in
+/// the excitation band's cell, the emission drawn by `Kind::sample`, each
+/// landing photon weighted by its count times λ'/λ times Δ_e / Δ_m over
+/// the band's nominal yield. Bands: 64 from 360 to 800 nm, so that
+/// chlorophyll (370-690 nm) and CDOM (310-550 nm) are excited inside and
+/// at the ends of their ranges.
+#[test]
+fn every_process_transfers_what_its_drawn_events_carry() {
+    let bands = BandGrid::even(360.0, 800.0, 64).unwrap();
+    let all = Inelastic::new(
+        &bands,
+        &[Kind::Raman, Kind::Chlorophyll, Kind::Cdom],
+        CHL_QUANTUM_YIELD,
+    );
+    let cells = &all.cells;
+    let nb = bands.len();
+    let mut rng = Pcg32::new(5, 0);
+    let n = 100_000;
+    for p in &all.processes {
+        for e in [1usize, 13, 27, 45] {
+            let (lo, hi) = cells[e];
+            let nominal = p.nominal[e];
+            let mut sum = vec![0.0; nb];
+            let mut sum2 = vec![0.0; nb];
+            for _ in 0..n {
+                let nm = lo + (hi - lo) * rng.uniform_f64();
+                let Some((em, count)) = p.kind.sample(nm, &mut rng) else {
+                    continue;
+                };
+                if let Some(m) = cells.iter().position(|&(a, b)| em >= a && em < b) {
+                    let x = count * nm / em * (hi - lo) / (cells[m].1 - cells[m].0) / nominal;
+                    sum[m] += x;
+                    sum2[m] += x * x;
+                }
+            }
+            for m in 0..nb {
+                let mean = sum[m] / n as f64;
+                // Rare landings (a far tail) may draw no photon at all: the
+                // standard error is at least that of a Poisson count of
+                // photons of weight about 1.
+                let t = p.transfer(e, m);
+                let se = ((sum2[m] / n as f64 - mean * mean).max(0.0) / n as f64)
+                    .sqrt()
+                    .max((t / n as f64).sqrt());
+                assert!(
+                    (t - mean).abs() <= 4.0 * se + 3e-3 * t,
+                    "{:?} e {e} m {m}: closed form {t}, drawn {mean} +- {se}",
+                    p.kind
+                );
+            }
+        }
+    }
+    let chl = all.process(Kind::Chlorophyll).unwrap();
+    // The first cell excited only above 370 nm: its share of the cell.
+    let (lo, hi) = cells[1];
+    assert!((chl.nominal[1] - (hi - 370.0) / (hi - lo)).abs() < 1e-12);
+    // Hawes' mean quantum yield over a cell: 1-2 %.
+    let cdom = all.process(Kind::Cdom).unwrap();
+    assert!(cdom.nominal[13] > 0.01 && cdom.nominal[13] < 0.02, "{}", cdom.nominal[13]);
+    // Not excited above 690 nm; at 450 nm nearly all of it lands in the grid.
+    assert!(chl.scale[50] == 0.0 && chl.scale[13] == CHL_QUANTUM_YIELD);
+    // (Only what falls in the f32 rounding gaps between cells is lost.)
+    assert!(chl.lost[13] < 1e-5, "{}", chl.lost[13]);
+    // The energy of a 450 nm photon's fluorescence: 450 / 685 of it, to
+    // within the Gaussian's spread (E[1/λ] = 1/685 (1 + (10.6/685)^2)).
+    let (lo, hi) = cells[13];
+    let mid = 0.5 * (lo + hi);
+    let energy: f64 = (0..nb).map(|m| chl.transfer(13, m) * (cells[m].1 - cells[m].0)).sum();
+    let expected = mid / 685.0 * (1.0 + (10.6f64 / 685.0).powi(2)) * (hi - lo);
+    assert!((energy / expected - 1.0).abs() < 1e-3, "{energy} against {expected}");
+}
+
+/// Hawes' fulvic acid: its quantum yield at 450 nm is 1.93 % and its
+/// emission (per nm) peaks near 1 / (A1/λ' + B1) = 540 nm; it is zero
+/// outside 310-550 nm.
+#[test]
+fn cdom_fluorescence_follows_hawes() {
+    let y = Kind::Cdom.photon_yield(450.0);
+    assert!((y - 0.0193).abs() < 2e-4, "{y}");
+    let peak = (400..700)
+        .map(|nm| (nm, Kind::Cdom.into_interval(450.0, nm as f64, nm as f64 + 1.0).0))
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
+        .0;
+    assert!((535..=545).contains(&peak), "{peak}");
+    assert_eq!(Kind::Cdom.photon_yield(300.0), 0.0);
+    assert_eq!(Kind::Cdom.photon_yield(551.0), 0.0);
+    // Emission at or below the excitation wavelength is not made.
+    assert_eq!(Kind::Cdom.into_interval(450.0, 400.0, 450.0), (0.0, 0.0));
 }

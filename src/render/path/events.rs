@@ -5,6 +5,7 @@
 //! roulette and the next direction).
 
 use super::*;
+use crate::optics::inelastic::{Absorbers, Kind};
 
 impl PathTracer<'_> {
     /// A path meeting the floor or a target (`h`): the sun directly, then
@@ -140,24 +141,25 @@ impl PathTracer<'_> {
             s_sum += x * iop.b();
             n_sum += x * null(iop, k);
         }
-        // Water Raman scattering: the Raman source of the bands the path
+        // Inelastic light: the inelastic source of the bands the path
         // carries is a third kind of event, drawn with a probability
-        // `RAMAN_BOOST` times its share of the collision rate (at most
-        // `RAMAN_MAX_SHARE`); the other two keep their odds among the rest.
-        let p_r = match &self.raman {
-            Some((r, _)) => {
-                let r_sum: f64 = w.iter().zip(&r.gain).map(|(x, g)| x * g).sum();
-                if r_sum > 0.0 {
-                    (RAMAN_BOOST * r_sum / (s_sum + n_sum + r_sum)).min(RAMAN_MAX_SHARE)
-                } else {
-                    0.0
-                }
+        // `INELASTIC_BOOST` times its share of the collision rate (at most
+        // `INELASTIC_MAX_SHARE`), its rate bounded by the largest anywhere
+        // (the event weighs the source where it is); the other two keep
+        // their odds among the rest.
+        let p_r = if self.inelastic.is_some() {
+            let r_sum: f64 = w.iter().zip(&self.inelastic_bound).map(|(x, g)| x * g).sum();
+            if r_sum > 0.0 {
+                (INELASTIC_BOOST * r_sum / (s_sum + n_sum + r_sum)).min(INELASTIC_MAX_SHARE)
+            } else {
+                0.0
             }
-            None => 0.0,
+        } else {
+            0.0
         };
         if p_r > 0.0 && rng.uniform_f64() < p_r {
             let k = 1.0 / (mu_bar * p_r);
-            return self.raman_event(pos, dir, k, events, rng, w, target, tmp, tr, flown, out);
+            return self.inelastic_event(pos, dir, k, events, rng, w, target, tmp, tr, flown, out);
         }
         if s_sum + n_sum <= 0.0 {
             return Collided::End;
@@ -273,23 +275,24 @@ impl PathTracer<'_> {
 }
 
 impl PathTracer<'_> {
-    /// A Raman event at `pos` of a path travelling along `dir` whose band
-    /// throughputs are `w`, `k` = 1 / (rate x the event's probability):
-    /// the throughputs become those of the excitation bands that feed the
-    /// bands the path carries, the sun is estimated through the Raman
-    /// phase function by light sampling alone (the continuation's own
-    /// direction never counts the sun, so no MIS weight is needed), and
-    /// the path goes on in a direction drawn from that phase function.
+    /// An inelastic event at `pos` of a path travelling along `dir` whose
+    /// band throughputs are `w`, `k` = 1 / (rate x the event's
+    /// probability): one process is drawn in proportion to its source for
+    /// this path here, the throughputs become those of the excitation
+    /// bands that feed the bands the path carries, the sun is estimated
+    /// through the process's phase function by light sampling alone (the
+    /// continuation's own direction never counts the sun, so no MIS weight
+    /// is needed), and the path goes on in a direction drawn from that
+    /// phase function.
     ///
-    /// A path that has met no Raman event carries every sensor band; its
-    /// first one draws the band it will feed from then on (`target`: half
-    /// the draws in proportion to each band's throughput times its Raman
+    /// A path that has met no inelastic event carries every sensor band;
+    /// its first one draws the band it will feed from then on (`target`:
+    /// half the draws in proportion to each band's throughput times its
     /// gain, half uniform over the bands fed) and divides by that choice's
-    /// probability, since the excitation
-    /// throughputs of different sensor bands cannot share one vector.
-    /// Later events feed the same band.
+    /// probability, since the excitation throughputs of different sensor
+    /// bands cannot share one vector. Later events feed the same band.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn raman_event(
+    pub(super) fn inelastic_event(
         &self,
         pos: Vec3,
         dir: Vec3,
@@ -303,20 +306,63 @@ impl PathTracer<'_> {
         flown: &mut f64,
         out: &mut [f64],
     ) -> Collided {
-        let Some((raman, phase)) = &self.raman else {
+        let Some(inelastic) = self.inelastic else {
             return Collided::End;
         };
         let scene = self.scene;
         let n_w = scene.surface.n_water;
         absorb(w, &self.kappa, flown);
         let nb = w.len();
+        let mut parts = vec![Absorbers::default(); nb];
+        if inelastic.fluoresces() {
+            scene.water.absorbers(pos, &mut parts);
+        }
+        // Each process's gain here per band (Raman's is the same
+        // everywhere), and its source for this path.
+        let gains: Vec<Vec<f64>> = inelastic
+            .processes
+            .iter()
+            .map(|p| match p.kind {
+                Kind::Raman => p.gain_bound.clone(),
+                _ => p
+                    .rows
+                    .iter()
+                    .map(|row| row.iter().map(|&(e, c)| c * p.strength(&parts[e])).sum())
+                    .collect(),
+            })
+            .collect();
+        let rates: Vec<f64> = gains
+            .iter()
+            .map(|g| w.iter().zip(g).map(|(x, g)| x * g).sum())
+            .collect();
+        let all: f64 = rates.iter().sum();
+        if !(all > 0.0 && all.is_finite()) {
+            return Collided::End;
+        }
+        let chosen = if rates.len() == 1 {
+            0
+        } else {
+            let mut u = rng.uniform_f64() * all;
+            rates
+                .iter()
+                .position(|&r| {
+                    u -= r;
+                    u < 0.0
+                })
+                .unwrap_or_else(|| rates.iter().rposition(|&r| r > 0.0).unwrap_or(0))
+        };
+        let (process, gain) = (&inelastic.processes[chosen], &gains[chosen]);
+        // (One process: drawn with certainty.)
+        let k = if rates.len() == 1 {
+            k
+        } else {
+            k * all / rates[chosen]
+        };
+        let coefficient = |e: usize| process.scale[e] * process.strength(&parts[e]);
         let mut excitation = vec![0.0; nb];
         match *target {
             None => {
-                let total: f64 = w.iter().zip(&raman.gain).map(|(x, g)| x * g).sum();
-                if !(total > 0.0 && total.is_finite()) {
-                    return Collided::End;
-                }
+                let total = rates[chosen];
                 // The sensor band: half the draws in proportion to w_m
                 // gain_m, half uniform over the bands fed (a defensive
                 // mixture: a band whose share is small but whose own light
@@ -324,16 +370,16 @@ impl PathTracer<'_> {
                 // rare draws of large weight).
                 let fed = w
                     .iter()
-                    .zip(&raman.gain)
+                    .zip(gain)
                     .filter(|&(x, g)| x * g > 0.0)
                     .count();
                 if fed == 0 {
                     return Collided::End;
                 }
-                let uniform = rng.uniform_f64() < RAMAN_UNIFORM_TARGET;
+                let uniform = rng.uniform_f64() < INELASTIC_UNIFORM_TARGET;
                 let mut u = rng.uniform_f64() * if uniform { fed as f64 } else { total };
                 let mut m = None;
-                for (b, (x, g)) in w.iter().zip(&raman.gain).enumerate() {
+                for (b, (x, g)) in w.iter().zip(gain).enumerate() {
                     let p = x * g;
                     if p > 0.0 {
                         m = Some(b);
@@ -347,28 +393,32 @@ impl PathTracer<'_> {
                 let Some(m) = m else {
                     return Collided::End;
                 };
-                let q = (1.0 - RAMAN_UNIFORM_TARGET) * w[m] * raman.gain[m] / total
-                    + RAMAN_UNIFORM_TARGET / fed as f64;
-                // w_m b_R(e) T(e, m) k / q_m.
+                let q = (1.0 - INELASTIC_UNIFORM_TARGET) * w[m] * gain[m] / total
+                    + INELASTIC_UNIFORM_TARGET / fed as f64;
+                // w_m c(e) T(e, m) k / q_m.
                 let scale = k * w[m] / q;
                 for (e, x) in excitation.iter_mut().enumerate() {
-                    *x = raman.coefficient[e] * raman.transfer(e, m) * scale;
+                    *x = coefficient(e) * process.transfer(e, m) * scale;
                 }
                 *target = Some(m);
             }
             Some(_) => {
                 for (e, x) in excitation.iter_mut().enumerate() {
-                    let fed: f64 = w
-                        .iter()
-                        .enumerate()
-                        .map(|(b, wb)| wb * raman.transfer(e, b))
-                        .sum();
-                    *x = raman.coefficient[e] * fed * k;
+                    let c = coefficient(e);
+                    if c > 0.0 {
+                        let fed: f64 = w
+                            .iter()
+                            .enumerate()
+                            .map(|(b, wb)| wb * process.transfer(e, b))
+                            .sum();
+                        *x = c * fed * k;
+                    }
                 }
             }
         }
         w.copy_from_slice(&excitation);
         let target = *target;
+        let phase = &process.phase;
         for sun in self.sun.sample(rng).into_iter().flatten() {
             let s_w = sun.dir;
             self.transmittance(pos, -s_w, rng, tmp, tr);

@@ -3,6 +3,7 @@
 //! function.
 
 use super::*;
+use crate::optics::inelastic::{Inelastic, Kind, CHL_QUANTUM_YIELD};
 
 fn phase(ctx: &Ctx, p: Option<&PhaseFile>) -> Result<PhaseFunction> {
     let Some(p) = p else {
@@ -386,29 +387,63 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
     })
 }
 
-/// `[water] raman`: the Raman transfer on the band grid, or None. Its
-/// coefficient is part of the water's absorption (`optics::inelastic`), so
-/// water absorbing less than b_R somewhere in a band is refused.
-pub(super) fn raman(
+/// `[water] raman` and `[water.fluorescence]`: the inelastic processes on
+/// the band grid, or None. Each is part of the water's absorption
+/// (`optics::inelastic`), so water absorbing less than b_R somewhere in a
+/// band is refused, and fluorescence needs water given by its
+/// constituents (it draws on their absorption).
+pub(super) fn inelastic(
     ctx: &Ctx,
     w: &WaterFile,
     water: &WaterModel,
-) -> Result<Option<crate::optics::inelastic::RamanBands>> {
-    if !w.raman.unwrap_or(false) {
-        return Ok(None);
+) -> Result<Option<Inelastic>> {
+    let mut kinds = Vec::new();
+    if w.raman.unwrap_or(false) {
+        kinds.push(Kind::Raman);
     }
-    let r = crate::optics::inelastic::RamanBands::new(&ctx.bands);
-    for (b, &b_r) in r.coefficient.iter().enumerate() {
-        let a = water.absorption_minorant(b);
-        if a < b_r {
+    let mut chl_yield = CHL_QUANTUM_YIELD;
+    if let Some(f) = &w.fluorescence {
+        if !matches!(water, WaterModel::Constituents { .. }) {
             return Err(ctx.err(
-                &[K("water"), K("raman")],
-                format!(
-                    "the water absorbs {a:.3e} 1/m at {} nm somewhere, less than the Raman scattering coefficient {b_r:.3e} 1/m that is part of its absorption",
-                    ctx.bands.centers_nm()[b]
-                ),
+                &[K("water"), K("fluorescence")],
+                "fluorescence draws on the light phytoplankton and CDOM absorb: it needs water given by its constituents (chl, cdom_440), not by iop or iop_file",
             ));
         }
+        if let Some(y) = f.chl_quantum_yield {
+            if !(0.0..=1.0).contains(&y) {
+                return Err(ctx.err(
+                    &[K("water"), K("fluorescence"), K("chl_quantum_yield")],
+                    format!("{y}: a quantum yield lies from 0 to 1"),
+                ));
+            }
+            chl_yield = y;
+        }
+        if chl_yield > 0.0 {
+            kinds.push(Kind::Chlorophyll);
+        }
+        if f.cdom.unwrap_or(false) {
+            kinds.push(Kind::Cdom);
+        }
     }
+    if kinds.is_empty() {
+        return Ok(None);
+    }
+    let mut r = Inelastic::new(&ctx.bands, &kinds, chl_yield);
+    if let Some(raman) = r.process(Kind::Raman) {
+        for (b, &b_r) in raman.scale.iter().enumerate() {
+            let a = water.absorption_minorant(b);
+            if a < b_r {
+                return Err(ctx.err(
+                    &[K("water"), K("raman")],
+                    format!(
+                        "the water absorbs {a:.3e} 1/m at {} nm somewhere, less than the Raman scattering coefficient {b_r:.3e} 1/m that is part of its absorption",
+                        ctx.bands.centers_nm()[b]
+                    ),
+                ));
+            }
+        }
+    }
+    let max: Vec<_> = (0..ctx.bands.len()).map(|b| water.absorbers_max(b)).collect();
+    r.bound_gains(&max);
     Ok(Some(r))
 }
