@@ -97,11 +97,23 @@ pub struct Energy {
     /// inelastic light. Power emitted is less than power taken by λ'/λ
     /// (and the quantum yield): the rest goes into the water's vibration,
     /// or is absorbed. (Older reports, Raman alone, named them raman_*.)
-    #[serde(default, alias = "raman_out", deserialize_with = "crate::nan_json::f64s")]
+    #[serde(
+        default,
+        alias = "raman_out",
+        deserialize_with = "crate::nan_json::f64s"
+    )]
     pub inelastic_out: Vec<f64>,
-    #[serde(default, alias = "raman_lost", deserialize_with = "crate::nan_json::f64s")]
+    #[serde(
+        default,
+        alias = "raman_lost",
+        deserialize_with = "crate::nan_json::f64s"
+    )]
     pub inelastic_lost: Vec<f64>,
-    #[serde(default, alias = "raman_in", deserialize_with = "crate::nan_json::f64s")]
+    #[serde(
+        default,
+        alias = "raman_in",
+        deserialize_with = "crate::nan_json::f64s"
+    )]
     pub inelastic_in: Vec<f64>,
     /// Power that left the water up through the surface (the
     /// water-leaving light, without the surface's reflection), and the

@@ -349,7 +349,10 @@ impl<'a> Estimator<'a> {
             let mut w = mixture(phases, fw, cos) * power;
             // Through the Raman phase function and the isotropic one.
             let mut phases = if inelastic {
-                [raman_phase.eval(cos) * power, power / (4.0 * std::f64::consts::PI)]
+                [
+                    raman_phase.eval(cos) * power,
+                    power / (4.0 * std::f64::consts::PI),
+                ]
             } else {
                 [0.0; 2]
             };
@@ -488,7 +491,11 @@ impl<'a> Estimator<'a> {
                 return (0.0, false, [0.0; 2]);
             }
             let r = scene.reflectance(surface, x, n.photon.band as usize);
-            (r / std::f64::consts::PI * n.photon.power as f64, false, [0.0; 2])
+            (
+                r / std::f64::consts::PI * n.photon.power as f64,
+                false,
+                [0.0; 2],
+            )
         };
         self.estimate(
             x,

@@ -186,7 +186,12 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         ("absorbed by floor and targets", &en.absorbed_surfaces),
         ("lost at the edges", &en.lost_edges),
     ];
-    if en.inelastic_in.iter().chain(&shifted_out).any(|&p| p != 0.0) {
+    if en
+        .inelastic_in
+        .iter()
+        .chain(&shifted_out)
+        .any(|&p| p != 0.0)
+    {
         parts.push(("inelastic out (Raman, fluorescence)", &shifted_out));
         parts.push(("inelastic in", &en.inelastic_in));
     }

@@ -163,8 +163,7 @@ impl Process {
             .map(|&c| {
                 let (share, points) = part(c);
                 if share > 0.0 {
-                    share * points.map(|nm| kind.photon_yield(nm)).sum::<f64>()
-                        / CELL_POINTS as f64
+                    share * points.map(|nm| kind.photon_yield(nm)).sum::<f64>() / CELL_POINTS as f64
                 } else {
                     0.0
                 }
@@ -268,7 +267,9 @@ impl Process {
 
 /// For a flat excitation spectrum and strength: the share of each
 /// band's source that `kind` excites below the first cell, by the
-/// excitation rule of [`MISSING_STEP_NM`].
+/// excitation rule of [`MISSING_STEP_NM`]; 0 for bands whose whole
+/// source is below 1 % of the largest band's (the far tails of an
+/// emission spectrum, where a share says nothing).
 fn missing_shares(kind: Kind, cells: &[(f64, f64)]) -> Vec<f64> {
     let first = cells[0].0;
     let last = cells[cells.len() - 1].1;
@@ -279,27 +280,34 @@ fn missing_shares(kind: Kind, cells: &[(f64, f64)]) -> Vec<f64> {
         Kind::Raman => raman_coefficient(nm),
         _ => 1.0,
     };
-    cells
+    let parts: Vec<(f64, f64)> = cells
         .iter()
         .map(|&(lo, hi)| {
             let (mut below, mut within) = (0.0, 0.0);
             let mut nm = start + 0.5 * MISSING_STEP_NM;
             while nm < hi.min(last) {
                 let (reach_lo, reach_hi) = kind.reach(nm);
-                if hi <= reach_lo || lo >= reach_hi {
-                    nm += MISSING_STEP_NM;
-                    continue;
-                }
-                let energy = kind.into_interval(nm, lo, hi).1 * weight(nm);
-                if nm < first {
-                    below += energy;
-                } else {
-                    within += energy;
+                if hi > reach_lo && lo < reach_hi {
+                    // Per unit width of the band, as its radiance reads.
+                    let energy = kind.into_interval(nm, lo, hi).1 * weight(nm) / (hi - lo);
+                    if nm < first {
+                        below += energy;
+                    } else {
+                        within += energy;
+                    }
                 }
                 nm += MISSING_STEP_NM;
             }
-            if below + within > 0.0 {
-                below / (below + within)
+            (below, within)
+        })
+        .collect();
+    let largest = parts.iter().fold(0.0f64, |m, (b, w)| m.max(b + w));
+    parts
+        .iter()
+        .map(|&(below, within)| {
+            let total = below + within;
+            if total > 0.01 * largest {
+                below / total
             } else {
                 0.0
             }

@@ -11,9 +11,9 @@
 //! exactly (shortest round-trip digits): two scenes that differ only in how
 //! they spell a value (a default written out, `1.0` for `1`) hash alike.
 
-use crate::optics::inelastic::Kind;
 use super::Scene;
 use crate::error::{Error, Result};
+use crate::optics::inelastic::Kind;
 use crate::provenance::{sha256_hex, ProvenanceBuilder};
 
 impl Scene {
@@ -33,7 +33,10 @@ impl Scene {
             for p in &inelastic.processes {
                 match p.kind {
                     Kind::Raman => b.value("raman", true),
-                    Kind::Chlorophyll => b.value("chl_quantum_yield", p.scale.iter().fold(0.0, |m: f64, &x| m.max(x))),
+                    Kind::Chlorophyll => b.value(
+                        "chl_quantum_yield",
+                        p.scale.iter().fold(0.0, |m: f64, &x| m.max(x)),
+                    ),
                     Kind::Cdom => b.value("cdom_fluorescence", true),
                 };
             }

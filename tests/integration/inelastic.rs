@@ -57,9 +57,7 @@ radiometer = [{{ depth_m = {z_r}, view = "nadir", position_m = [20.0, 20.0] }}]
     let nb = scene.bands.len();
     let expected: Vec<f64> = (0..nb)
         .map(|m| {
-            let fed: f64 = (0..nb)
-                .map(|e| raman.scale[e] * raman.transfer(e, m))
-                .sum();
+            let fed: f64 = (0..nb).map(|e| raman.scale[e] * raman.transfer(e, m)).sum();
             fed * p * f_w * column
         })
         .collect();

@@ -10,6 +10,7 @@ mod convergence;
 mod corruption;
 mod cube_tool;
 mod determinism;
+mod fluorescence;
 mod georef;
 mod inelastic;
 mod job;

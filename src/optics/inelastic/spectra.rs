@@ -107,12 +107,13 @@ impl Kind {
     pub fn reach(self, nm: f64) -> (f64, f64) {
         let (lo, hi) = match self {
             Kind::Raman => {
-                let (lo, hi) = WALRAFEN
-                    .iter()
-                    .fold((f64::MAX, f64::MIN), |(lo, hi), &(_, mu, f)| {
-                        let s = 8.0 * sigma_of(f);
-                        (lo.min(mu - s), hi.max(mu + s))
-                    });
+                let (lo, hi) =
+                    WALRAFEN
+                        .iter()
+                        .fold((f64::MAX, f64::MIN), |(lo, hi), &(_, mu, f)| {
+                            let s = 8.0 * sigma_of(f);
+                            (lo.min(mu - s), hi.max(mu + s))
+                        });
                 (emission_nm(nm, lo), emission_nm(nm, hi))
             }
             Kind::Chlorophyll => (
@@ -141,7 +142,9 @@ impl Kind {
                 // ∫ η dλ = A0 ∫ G(k) / k^2 dk over the Gaussian G in
                 // wavenumber k = 1/λ; 6 sd cover it.
                 if a0 > 0.0 {
-                    a0 * gauss_legendre(mu - 6.0 * s, mu + 6.0 * s, |k| gaussian(k, mu, s) / (k * k))
+                    a0 * gauss_legendre(mu - 6.0 * s, mu + 6.0 * s, |k| {
+                        gaussian(k, mu, s) / (k * k)
+                    })
                 } else {
                     0.0
                 }
@@ -228,7 +231,10 @@ impl Kind {
                 if k <= 0.0 {
                     return None;
                 }
-                (1.0 / k, a0 * s * (2.0 * std::f64::consts::PI).sqrt() / (k * k))
+                (
+                    1.0 / k,
+                    a0 * s * (2.0 * std::f64::consts::PI).sqrt() / (k * k),
+                )
             }
         };
         (em > nm && em.is_finite()).then_some((em, count))

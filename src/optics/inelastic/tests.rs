@@ -217,7 +217,11 @@ fn every_process_transfers_what_its_drawn_events_carry() {
     assert!((chl.nominal[1] - (hi - 370.0) / (hi - lo)).abs() < 1e-12);
     // Hawes' mean quantum yield over a cell: 1-2 %.
     let cdom = all.process(Kind::Cdom).unwrap();
-    assert!(cdom.nominal[13] > 0.01 && cdom.nominal[13] < 0.02, "{}", cdom.nominal[13]);
+    assert!(
+        cdom.nominal[13] > 0.01 && cdom.nominal[13] < 0.02,
+        "{}",
+        cdom.nominal[13]
+    );
     // Not excited above 690 nm; at 450 nm nearly all of it lands in the grid.
     assert!(chl.scale[50] == 0.0 && chl.scale[13] == CHL_QUANTUM_YIELD);
     // (Only what falls in the f32 rounding gaps between cells is lost.)
@@ -226,9 +230,14 @@ fn every_process_transfers_what_its_drawn_events_carry() {
     // within the Gaussian's spread (E[1/λ] = 1/685 (1 + (10.6/685)^2)).
     let (lo, hi) = cells[13];
     let mid = 0.5 * (lo + hi);
-    let energy: f64 = (0..nb).map(|m| chl.transfer(13, m) * (cells[m].1 - cells[m].0)).sum();
+    let energy: f64 = (0..nb)
+        .map(|m| chl.transfer(13, m) * (cells[m].1 - cells[m].0))
+        .sum();
     let expected = mid / 685.0 * (1.0 + (10.6f64 / 685.0).powi(2)) * (hi - lo);
-    assert!((energy / expected - 1.0).abs() < 1e-3, "{energy} against {expected}");
+    assert!(
+        (energy / expected - 1.0).abs() < 1e-3,
+        "{energy} against {expected}"
+    );
 }
 
 /// Hawes' fulvic acid: its quantum yield at 450 nm is 1.93 % and its
@@ -239,7 +248,14 @@ fn cdom_fluorescence_follows_hawes() {
     let y = Kind::Cdom.photon_yield(450.0);
     assert!((y - 0.0193).abs() < 2e-4, "{y}");
     let peak = (400..700)
-        .map(|nm| (nm, Kind::Cdom.into_interval(450.0, nm as f64, nm as f64 + 1.0).0))
+        .map(|nm| {
+            (
+                nm,
+                Kind::Cdom
+                    .into_interval(450.0, nm as f64, nm as f64 + 1.0)
+                    .0,
+            )
+        })
         .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
         .0;
     assert!((535..=545).contains(&peak), "{peak}");

@@ -148,7 +148,11 @@ impl PathTracer<'_> {
         // (the event weighs the source where it is); the other two keep
         // their odds among the rest.
         let p_r = if self.inelastic.is_some() {
-            let r_sum: f64 = w.iter().zip(&self.inelastic_bound).map(|(x, g)| x * g).sum();
+            let r_sum: f64 = w
+                .iter()
+                .zip(&self.inelastic_bound)
+                .map(|(x, g)| x * g)
+                .sum();
             if r_sum > 0.0 {
                 (INELASTIC_BOOST * r_sum / (s_sum + n_sum + r_sum)).min(INELASTIC_MAX_SHARE)
             } else {
@@ -368,11 +372,7 @@ impl PathTracer<'_> {
                 // mixture: a band whose share is small but whose own light
                 // is faint, the near infrared, would otherwise rest on
                 // rare draws of large weight).
-                let fed = w
-                    .iter()
-                    .zip(gain)
-                    .filter(|&(x, g)| x * g > 0.0)
-                    .count();
+                let fed = w.iter().zip(gain).filter(|&(x, g)| x * g > 0.0).count();
                 if fed == 0 {
                     return Collided::End;
                 }

@@ -392,11 +392,7 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
 /// (`optics::inelastic`), so water absorbing less than b_R somewhere in a
 /// band is refused, and fluorescence needs water given by its
 /// constituents (it draws on their absorption).
-pub(super) fn inelastic(
-    ctx: &Ctx,
-    w: &WaterFile,
-    water: &WaterModel,
-) -> Result<Option<Inelastic>> {
+pub(super) fn inelastic(ctx: &Ctx, w: &WaterFile, water: &WaterModel) -> Result<Option<Inelastic>> {
     let mut kinds = Vec::new();
     if w.raman.unwrap_or(false) {
         kinds.push(Kind::Raman);
@@ -443,7 +439,9 @@ pub(super) fn inelastic(
             }
         }
     }
-    let max: Vec<_> = (0..ctx.bands.len()).map(|b| water.absorbers_max(b)).collect();
+    let max: Vec<_> = (0..ctx.bands.len())
+        .map(|b| water.absorbers_max(b))
+        .collect();
     r.bound_gains(&max);
     Ok(Some(r))
 }
