@@ -83,6 +83,12 @@ pub struct Scratch {
     parts: Vec<Absorbers>,
 }
 
+/// A found photon's weight toward the viewer (power times the phase
+/// function), whether it travels toward the viewer's hemisphere, and its
+/// weights through the Raman and the isotropic phase functions (inelastic
+/// light; zero without it).
+pub(super) type PhotonWeight<'w> = dyn Fn(&Neighbour) -> (f64, bool, [f64; 2]) + 'w;
+
 /// Slots of `Scratch::inelastic` at one scale: Raman phase, isotropic,
 /// elastic; the expanded scale's follow at `+ INELASTIC_SLOTS`.
 pub(super) const INELASTIC_SLOTS: usize = 3;

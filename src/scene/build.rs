@@ -208,10 +208,17 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
         f.seed = s;
     }
     if let Some(on) = ov.inelastic {
+        // On: every process the water supports (fluorescence needs
+        // constituents), at the scene's quantum yield where it gives one.
         f.water.raman = Some(on);
-        if !on {
-            f.water.fluorescence = None;
-        }
+        let constituents = f.water.iop.is_none() && f.water.iop_file.is_none();
+        f.water.fluorescence = (on && constituents).then(|| {
+            let given = f.water.fluorescence.take().unwrap_or_default();
+            crate::scene::file::FluorescenceFile {
+                chl_quantum_yield: given.chl_quantum_yield,
+                cdom: Some(true),
+            }
+        });
     }
     if let Some(b) = ov.bands {
         // Over the scene's own range: its start and end, or the span of its

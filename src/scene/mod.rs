@@ -307,8 +307,10 @@ pub struct Overrides {
     pub integrator: Option<IntegratorMode>,
     /// `[sensor] samples_per_pixel`.
     pub samples_per_pixel: Option<u32>,
-    /// Inelastic light on or off (`--inelastic`): on turns Raman
-    /// scattering on, off turns it and fluorescence off.
+    /// Inelastic light on or off (`--inelastic`): on turns on Raman
+    /// scattering and, in water given by its constituents, chlorophyll
+    /// (at the scene's quantum yield, or 0.01) and CDOM fluorescence; off
+    /// turns them all off.
     #[serde(default)]
     pub inelastic: Option<bool>,
 }

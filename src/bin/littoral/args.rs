@@ -135,8 +135,10 @@ pub struct RenderArgs {
     /// scene's `[sensor] samples_per_pixel`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536), allow_hyphen_values = true)]
     pub spp: Option<u32>,
-    /// Inelastic light (water Raman scattering, `[water] raman`) on or
-    /// off, overriding the scene: `off` is the elastic-only ablation.
+    /// Inelastic light on or off, overriding the scene: on turns on water
+    /// Raman scattering (`[water] raman`) and, in water given by its
+    /// constituents, chlorophyll and CDOM fluorescence
+    /// (`[water.fluorescence]`); `off` is the elastic-only ablation.
     #[arg(long, value_enum)]
     pub inelastic: Option<OnOff>,
     /// Render only part I of N of the image tiles into --out (a part
@@ -201,8 +203,8 @@ pub struct EmitArgs {
     /// Random seed (overrides the scene).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Inelastic light (water Raman scattering, `[water] raman`) on or
-    /// off, overriding the scene.
+    /// Inelastic light on or off, overriding the scene (as `render
+    /// --inelastic`).
     #[arg(long, value_enum)]
     pub inelastic: Option<OnOff>,
     /// Memory budget, e.g. 64MiB, 2GiB, 500MB or plain bytes.

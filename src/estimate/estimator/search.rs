@@ -244,7 +244,7 @@ impl Estimator<'_> {
         &self,
         x: Vec3,
         classes: Classes,
-        weight: &dyn Fn(&Neighbour) -> (f64, bool, [f64; 2]),
+        weight: &PhotonWeight,
         surface: Option<(Vec3, SurfaceId)>,
         view_up: Option<bool>,
         scratch: &mut Scratch,
