@@ -81,6 +81,11 @@ pub struct Scratch {
     inelastic_out: Vec<f64>,
     /// The water's absorbers at the estimate's point (fluorescence).
     parts: Vec<Absorbers>,
+    /// Prefix sums over the bands of the Raman, isotropic and elastic
+    /// densities, and each band's elastic radiance times a process's
+    /// strength (`add_inelastic`).
+    prefix: [Vec<f64>; 3],
+    source_in: Vec<f64>,
 }
 
 /// A found photon's weight toward the viewer (power times the phase
@@ -115,6 +120,8 @@ impl Scratch {
             elastic_density: vec![0.0; bands],
             inelastic_out: vec![0.0; bands],
             parts: vec![Absorbers::default(); bands],
+            prefix: std::array::from_fn(|_| Vec::with_capacity(bands + 1)),
+            source_in: Vec::with_capacity(bands),
         }
     }
 }
@@ -406,7 +413,8 @@ impl<'a> Estimator<'a> {
     /// in-scatter estimate of each excitation band e, b_e ∫ p L_e, divided
     /// by b_e and carried from the elastic phase function to the process's
     /// (Raman, or isotropic for fluorescence) by the ratio of the found
-    /// photons' weights through both, pooled over the bands that feed m:
+    /// photons' weights through both, pooled over the run of bands that
+    /// feed m (from the first to the last):
     /// a ratio of two sums over the same photons, so the band shapes of
     /// the `grid` mode serve the inelastic source too, and one band's few
     /// photons do not make it noisy.
@@ -419,25 +427,50 @@ impl<'a> Estimator<'a> {
             elastic_density,
             inelastic_out,
             parts,
+            prefix,
+            source_in,
             ..
         } = scratch;
         if inelastic.fluoresces() {
             self.scene.water.absorbers(x, parts);
         }
+        // Prefix sums of the densities over the bands (each row's bands
+        // are one run of them), so that a row's pooled ratio costs two
+        // lookups.
+        let nb = self.scene.bands.len();
+        for (k, v) in [&phase_density[0], &phase_density[1], &*elastic_density]
+            .into_iter()
+            .enumerate()
+        {
+            let p = &mut prefix[k];
+            p.resize(nb + 1, 0.0);
+            p[0] = 0.0;
+            for e in 0..nb {
+                p[e + 1] = p[e] + v[e];
+            }
+        }
         inelastic_out.iter_mut().for_each(|o| *o = 0.0);
         for p in &inelastic.processes {
-            let density = &phase_density[phase_slot(p.kind)];
-            for (m, row) in p.rows.iter().enumerate() {
-                let (mut num, mut den, mut sum) = (0.0, 0.0, 0.0);
-                for &(e, c) in row {
-                    num += density[e];
-                    den += elastic_density[e];
-                    let b = iops[e].b();
-                    if b > 0.0 {
-                        sum += c * p.strength(&parts[e]) * out[e] / b;
-                    }
+            // ∫ p L_e from the elastic estimate, times the strength.
+            source_in.clear();
+            source_in.extend((0..nb).map(|e| {
+                let b = iops[e].b();
+                if b > 0.0 {
+                    p.strength(&parts[e]) * out[e] / b
+                } else {
+                    0.0
                 }
+            }));
+            let density = &prefix[phase_slot(p.kind)];
+            let elastic = &prefix[2];
+            for (m, row) in p.rows.iter().enumerate() {
+                let (Some(&(first, _)), Some(&(last, _))) = (row.first(), row.last()) else {
+                    continue;
+                };
+                let den = elastic[last + 1] - elastic[first];
                 if den > 0.0 {
+                    let num = density[last + 1] - density[first];
+                    let sum: f64 = row.iter().map(|&(e, c)| c * source_in[e]).sum();
                     inelastic_out[m] += sum * num / den;
                 }
             }
@@ -457,7 +490,7 @@ impl<'a> Estimator<'a> {
         m_ss: f64,
         e_w: &[f64],
         t: &[f64],
-        scratch: &Scratch,
+        scratch: &mut Scratch,
         out: &mut [f64],
     ) {
         out.iter_mut().for_each(|o| *o = 0.0);
@@ -466,12 +499,14 @@ impl<'a> Estimator<'a> {
         };
         for p in &inelastic.processes {
             let phase = p.phase.eval_one_minus_cos(m_ss);
+            let Scratch {
+                parts, source_in, ..
+            } = &mut *scratch;
+            source_in.clear();
+            source_in.extend((0..e_w.len()).map(|e| p.strength(&parts[e]) * e_w[e] * t[e]));
+            let beam = &*source_in;
             for (o, row) in out.iter_mut().zip(&p.rows) {
-                *o += phase
-                    * row
-                        .iter()
-                        .map(|&(e, c)| c * p.strength(&scratch.parts[e]) * e_w[e] * t[e])
-                        .sum::<f64>();
+                *o += phase * row.iter().map(|&(e, c)| c * beam[e]).sum::<f64>();
             }
         }
     }

@@ -171,10 +171,13 @@ radiometer = [
 }
 
 /// The photon map with inelastic light against the path integrator in
-/// chlorophyll-rich water ([`green_water`]): every band of both
+/// chlorophyll-rich water ([`green_water`], lit by the sun and by the sky
+/// alone) and with fluorescence alone over a shallow sandy floor under a
+/// chlorophyll-rich layer ([`layered_shallows`]): every band of both
 /// radiometers (1 m deep over the upward hemisphere, cosine-weighted, and
-/// 1 m above the water looking straight down) within 3 sigma + 2 %, and
-/// the mean of the fluorescence bands (670–700 nm) within 3 sigma + 1 %.
+/// 1 m above the water looking straight down; 1 m deep straight down
+/// under the sky) within 3 sigma + 2 %, and the mean of the fluorescence
+/// bands (670–700 nm) within 3 sigma + 1 %.
 ///
 /// Not the narrow nadir radiance 1 m deep: there the path integrator's
 /// fluorescence rests on rare paths of large weight (the excitation
