@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Water Raman scattering in clear oligotrophic water against a published
 # empirical model. Chl 0.05 mg m^-3, no floor, flat surface, sun at 30
-# degrees, no sky, 36 bands 350-700 nm (data tables clamped below their
-# first wavelength: a_w at 380 nm, a_phi at 400 nm), 16 M photons. The
+# degrees (ASTM G173 direct spectrum), no sky, 36 bands 350-700 nm (data
+# tables clamped below their first wavelength: a_w at 380 nm, a_phi at
+# 400 nm), 16 M photons. The
 # photon map reads R_rs from a nadir radiometer 1 m above the water (no
 # sky and no glint in a nadir view: its radiance is L_w) with Raman
 # scattering on and off. Prints the Raman share of R_rs, (on - off) / on,
@@ -28,7 +29,7 @@ bands = 36
 out_of_range = "clamp"
 [sun]
 zenith_deg = 30.0
-irradiance = 1.0
+spectrum = "astm-g173-direct"
 [domain]
 size_m = [40.0, 40.0]
 [sensor]

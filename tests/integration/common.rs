@@ -167,3 +167,56 @@ pub fn path_scene(text: &str, spp: u32) -> littoral::scene::Scene {
     };
     littoral::scene::Scene::parse(text, Path::new("path.toml"), &o).unwrap()
 }
+
+/// The photon map's radiometer readings `pm` against the path
+/// integrator's `path` in a scene of bands `nm`: every band within 3 sigma
+/// + 2 %, and the mean over the bands in `window` (nm) within 3 sigma +
+/// 1 % (its sigma the plain mean of the bands' errors, which are not
+/// independent). What fails, each line led by `label`; both are printed.
+pub fn photon_map_against_path(
+    label: &str,
+    pm: &[littoral::render::RadiometerReading],
+    path: &[littoral::render::RadiometerReading],
+    nm: &[f32],
+    window: (f32, f32),
+) -> Vec<String> {
+    let within: Vec<usize> = (0..nm.len())
+        .filter(|&b| (window.0..=window.1).contains(&nm[b]))
+        .collect();
+    let mut failures = Vec::new();
+    for (a, b) in pm.iter().zip(path) {
+        for i in 0..a.L.len() {
+            let sigma = a.stderr[i].hypot(b.stderr[i]);
+            eprintln!(
+                "{label}, {} m, {:.0} nm: photon map {:.4e} +- {:.1e}, path {:.4e} +- {:.1e} ({:+.1} %)",
+                a.depth_m,
+                nm[i],
+                a.L[i],
+                a.stderr[i],
+                b.L[i],
+                b.stderr[i],
+                (a.L[i] / b.L[i] - 1.0) * 100.0
+            );
+            if (a.L[i] - b.L[i]).abs() > 3.0 * sigma + 0.02 * b.L[i] {
+                failures.push(format!("{label}, {} m, band {i}", a.depth_m));
+            }
+        }
+        let mean = |v: &[f64]| within.iter().map(|&i| v[i]).sum::<f64>() / within.len() as f64;
+        let (m_a, m_b) = (mean(&a.L), mean(&b.L));
+        let sigma = mean(&a.stderr).hypot(mean(&b.stderr));
+        let span = format!("{:.0}-{:.0} nm", window.0, window.1);
+        eprintln!(
+            "{label}, {} m, {span}: {:+.2} % +- {:.2} %",
+            a.depth_m,
+            (m_a / m_b - 1.0) * 100.0,
+            sigma / m_b * 100.0
+        );
+        if (m_a - m_b).abs() > 3.0 * sigma + 0.01 * m_b {
+            failures.push(format!(
+                "{label}, {} m, {span}: {m_a:.4e} against {m_b:.4e} +- {sigma:.1e}",
+                a.depth_m
+            ));
+        }
+    }
+    failures
+}

@@ -198,53 +198,19 @@ fn photon_map_matches_the_path_integrator_with_fluorescence() {
 }
 
 /// The photon map's radiometers against the path integrator's in the
-/// scene `text` lit by `light`: what fails.
-fn photon_map_against_path(text: &str, light: &str) -> Vec<String> {
+/// scene `text` (`label` in what fails).
+fn photon_map_against_path(text: &str, label: &str) -> Vec<String> {
     let scene = Scene::parse(text, Path::new("green.toml"), &Overrides::default()).unwrap();
     let dir = tempdir();
-    let report = render_job(&scene, dir.path(), 0);
-    let pm = report.radiometers;
+    let pm = render_job(&scene, dir.path(), 0).radiometers;
     let path = littoral::render::radiometers_path(&path_scene(text, 256), 0).unwrap();
-    let peak: Vec<usize> = (0..scene.bands.len())
-        .filter(|&b| (670.0..=700.0).contains(&scene.bands.centers_nm()[b]))
-        .collect();
-    let mut failures = Vec::new();
-    for (a, b) in pm.iter().zip(&path) {
-        for i in 0..a.L.len() {
-            let sigma = a.stderr[i].hypot(b.stderr[i]);
-            eprintln!(
-                "{light}, {} m, {:.0} nm: photon map {:.4e} +- {:.1e}, path {:.4e} +- {:.1e} ({:+.1} %)",
-                a.depth_m,
-                scene.bands.centers_nm()[i],
-                a.L[i],
-                a.stderr[i],
-                b.L[i],
-                b.stderr[i],
-                (a.L[i] / b.L[i] - 1.0) * 100.0
-            );
-            if (a.L[i] - b.L[i]).abs() > 3.0 * sigma + 0.02 * b.L[i] {
-                failures.push(format!("{light}, {} m, band {i}", a.depth_m));
-            }
-        }
-        let mean = |v: &[f64]| peak.iter().map(|&i| v[i]).sum::<f64>() / peak.len() as f64;
-        let (m_a, m_b) = (mean(&a.L), mean(&b.L));
-        // The bands' errors are not independent: their plain sum bounds
-        // the band mean's.
-        let sigma = mean(&a.stderr).hypot(mean(&b.stderr));
-        eprintln!(
-            "{light}, {} m, 670-700 nm: {:+.2} % +- {:.2} %",
-            a.depth_m,
-            (m_a / m_b - 1.0) * 100.0,
-            sigma / m_b * 100.0
-        );
-        if (m_a - m_b).abs() > 3.0 * sigma + 0.01 * m_b {
-            failures.push(format!(
-                "{light}, {} m, 670-700 nm: {m_a:.4e} against {m_b:.4e} +- {sigma:.1e}",
-                a.depth_m
-            ));
-        }
-    }
-    failures
+    crate::common::photon_map_against_path(
+        label,
+        &pm,
+        &path,
+        scene.bands.centers_nm(),
+        (670.0, 700.0),
+    )
 }
 
 /// Photon emission with inelastic light, as an independent forward

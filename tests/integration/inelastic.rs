@@ -1,6 +1,8 @@
 //! Water Raman scattering in the path integrator against closed forms.
 
-use crate::common::{minimal, minimal_with, p, path_scene, render_job, tempdir};
+use crate::common::{
+    minimal, minimal_with, p, path_scene, photon_map_against_path, render_job, tempdir,
+};
 use littoral::optics::inelastic::{Inelastic, RAMAN_DEPOLARISATION};
 use littoral::optics::surface::fresnel_reflectance;
 use littoral::scene::{Overrides, Scene};
@@ -158,46 +160,13 @@ fn photon_map_matches_the_path_integrator_with_raman() {
     );
     let pm = report.radiometers;
     let path = littoral::render::radiometers_path(&path_scene(&text, 256), 0).unwrap();
-    let fed: Vec<usize> = (0..scene.bands.len())
-        .filter(|&b| scene.bands.centers_nm()[b] >= 530.0)
-        .collect();
-    let mut failures = Vec::new();
-    for (a, b) in pm.iter().zip(&path) {
-        for i in 0..a.L.len() {
-            let sigma = a.stderr[i].hypot(b.stderr[i]);
-            eprintln!(
-                "{} m, {:.0} nm: photon map {:.4e} +- {:.1e}, path {:.4e} +- {:.1e} ({:+.1} %)",
-                a.depth_m,
-                scene.bands.centers_nm()[i],
-                a.L[i],
-                a.stderr[i],
-                b.L[i],
-                b.stderr[i],
-                (a.L[i] / b.L[i] - 1.0) * 100.0
-            );
-            if (a.L[i] - b.L[i]).abs() > 3.0 * sigma + 0.02 * b.L[i] {
-                failures.push(format!("{} m, band {i}", a.depth_m));
-            }
-        }
-        let mean = |v: &[f64]| fed.iter().map(|&i| v[i]).sum::<f64>() / fed.len() as f64;
-        // The bands' errors are not independent: their plain sum bounds
-        // the band mean's.
-        let se = |s: &[f64]| fed.iter().map(|&i| s[i]).sum::<f64>() / fed.len() as f64;
-        let (m_a, m_b) = (mean(&a.L), mean(&b.L));
-        let sigma = se(&a.stderr).hypot(se(&b.stderr));
-        eprintln!(
-            "{} m, 530-600 nm: {:+.2} % +- {:.2} %",
-            a.depth_m,
-            (m_a / m_b - 1.0) * 100.0,
-            sigma / m_b * 100.0
-        );
-        if (m_a - m_b).abs() > 3.0 * sigma + 0.01 * m_b {
-            failures.push(format!(
-                "{} m, 530-600 nm: {m_a:.4e} against {m_b:.4e} +- {sigma:.1e}",
-                a.depth_m
-            ));
-        }
-    }
+    let failures = photon_map_against_path(
+        "clear",
+        &pm,
+        &path,
+        scene.bands.centers_nm(),
+        (530.0, 600.0),
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
