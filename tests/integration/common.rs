@@ -169,10 +169,11 @@ pub fn path_scene(text: &str, spp: u32) -> littoral::scene::Scene {
 }
 
 /// The photon map's radiometer readings `pm` against the path
-/// integrator's `path` in a scene of bands `nm`: every band within 3 sigma
-/// + 2 %, and the mean over the bands in `window` (nm) within 3 sigma +
-/// 1 % (its sigma the plain mean of the bands' errors, which are not
-/// independent). What fails, each line led by `label`; both are printed.
+/// integrator's `path` in a scene of bands `nm`: every band within 3
+/// sigma plus 2 %, and the mean over the bands in `window` (nm) within 3
+/// sigma plus 1 % (its sigma the plain mean of the bands' errors, which
+/// are not independent). What fails, each line led by `label`; both are
+/// printed.
 pub fn photon_map_against_path(
     label: &str,
     pm: &[littoral::render::RadiometerReading],
@@ -185,12 +186,11 @@ pub fn photon_map_against_path(
         .collect();
     let mut failures = Vec::new();
     for (a, b) in pm.iter().zip(path) {
-        for i in 0..a.L.len() {
+        for (i, w) in nm.iter().enumerate() {
             let sigma = a.stderr[i].hypot(b.stderr[i]);
             eprintln!(
-                "{label}, {} m, {:.0} nm: photon map {:.4e} +- {:.1e}, path {:.4e} +- {:.1e} ({:+.1} %)",
+                "{label}, {} m, {w:.0} nm: photon map {:.4e} +- {:.1e}, path {:.4e} +- {:.1e} ({:+.1} %)",
                 a.depth_m,
-                nm[i],
                 a.L[i],
                 a.stderr[i],
                 b.L[i],
