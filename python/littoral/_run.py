@@ -36,8 +36,10 @@ def render(
 
     - ``photons``, ``bands``, ``seed``, ``spp`` (samples per pixel),
       ``integrator`` (``"photon-map"`` or ``"path"``) and ``inelastic``
-      (water Raman scattering on or off, ``[water] raman``) override the
-      scene's values, as the command line's flags do; ``None`` keeps them.
+      (``True``: water Raman scattering and, in water given by its
+      constituents, chlorophyll and CDOM fluorescence; ``False``: none)
+      override the scene's values, as the command line's flags do;
+      ``None`` keeps them.
     - ``mem_budget`` bounds the run's memory (``"512MiB"``, ``"2GiB"``);
       ``threads`` = 0 uses every core. The result is the same for any
       number of threads.
