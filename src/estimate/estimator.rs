@@ -353,7 +353,11 @@ impl<'a> Estimator<'a> {
         let jumps = self.layered;
         let water = &self.scene.water;
         let inelastic = self.inelastic.is_some();
-        let raman_phase = &self.raman_phase;
+        // The Raman phase function only where Raman scattering is on.
+        let raman_phase = self
+            .inelastic
+            .and_then(|i| i.process(Kind::Raman))
+            .map(|_| &self.raman_phase);
         let weight = |n: &Neighbour| -> (f64, bool, [f64; 2]) {
             let band = n.photon.band as usize;
             let fw = mix[band] as f64;
@@ -363,7 +367,7 @@ impl<'a> Estimator<'a> {
             // Through the Raman phase function and the isotropic one.
             let mut phases = if inelastic {
                 [
-                    raman_phase.eval(cos) * power,
+                    raman_phase.map_or(0.0, |p| p.eval(cos) * power),
                     power / (4.0 * std::f64::consts::PI),
                 ]
             } else {
