@@ -56,7 +56,7 @@ const HAWES_A0_FIRST_NM: f64 = 310.0;
 const HAWES_A0_STEP_NM: f64 = 20.0;
 
 /// nm · cm^-1 per 1: wavenumber (cm^-1) = 1e7 / wavelength (nm).
-pub(super) const NM_CM: f64 = 1.0e7;
+const NM_CM: f64 = 1.0e7;
 
 /// Points of the Gauss–Legendre rule the fluorescence intervals use.
 const GL_POINTS: usize = 8;
@@ -304,7 +304,7 @@ fn gauss_legendre(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
 }
 
 /// Standard deviation of a Gaussian of full width at half maximum `fwhm`.
-pub(super) fn sigma_of(fwhm: f64) -> f64 {
+fn sigma_of(fwhm: f64) -> f64 {
     fwhm / (2.0 * (2.0 * std::f64::consts::LN_2).sqrt())
 }
 
@@ -340,7 +340,7 @@ pub fn emission_nm(nm: f64, dk: f64) -> f64 {
 
 /// For one Gaussian (mean `mu`, sd `s`) and the interval [u0, u1]:
 /// P(u0 <= X <= u1) and E[X; u0 <= X <= u1].
-pub(super) fn gaussian_partial(mu: f64, s: f64, u0: f64, u1: f64) -> (f64, f64) {
+fn gaussian_partial(mu: f64, s: f64, u0: f64, u1: f64) -> (f64, f64) {
     let cdf = |u: f64| 0.5 * libm::erfc(-(u - mu) / (s * std::f64::consts::SQRT_2));
     let pdf = |u: f64| gaussian(u, mu, s) / (s * (2.0 * std::f64::consts::PI).sqrt());
     let p = cdf(u1) - cdf(u0);
