@@ -281,7 +281,8 @@ pub struct WaterFile {
     pub layer: Vec<LayerFile>,
     /// CSV of a regular 3-D grid of constituents.
     pub grid: Option<String>,
-    /// Water Raman scattering (`optics::inelastic`); default false.
+    /// Water Raman scattering (`optics::inelastic`); default true for
+    /// water given by its constituents, false for water given by its IOPs.
     pub raman: Option<bool>,
     /// Chlorophyll and CDOM fluorescence (`optics::inelastic`); none
     /// without the table.

@@ -273,6 +273,7 @@ fn emission_tallies_match_the_path_integrator_with_fluorescence() {
 
 /// Fluorescence draws on the constituents' absorption: water given by its
 /// IOPs is refused, naming the key; a quantum yield outside [0, 1] too.
+/// Raman scattering is on by default in constituent water only.
 #[test]
 fn fluorescence_needs_constituent_water_and_a_yield_in_range() {
     let refused = |water: &str, key: &str| {
@@ -308,11 +309,28 @@ fn fluorescence_needs_constituent_water_and_a_yield_in_range() {
         .iter()
         .map(|p| p.kind)
         .collect();
-    assert_eq!(kinds, [Kind::Chlorophyll, Kind::Cdom]);
+    // Raman scattering is on by default in water given by its constituents.
+    assert_eq!(kinds, [Kind::Raman, Kind::Chlorophyll, Kind::Cdom]);
     assert!(Scene::parse(&text, Path::new("f.toml"), &o)
         .unwrap()
         .inelastic
         .is_none());
+    // Off in water given by its IOPs unless asked; `raman = false` turns
+    // the default off.
+    let kinds_of = |water: &str| -> Vec<Kind> {
+        let text = with_water(&minimal().text(), water);
+        Scene::parse(&text, Path::new("f.toml"), &Overrides::default())
+            .unwrap()
+            .inelastic
+            .map_or_else(Vec::new, |r| r.processes.iter().map(|p| p.kind).collect())
+    };
+    assert_eq!(kinds_of("water = { chl = 1.0 }"), [Kind::Raman]);
+    assert_eq!(kinds_of("water = { chl = 1.0, raman = false }"), []);
+    assert_eq!(kinds_of("water = { iop = { a = 0.1, b = 0.2 } }"), []);
+    assert_eq!(
+        kinds_of("water = { iop = { a = 0.1, b = 0.2 }, raman = true }"),
+        [Kind::Raman]
+    );
 }
 
 /// Share of the light field's radiance along the vertical: directions

@@ -394,12 +394,17 @@ fn read_grid(path: &Path) -> Result<ConstituentGrid> {
 /// constituents (it draws on their absorption).
 pub(super) fn inelastic(ctx: &Ctx, w: &WaterFile, water: &WaterModel) -> Result<Option<Inelastic>> {
     let mut kinds = Vec::new();
-    if w.raman.unwrap_or(false) {
+    // Raman scattering is the water's own: on by default where the water
+    // is given by its constituents. Water given by its IOPs stands for a
+    // medium whose absorption the user measured or chose, whose inelastic
+    // part littoral cannot know; it stays elastic unless asked.
+    let constituents = matches!(water, WaterModel::Constituents { .. });
+    if w.raman.unwrap_or(constituents) {
         kinds.push(Kind::Raman);
     }
     let mut chl_yield = CHL_QUANTUM_YIELD;
     if let Some(f) = &w.fluorescence {
-        if !matches!(water, WaterModel::Constituents { .. }) {
+        if !constituents {
             return Err(ctx.err(
                 &[K("water"), K("fluorescence")],
                 "fluorescence draws on the light phytoplankton and CDOM absorb: it needs water given by its constituents (chl, cdom_440), not by iop or iop_file",
