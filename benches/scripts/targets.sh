@@ -6,7 +6,8 @@
 # directions (the sand's reading is the four positions' mean).
 # Usage: benches/scripts/targets.sh [OUTDIR] [PHOTONS_PER_M2] [SPP] [GATHER_RAYS] [WIND_M_S] [SEEDS]
 # (WIND_M_S 0: a flat surface; default 5, Cox-Munk. SEEDS: the photon map's
-# seeds, e.g. "1 2 3 4"; default "1".)
+# seeds, e.g. "1 2 3 4"; default "1".) TARGET_SPLIT in the environment
+# sets `[photons] target_split` (default: the scene default, 16).
 # Prints one markdown row per box: band-mean R_rs difference with the
 # combined standard error of the band means, the worst band against its
 # 3 sigma + 2 % allowance, and the box/sand contrast of both integrators.
@@ -43,7 +44,8 @@ for size in 0.5 1 2 4; do
     "$bin" scene set tests/scenes/box.toml "name=\"$name\"" "${surface[@]}" \
       "domain.size_m=[$domain.0, $domain.0]" "bottom.depth_m=$floor" \
       "target=[{ kind = \"box\", center_m = [20.0, 20.0, $centre], size_m = [$size, $size, 0.5], reflectance = 0.5 }]" \
-      "$radiometers" "photons.count=$photons" "estimate.gather_rays=$gather" > "$out/$name.toml"
+      "$radiometers" "photons.count=$photons" "estimate.gather_rays=$gather" \
+      ${TARGET_SPLIT:+"photons.target_split=$TARGET_SPLIT"} > "$out/$name.toml"
     pm=()
     for seed in $seeds; do
       "$bin" render "$out/$name.toml" --out "$out/$name-pm-$seed" --seed "$seed" --quiet 2>/dev/null

@@ -24,7 +24,22 @@
 //! Kahn's particle splitting: the expected stored power is unchanged, and
 //! the weights of a path's branches sum to exactly one, so every unit of
 //! emitted power still ends in exactly one fate). A copy never splits
-//! again. Stored powers and tallies carry the branch's weight.
+//! upward again. Stored powers and tallies carry the branch's weight.
+//!
+//! **Splitting over targets.** A small submerged target is read from the
+//! photons around it, and at the default density a 1–2 m box has too few
+//! near it for its estimates to hold their level. A path that enters the
+//! water over a target (within [`crate::scene::Scene::split_footprints`]:
+//! the target's extent widened by the depth of its top and 1 m) splits
+//! there into `[photons] target_split` copies of weight 1 / target_split,
+//! each entering at its own point of the footprint (drawn uniformly where
+//! that footprint is the first to hold it, so that the power entering
+//! every point is unchanged in expectation) in the path's refracted
+//! direction, each free to split upward once more. The map
+//! is that many times denser around the targets at the same expected power
+//! everywhere (the adaptive emission of the poster's title, with exact
+//! weights), and the weights stay powers of two, so fates still add up
+//! exactly.
 //!
 //! Stored photons: a volume photon at every real scattering event (in the
 //! layer of its vertical direction, [`crate::photon::volume_layer`]), a
@@ -83,6 +98,10 @@ struct Branch {
     dir: Vec3,
     band: usize,
     weight: f64,
+    /// The weight the branch began with: 1, or 1 / `target_split` for a
+    /// copy of a path split over a target. A branch still of this weight
+    /// has not split upward (nor been moved by inelastic light).
+    full: f64,
     /// Still the sun's unscattered light.
     direct: bool,
     /// Inelastic light moved it into its band.
@@ -159,20 +178,73 @@ pub fn trace(
         return path.result;
     }
     cross_surface_down(scene, tally, ev.direction, 1.0);
-    let mut next = Some(Branch {
+    // Over a target the path splits into copies of equal weight that go on
+    // independently from the surface.
+    // Over a target the path splits into copies of equal weight, each
+    // entering at its own point of the same footprint.
+    let footprint = (scene.target_split > 1)
+        .then(|| first_footprint(scene, pos))
+        .flatten();
+    let copies = footprint.map_or(1, |_| scene.target_split);
+    let weight = 1.0 / copies as f64;
+    let entering = Branch {
         pos,
         dir: ev.direction,
         band,
-        weight: 1.0,
+        weight,
+        full: weight,
         direct: source == Source::Sun,
         shifted: false,
-    });
+    };
+    if let Some(j) = footprint {
+        for _ in 1..copies {
+            let pos = point_in_footprint(scene, j, rng);
+            path.pending.push(Branch { pos, ..entering });
+        }
+    }
+    let mut next = Some(entering);
     while let Some(branch) = next {
         let (band, fate, weight) = path.run(branch, rng, tallies, out);
         end(tallies, band, fate, weight);
         next = path.pending.pop();
     }
     path.result
+}
+
+/// The first of the scene's split footprints that holds the surface point
+/// `pos`.
+fn first_footprint(scene: &Scene, pos: Vec3) -> Option<usize> {
+    let (x, y) = (f64::from(pos.x), f64::from(pos.y));
+    scene
+        .split_footprints
+        .iter()
+        .position(|f| f.contains(&scene.domain, x, y))
+}
+
+/// A surface point drawn uniformly from the points of the domain whose
+/// first split footprint is `j` (by rejection from footprint `j`), so that
+/// the copies of a path split there stand for the same region as the path
+/// itself: the expected power entering each point is unchanged, and the
+/// copies start apart (copies at one point would stay near one line
+/// through forward-peaked water, a clump that biases a k-nearest estimate
+/// high).
+fn point_in_footprint(scene: &Scene, j: usize, rng: &mut Pcg32) -> Vec3 {
+    let f = &scene.split_footprints[j];
+    let d = &scene.domain;
+    loop {
+        let x = f.min[0] + (f.max[0] - f.min[0]) * rng.uniform_f64();
+        let y = f.min[1] + (f.max[1] - f.min[1]) * rng.uniform_f64();
+        let (x, y) = if d.periodic {
+            (x.rem_euclid(d.size_m[0]), y.rem_euclid(d.size_m[1]))
+        } else {
+            (x, y)
+        };
+        let inside = (0.0..d.size_m[0]).contains(&x) && (0.0..d.size_m[1]).contains(&y);
+        let p = Vec3::new(x as f32, y as f32, 0.0);
+        if inside && first_footprint(scene, p) == Some(j) {
+            return p;
+        }
+    }
 }
 
 /// Weight `weight` of a photon of `band` ended in `fate`.
@@ -199,8 +271,8 @@ impl Path<'_> {
     /// After the branch turned into `b.dir`: split a path of full weight
     /// that now travels up, leaving the copies for later.
     fn maybe_split(&mut self, b: &mut Branch) {
-        if self.split > 1 && b.weight == 1.0 && b.dir.z > SPLIT_MU {
-            b.weight = 1.0 / self.split as f64;
+        if self.split > 1 && b.weight == b.full && b.dir.z > SPLIT_MU {
+            b.weight = b.full / self.split as f64;
             self.pending.extend(std::iter::repeat_n(*b, self.split - 1));
         }
     }

@@ -225,7 +225,8 @@ impl<'a> Estimator<'a> {
     /// growing as the square root of the photons traced, so that both the
     /// voxels' size and their noise shrink as photons are added. Photons of
     /// the up layer count as 1 / `upward_split` photon each: the copies of a
-    /// split path refine the grid's upwelling light, not its resolution.
+    /// split path refine the grid's upwelling light, not its resolution;
+    /// so do those of paths split over targets (`Scene::target_split_gain`).
     fn shape_voxels(scene: &Scene, [down, up]: [u64; 2]) -> usize {
         let nb = scene.bands.len();
         let by_bytes = (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb)) as usize;
@@ -233,7 +234,9 @@ impl<'a> Estimator<'a> {
             .sqrt()
             .max(1.0);
         let per_band = (scene.estimate.shape_photons_per_band as f64 * growth).round() as usize;
-        let photons = down + up / scene.upward_split.max(1) as u64;
+        let photons = ((down + up / scene.upward_split.max(1) as u64) as f64
+            / scene.target_split_gain())
+        .round() as u64;
         BandShapeGrid::planned_voxels(photons, nb, per_band, MAX_SHAPE_VOXELS.min(by_bytes))
     }
 

@@ -325,7 +325,7 @@ fn georef(ctx: &Ctx, f: &SceneFile) -> Result<Georef> {
     Ok(georef)
 }
 
-/// `[photons]` (count and upward splitting) and `[tally]`: the tally
+/// `[photons]` (count, upward and target splitting) and `[tally]`: the tally
 /// depths, sorted, each above the floor's deepest point.
 fn photons_and_tallies(ctx: &Ctx, f: &SceneFile, deepest_floor_m: Option<f64>) -> Result<Vec<f64>> {
     if f.photons.count == 0 {
@@ -345,6 +345,13 @@ fn photons_and_tallies(ctx: &Ctx, f: &SceneFile, deepest_floor_m: Option<f64>) -
         return Err(ctx.err(
             &[K("photons"), K("upward_split")],
             format!("{split} is not a power of two from 1 to 64"),
+        ));
+    }
+    let target_split = f.photons.target_split;
+    if !(target_split.is_power_of_two() && target_split <= 64) {
+        return Err(ctx.err(
+            &[K("photons"), K("target_split")],
+            format!("{target_split} is not a power of two from 1 to 64"),
         ));
     }
     let mut tally_depths = f.tally.depths_m.clone();
@@ -453,7 +460,13 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         inelastic,
         bottom,
         target_reflectance,
+        split_footprints: if f.photons.target_split > 1 {
+            extents.iter().map(split_footprint).collect()
+        } else {
+            Vec::new()
+        },
         target_extents: extents,
+        target_split: f.photons.target_split as usize,
         geometry,
         photons: f.photons.count,
         store_direct: f.photons.store_direct,
@@ -471,4 +484,17 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
             overrides: *ov,
         },
     })
+}
+
+/// Where paths entering the water split over a target (`[photons]
+/// target_split`): its horizontal extent widened by the depth of its top
+/// and [`TARGET_SPLIT_MARGIN_M`], which holds the refracted sun's offset
+/// at that depth (0.4 of it below a sun at 30 degrees) and most of the
+/// light scattered on the way down.
+fn split_footprint(b: &crate::bounds::Aabb) -> Footprint {
+    let margin = (-f64::from(b.max.z)).max(0.0) + crate::scene::settings::TARGET_SPLIT_MARGIN_M;
+    Footprint {
+        min: [f64::from(b.min.x) - margin, f64::from(b.min.y) - margin],
+        max: [f64::from(b.max.x) + margin, f64::from(b.max.y) + margin],
+    }
 }

@@ -27,6 +27,11 @@ impl Scene {
             .value("store_direct", self.store_direct)
             .value("upward_split", self.upward_split)
             .value("tally_depths_m", &self.tally_depths);
+        // Only where paths split, so that the maps of scenes without
+        // targets keep their digests.
+        if !self.split_footprints.is_empty() {
+            b.value("target_split", self.target_split);
+        }
         // Only when on, so that the maps of scenes without it keep their
         // digests.
         if let Some(inelastic) = &self.inelastic {

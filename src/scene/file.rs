@@ -400,10 +400,18 @@ pub struct PhotonsFile {
     /// (`emit::trace`): a power of two, 1 (no splitting) to 64.
     #[serde(default = "default_upward_split")]
     pub upward_split: u32,
+    /// Copies a path splits into where it enters the water over a target
+    /// (`emit::trace`): a power of two, 1 (no splitting) to 64.
+    #[serde(default = "default_target_split")]
+    pub target_split: u32,
 }
 
 fn default_upward_split() -> u32 {
     crate::scene::settings::DEFAULT_UPWARD_SPLIT
+}
+
+fn default_target_split() -> u32 {
+    crate::scene::settings::DEFAULT_TARGET_SPLIT
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -73,6 +73,44 @@ pub struct Sky {
     pub model: crate::optics::sky::SkyModel,
 }
 
+/// A horizontal rectangle (m) over the domain: where paths entering the
+/// water over a target split.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Footprint {
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+impl Footprint {
+    /// Its area within `domain` (m^2).
+    pub fn area_in(&self, domain: &Domain) -> f64 {
+        let side = |i: usize| (self.max[i] - self.min[i]).clamp(0.0, domain.size_m[i]);
+        if domain.periodic {
+            side(0) * side(1)
+        } else {
+            let clip =
+                |i: usize| (self.max[i].min(domain.size_m[i]) - self.min[i].max(0.0)).max(0.0);
+            clip(0) * clip(1)
+        }
+    }
+
+    /// Whether the surface point (x, y) of `domain` lies within it; across
+    /// periodic edges, also where one of its images does.
+    pub fn contains(&self, domain: &Domain, x: f64, y: f64) -> bool {
+        let axis = |v: f64, lo: f64, hi: f64, size: f64| {
+            if !domain.periodic {
+                (lo..=hi).contains(&v)
+            } else if hi - lo >= size {
+                true
+            } else {
+                (v - lo).rem_euclid(size) <= hi - lo
+            }
+        };
+        axis(x, self.min[0], self.max[0], domain.size_m[0])
+            && axis(y, self.min[1], self.max[1], domain.size_m[1])
+    }
+}
+
 /// The horizontal domain.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Domain {
@@ -237,6 +275,12 @@ pub struct Scene {
     pub target_reflectance: Vec<Vec<f64>>,
     /// The bounds of each target's triangles (surface id 1 + index).
     pub target_extents: Vec<crate::bounds::Aabb>,
+    /// Copies a path splits into where it enters the water within one of
+    /// [`Scene::split_footprints`] (1: no splitting; see `emit::trace`).
+    pub target_split: usize,
+    /// The footprints over the targets where entering paths split (empty
+    /// without targets or splitting).
+    pub split_footprints: Vec<Footprint>,
     pub geometry: Geometry,
     pub photons: u64,
     pub store_direct: bool,
@@ -316,6 +360,20 @@ pub struct Overrides {
 }
 
 impl Scene {
+    /// Paths traced per path emitted, on average, from splitting over the
+    /// targets: 1 + (target_split - 1) x the share of the domain their
+    /// footprints cover (overlapping footprints counted twice, at most the
+    /// whole domain).
+    pub fn target_split_gain(&self) -> f64 {
+        let covered: f64 = self
+            .split_footprints
+            .iter()
+            .map(|f| f.area_in(&self.domain))
+            .sum();
+        let share = (covered / self.domain.area_m2()).min(1.0);
+        1.0 + (self.target_split.max(1) - 1) as f64 * share
+    }
+
     /// Parse and validate scene `text`; `path` names it in errors and
     /// anchors relative file names.
     pub fn parse(text: &str, path: &Path, overrides: &Overrides) -> Result<Scene> {

@@ -31,6 +31,12 @@ pub fn policy_k(photons: u64) -> usize {
 /// Copies a photon path splits into when it first turns upward
 /// (`[photons] upward_split`; see `emit::trace`).
 pub const DEFAULT_UPWARD_SPLIT: u32 = 4;
+/// Copies a photon path splits into where it enters the water over a
+/// target (`[photons] target_split`; see `emit::trace`).
+pub const DEFAULT_TARGET_SPLIT: u32 = 16;
+/// The footprint over a target where entering paths split reaches this far
+/// beyond the target's horizontal extent, plus the depth of its top (m).
+pub const TARGET_SPLIT_MARGIN_M: f64 = 1.0;
 /// Largest radius of a k-nearest search (m).
 pub const DEFAULT_MAX_RADIUS_M: f64 = 2.0;
 /// Ray-marching step in water (m).
