@@ -401,7 +401,7 @@ pub struct PhotonsFile {
     #[serde(default = "default_upward_split")]
     pub upward_split: u32,
     /// Copies a path splits into where it enters the water over a target
-    /// (`emit::trace`): a power of two, 1 (no splitting) to 64.
+    /// (`emit::trace`): a power of two, 1 (no splitting, the default) to 64.
     #[serde(default = "default_target_split")]
     pub target_split: u32,
 }
