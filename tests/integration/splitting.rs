@@ -40,6 +40,22 @@ fn run(s: &Scene) -> Totals {
     Emitter::new(s).unwrap().trace_all(0).unwrap()
 }
 
+/// Each of `quantities` at each of the three tally depths agrees between
+/// two emissions within four combined standard errors.
+fn assert_tallies_agree(a: &Totals, b: &Totals, quantities: &[usize]) {
+    for d in 0..3 {
+        for &q in quantities {
+            let (m1, s1) = a.mean_and_stderr(a.slot(d, q), 0);
+            let (m2, s2) = b.mean_and_stderr(b.slot(d, q), 0);
+            let z = (m2 - m1) / (s1 * s1 + s2 * s2).sqrt();
+            assert!(
+                z.abs() < 4.0,
+                "depth {d} quantity {q}: {m1} vs {m2} ({z} sigma)"
+            );
+        }
+    }
+}
+
 /// The upwelling tallies (Eu, Eou and the Lu cone at every depth) of an
 /// emission splitting 16 ways agree with an analog emission's within four
 /// combined standard errors (the runs share a seed, which only makes them
@@ -49,17 +65,7 @@ fn run(s: &Scene) -> Totals {
 fn upward_splitting_leaves_the_tallies_unbiased() {
     let analog = run(&deep(1, 200_000, false));
     let split = run(&deep(16, 200_000, false));
-    for d in 0..3 {
-        for q in [EU, EOU, LU] {
-            let (m1, s1) = analog.mean_and_stderr(analog.slot(d, q), 0);
-            let (m2, s2) = split.mean_and_stderr(split.slot(d, q), 0);
-            let z = (m2 - m1) / (s1 * s1 + s2 * s2).sqrt();
-            assert!(
-                z.abs() < 4.0,
-                "depth {d} quantity {q}: {m1} vs {m2} ({z} sigma)"
-            );
-        }
-    }
+    assert_tallies_agree(&analog, &split, &[EU, EOU, LU]);
     let (_, se_analog) = analog.mean_and_stderr(analog.slot(0, LU), 0);
     let (_, se_split) = split.mean_and_stderr(split.slot(0, LU), 0);
     eprintln!("Lu(0-) standard error: analog {se_analog}, split {se_split}");
@@ -88,16 +94,7 @@ fn volume_photons_are_layered_by_direction_and_copies_carry_their_share() {
     let dir = tempdir();
     let scene = deep(4, 20_000, true);
     let path = dir.path().join("split.map");
-    EmitJob {
-        scene: &scene,
-        map: path.clone(),
-        report: None,
-        threads: 2,
-        budget: MemoryBudget::new(64 << 20),
-        scene_seconds: 0.0,
-    }
-    .run(&Silent)
-    .unwrap();
+    emit_map(&scene, &path);
     let power = Emitter::new(&scene).unwrap().photon_power(0) as f32;
     let map = MapFile::open(&path).unwrap();
     let mut counts = [0usize; 3];
@@ -123,6 +120,20 @@ fn volume_photons_are_layered_by_direction_and_copies_carry_their_share() {
     assert!(counts.iter().all(|&c| c > 0), "{counts:?}");
     assert!(shares[1] > 0, "no split copies: {shares:?}");
     assert_eq!(counts.iter().sum::<usize>(), all_photons(&map).len());
+}
+
+/// Emit `scene` into a photon map at `path` on two threads.
+fn emit_map(scene: &Scene, path: &Path) {
+    EmitJob {
+        scene,
+        map: path.to_path_buf(),
+        report: None,
+        threads: 2,
+        budget: MemoryBudget::new(64 << 20),
+        scene_seconds: 0.0,
+    }
+    .run(&Silent)
+    .unwrap();
 }
 
 /// The photons of tile `t`.
@@ -167,17 +178,7 @@ fn target_splitting_leaves_the_tallies_unbiased() {
     use littoral::emit::tally::ED;
     let analog = run(&over_box(1, 100_000));
     let split = run(&over_box(16, 100_000));
-    for d in 0..3 {
-        for q in [ED, EU, EOU, LU] {
-            let (m1, s1) = analog.mean_and_stderr(analog.slot(d, q), 0);
-            let (m2, s2) = split.mean_and_stderr(split.slot(d, q), 0);
-            let z = (m2 - m1) / (s1 * s1 + s2 * s2).sqrt();
-            assert!(
-                z.abs() < 4.0,
-                "depth {d} quantity {q}: {m1} vs {m2} ({z} sigma)"
-            );
-        }
-    }
+    assert_tallies_agree(&analog, &split, &[ED, EU, EOU, LU]);
     let ended = split.escaped[0] + split.absorbed_water[0] + split.absorbed_surfaces[0];
     assert_eq!(ended + split.lost_edges[0], split.emitted[0] * FATE_UNIT);
 }
@@ -191,16 +192,7 @@ fn target_splitting_makes_the_map_dense_over_the_target() {
         let dir = tempdir();
         let scene = over_box(split, 40_000);
         let path = dir.path().join("box.map");
-        EmitJob {
-            scene: &scene,
-            map: path.clone(),
-            report: None,
-            threads: 2,
-            budget: MemoryBudget::new(64 << 20),
-            scene_seconds: 0.0,
-        }
-        .run(&Silent)
-        .unwrap();
+        emit_map(&scene, &path);
         let map = MapFile::open(&path).unwrap();
         let in_column = |p: &littoral::photon::Photon, cx: f32, cy: f32| {
             (p.position.x - cx).abs() < 1.0
