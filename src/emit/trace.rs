@@ -178,8 +178,6 @@ pub fn trace(
         return path.result;
     }
     cross_surface_down(scene, tally, ev.direction, 1.0);
-    // Over a target the path splits into copies of equal weight that go on
-    // independently from the surface.
     // Over a target the path splits into copies of equal weight, each
     // entering at its own point of the same footprint.
     let footprint = (scene.target_split > 1)
