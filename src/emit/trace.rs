@@ -180,9 +180,8 @@ pub fn trace(
     cross_surface_down(scene, tally, ev.direction, 1.0);
     // Over a target the path splits into copies of equal weight, each
     // entering at its own point of the same footprint.
-    let footprint = (scene.target_split > 1)
-        .then(|| first_footprint(scene, pos))
-        .flatten();
+    // (No footprints without splitting: `Scene::split_footprints`.)
+    let footprint = first_footprint(scene, pos);
     let copies = footprint.map_or(1, |_| scene.target_split);
     let weight = 1.0 / copies as f64;
     let entering = Branch {
