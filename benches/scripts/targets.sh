@@ -7,7 +7,7 @@
 # Usage: benches/scripts/targets.sh [OUTDIR] [PHOTONS_PER_M2] [SPP] [GATHER_RAYS] [WIND_M_S] [SEEDS]
 # (WIND_M_S 0: a flat surface; default 5, Cox-Munk. SEEDS: the photon map's
 # seeds, e.g. "1 2 3 4"; default "1".) TARGET_SPLIT in the environment
-# sets `[photons] target_split` (default: the scene's, 1).
+# sets `[photons] target_split` (default: the scene's, 16).
 # Prints one markdown row per box: band-mean R_rs difference with the
 # combined standard error of the band means, the worst band against its
 # 3 sigma + 2 % allowance, and the box/sand contrast of both integrators.

@@ -32,7 +32,7 @@ use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
 use crate::estimate::groups::{GroupSums, Groups, CHANNELS, GROUPS};
-use crate::estimate::shape::BandShapeGrid;
+use crate::estimate::shape::{BandShapeGrid, VIEW_DOWN, VIEW_UP, VIEW_UP_TARGET};
 use crate::estimate::spectral::{
     combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
 };
@@ -200,7 +200,8 @@ impl<'a> Estimator<'a> {
                 voxels,
                 scene.horizontally_uniform(),
                 &scene.water.depth_boundaries(),
-                &|p: &crate::photon::Photon, up: bool| est.shape_weight(p, up),
+                Self::shape_views(scene),
+                &|p: &crate::photon::Photon, view: usize| est.shape_weight(p, view),
             )?;
             est.shapes = Some(shapes);
         }
@@ -208,15 +209,50 @@ impl<'a> Estimator<'a> {
     }
 
     /// The phase weight of photon `p` toward a viewer straight above
-    /// (`up`: light travelling up) or below, as a volume estimate there
-    /// weighs it: the local mixture of the truncated phase functions.
-    fn shape_weight(&self, p: &crate::photon::Photon, up: bool) -> f64 {
-        let toward_viewer = if up { Vec3::Z } else { -Vec3::Z };
+    /// ([`VIEW_UP`], and [`VIEW_UP_TARGET`] looking down at a target) or
+    /// below ([`VIEW_DOWN`]), as a volume estimate there weighs it: the
+    /// local mixture of the truncated phase functions.
+    fn shape_weight(&self, p: &crate::photon::Photon, view: usize) -> f64 {
+        let toward_viewer = if view == VIEW_DOWN { -Vec3::Z } else { Vec3::Z };
         let iop = self.scene.water.iop(p.position, p.band as usize);
         let b = iop.b();
         let fw = if b > 0.0 { iop.b_w / b } else { 0.0 };
         let cos = p.direction.dot(toward_viewer) as f64;
-        mixture(self.phases_for(toward_viewer, false), fw, cos)
+        mixture(
+            self.phases_for(toward_viewer, view == VIEW_UP_TARGET),
+            fw,
+            cos,
+        )
+    }
+
+    /// Viewing directions of the band-shape grid: light travelling up and
+    /// down, and a third, light travelling up as rays looking down at a
+    /// target weigh it, in a scene with targets whose peak for those rays
+    /// (`forward_peak_target_deg`) differs from the one looking down.
+    fn shape_views(scene: &Scene) -> usize {
+        let e = &scene.estimate;
+        if scene.target_extents.is_empty() || e.forward_peak_target_deg == e.forward_peak_down_deg {
+            2
+        } else {
+            3
+        }
+    }
+
+    /// The band-shape grid's view for an estimate toward `toward_viewer`
+    /// (`at_target`: a ray looking down at a target).
+    fn shape_view(&self, toward_viewer: Vec3, at_target: bool) -> usize {
+        match (toward_viewer.z > 0.0, at_target) {
+            (false, _) => VIEW_DOWN,
+            (true, true)
+                if self
+                    .shapes
+                    .as_ref()
+                    .is_some_and(|g| g.views() > VIEW_UP_TARGET) =>
+            {
+                VIEW_UP_TARGET
+            }
+            (true, _) => VIEW_UP,
+        }
     }
 
     /// Voxels of the band-shape grid over a map of `volume_photons` volume
@@ -229,7 +265,8 @@ impl<'a> Estimator<'a> {
     /// so do those of paths split over targets (`Scene::target_split_gain`).
     fn shape_voxels(scene: &Scene, [down, up]: [u64; 2]) -> usize {
         let nb = scene.bands.len();
-        let by_bytes = (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb)) as usize;
+        let by_bytes =
+            (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb, Self::shape_views(scene))) as usize;
         let growth = (scene.photons as f64 / crate::scene::settings::POLICY_PHOTONS)
             .sqrt()
             .max(1.0);
@@ -245,9 +282,11 @@ impl<'a> Estimator<'a> {
     /// unless `spectral = "grid"`), for the memory budget.
     pub fn shape_grid_bytes(scene: &Scene, volume_photons: [u64; 2]) -> u64 {
         match scene.estimate.spectral {
-            SpectralMode::Grid => {
-                BandShapeGrid::bytes(Self::shape_voxels(scene, volume_photons), scene.bands.len())
-            }
+            SpectralMode::Grid => BandShapeGrid::bytes(
+                Self::shape_voxels(scene, volume_photons),
+                scene.bands.len(),
+                Self::shape_views(scene),
+            ),
             _ => 0,
         }
     }
@@ -324,8 +363,8 @@ impl<'a> Estimator<'a> {
 
     /// [`Estimator::volume`] with the IOPs at `x` (one per band) given;
     /// `at_target`: the viewer looks down at a target, and the phase
-    /// functions' forward peak is `forward_peak_target_deg` wide (the
-    /// band shapes of the `grid` mode stay those of `forward_peak_down_deg`).
+    /// functions' forward peak is `forward_peak_target_deg` wide (and the
+    /// band shapes of the `grid` mode weigh the photons alike).
     pub fn volume_with_iops(
         &self,
         x: Vec3,
@@ -388,7 +427,7 @@ impl<'a> Estimator<'a> {
             }
             (w, cos > 0.0, phases)
         };
-        let view_up = Some(toward_viewer.z > 0.0);
+        let view = Some(self.shape_view(toward_viewer, at_target));
         let classes = if self.shapes.is_some() {
             // Light travelling toward the viewer looking down travels up.
             let (light, heavy) = if toward_viewer.z > 0.0 {
@@ -400,7 +439,7 @@ impl<'a> Estimator<'a> {
         } else {
             Classes::Union(&VOLUME_LAYERS)
         };
-        let r = self.estimate(x, classes, &weight, None, view_up, scratch, out);
+        let r = self.estimate(x, classes, &weight, None, view, scratch, out);
         scratch.mix = mix;
         r?;
         self.add_inelastic(x, iops, scratch, out);

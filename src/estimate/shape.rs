@@ -49,6 +49,10 @@ const MAX_LAYERS: usize = 64;
 /// Band shapes of the in-scatter toward the two viewing directions, per voxel.
 pub struct BandShapeGrid {
     bands: usize,
+    /// Viewing directions: [`VIEW_UP`], [`VIEW_DOWN`] and, in a scene
+    /// whose rays looking down at a target truncate the phase functions'
+    /// forward peak otherwise, [`VIEW_UP_TARGET`].
+    views: usize,
     /// Cells along x and y, layers along z.
     n: [usize; 3],
     size_m: [f32; 2],
@@ -58,9 +62,8 @@ pub struct BandShapeGrid {
     z_centres: Vec<f32>,
     /// Depths where the IOPs jump (z, negative), never interpolated across.
     jumps: Vec<f32>,
-    /// Per voxel (x fastest, then y, then z) and viewing direction (light
-    /// travelling up, down): the band shares (sum 1), or all zero where no
-    /// photon fell.
+    /// Per voxel (x fastest, then y, then z) and viewing direction: the
+    /// band shares (sum 1), or all zero where no photon fell.
     shapes: Vec<f32>,
     /// Per voxel, viewing direction, group and band: the group's part of
     /// the shares.
@@ -68,6 +71,18 @@ pub struct BandShapeGrid {
 }
 
 use crate::photon::GROUPS;
+
+/// The shape of light travelling up, seen by a ray looking down.
+pub const VIEW_UP: usize = 0;
+/// The shape of light travelling down, seen by a ray looking up.
+pub const VIEW_DOWN: usize = 1;
+/// The shape of light travelling up as a ray looking down at a target
+/// weighs it (`forward_peak_target_deg`): a wider truncated peak weighs
+/// the light travelling nearly straight up less, and its band shape
+/// differs (with the other truncation's shapes, a 2 m box 5.5 m deep in
+/// Chl 10 water read its blue and red bands 4–5 % low, the green 1–3 %
+/// high).
+pub const VIEW_UP_TARGET: usize = 2;
 
 impl BandShapeGrid {
     /// Voxels (both hemispheres) a grid over `volume_photons` photons of
@@ -82,18 +97,18 @@ impl BandShapeGrid {
         ((volume_photons / per_voxel.max(1)) as usize).clamp(1, max_voxels.max(1))
     }
 
-    /// Bytes of a grid of `voxels` voxels over `bands` bands, at its peak
-    /// while building (f64 sums per group, then the f32 shares and group
-    /// parts).
-    pub fn bytes(voxels: usize, bands: usize) -> u64 {
+    /// Bytes of a grid of `voxels` voxels over `bands` bands and `views`
+    /// viewing directions, at its peak while building (f64 sums per group,
+    /// then the f32 shares and group parts).
+    pub fn bytes(voxels: usize, bands: usize, views: usize) -> u64 {
         let per = GROUPS * std::mem::size_of::<f64>() + (1 + GROUPS) * std::mem::size_of::<f32>();
-        (voxels * 2 * bands * per) as u64
+        (voxels * views * bands * per) as u64
     }
 
     /// Build the grid from the volume photons of `map` over a domain of
-    /// `size_m`, with about `voxels` voxels; `weight(photon, up)` is a
-    /// photon's phase weight toward a viewer of light travelling up (`up`)
-    /// or down. With `layers_only` (a scene whose light field cannot vary
+    /// `size_m`, with about `voxels` voxels; `weight(photon, view)` is a
+    /// photon's phase weight toward a viewer in each of `views` viewing
+    /// directions ([`VIEW_UP`], [`VIEW_DOWN`], [`VIEW_UP_TARGET`]). With `layers_only` (a scene whose light field cannot vary
     /// across the domain) the voxels are depth layers spanning the domain:
     /// the grid resolves only what varies, and each layer gathers as many
     /// photons as the grid's cells of that depth would together.
@@ -103,7 +118,8 @@ impl BandShapeGrid {
         voxels: usize,
         layers_only: bool,
         boundaries_m: &[f64],
-        weight: &(dyn Fn(&crate::photon::Photon, bool) -> f64 + Sync),
+        views: usize,
+        weight: &(dyn Fn(&crate::photon::Photon, usize) -> f64 + Sync),
     ) -> Result<BandShapeGrid> {
         let bands = map.bands().len();
         // Pass 1: the depth distribution of the photons, below the surface
@@ -158,6 +174,7 @@ impl BandShapeGrid {
         let size = [size_m[0] as f32, size_m[1] as f32];
         let mut grid = BandShapeGrid {
             bands,
+            views,
             n: [nxy, nxy, nz],
             size_m: size,
             z_edges,
@@ -169,21 +186,21 @@ impl BandShapeGrid {
         // Pass 2: weighted power per voxel, viewing direction, group and band.
         let cells = nxy * nxy * nz;
         let per_voxel = GROUPS * bands;
-        let mut sums = vec![0f64; cells * 2 * per_voxel];
+        let mut sums = vec![0f64; cells * views * per_voxel];
         for layer in VOLUME_LAYERS {
             map.for_each_photon(layer, &mut |p| {
                 let v = grid.voxel_of(p.position);
                 let g = p.group as usize % GROUPS;
-                for (h, up) in [(0, true), (1, false)] {
-                    let w = weight(p, up) * p.power as f64;
+                for h in 0..views {
+                    let w = weight(p, h) * p.power as f64;
                     if w.is_finite() {
-                        sums[(v * 2 + h) * per_voxel + g * bands + p.band as usize] += w;
+                        sums[(v * views + h) * per_voxel + g * bands + p.band as usize] += w;
                     }
                 }
             })?;
         }
-        grid.shapes = vec![0.0; cells * 2 * bands];
-        grid.deviations = vec![0.0; cells * 2 * per_voxel];
+        grid.shapes = vec![0.0; cells * views * bands];
+        grid.deviations = vec![0.0; cells * views * per_voxel];
         let mut band_sums = vec![0f64; bands];
         for (vh, by_group) in sums.chunks(per_voxel).enumerate() {
             band_sums.iter_mut().for_each(|s| *s = 0.0);
@@ -238,7 +255,13 @@ impl BandShapeGrid {
     /// down, interpolated trilinearly between voxel centres (clamped at the
     /// edges), into `out`; false where the voxels around x hold no weight.
     pub fn shape_at(&self, x: Vec3, up: bool, out: &mut [f64]) -> bool {
-        self.shape_and_groups_at(x, up, out, None)
+        let view = if up { VIEW_UP } else { VIEW_DOWN };
+        self.shape_and_groups_at(x, view, out, None)
+    }
+
+    /// Viewing directions held.
+    pub fn views(&self) -> usize {
+        self.views
     }
 
     /// [`BandShapeGrid::shape_at`], and with `groups` (`GROUPS` runs of
@@ -246,12 +269,13 @@ impl BandShapeGrid {
     pub fn shape_and_groups_at(
         &self,
         x: Vec3,
-        up: bool,
+        view: usize,
         out: &mut [f64],
         mut groups: Option<&mut [f64]>,
     ) -> bool {
         let [nx, ny, nz] = self.n;
-        let h = usize::from(!up);
+        let (h, views) = (view, self.views);
+        debug_assert!(h < views);
         // Fractional cell coordinates of x relative to the centres.
         let axis = |v: f32, size: f32, n: usize| -> (usize, usize, f32) {
             let c = (v / size * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
@@ -295,7 +319,7 @@ impl BandShapeGrid {
                         continue;
                     }
                     let v = (zi * ny + yi) * nx + xi;
-                    let s = &self.shapes[(v * 2 + h) * self.bands..][..self.bands];
+                    let s = &self.shapes[(v * views + h) * self.bands..][..self.bands];
                     if s.iter().all(|&x| x == 0.0) {
                         continue;
                     }
@@ -304,7 +328,7 @@ impl BandShapeGrid {
                         *o += w * si as f64;
                     }
                     if let Some(g) = groups.as_deref_mut() {
-                        let d = &self.deviations[(v * 2 + h) * per_voxel..][..per_voxel];
+                        let d = &self.deviations[(v * views + h) * per_voxel..][..per_voxel];
                         for (o, &di) in g.iter_mut().zip(d) {
                             *o += w * di as f64;
                         }

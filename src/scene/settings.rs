@@ -33,7 +33,7 @@ pub fn policy_k(photons: u64) -> usize {
 pub const DEFAULT_UPWARD_SPLIT: u32 = 4;
 /// Copies a photon path splits into where it enters the water over a
 /// target (`[photons] target_split`; see `emit::trace`).
-pub const DEFAULT_TARGET_SPLIT: u32 = 1;
+pub const DEFAULT_TARGET_SPLIT: u32 = 16;
 /// The footprint over a target where entering paths split reaches this far
 /// beyond the target's horizontal extent, plus the depth of its top (m).
 pub const TARGET_SPLIT_MARGIN_M: f64 = 1.0;

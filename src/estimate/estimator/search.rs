@@ -286,7 +286,7 @@ impl Estimator<'_> {
         classes: Classes,
         weight: &PhotonWeight,
         surface: Option<(Vec3, SurfaceId)>,
-        view_up: Option<bool>,
+        view: Option<usize>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -334,10 +334,13 @@ impl Estimator<'_> {
         let small = outer.capped(r_local);
         let big = outer.capped(r_big);
         // The band shape from the grid, where the grid mode has one here.
-        let has_shape = match (&self.shapes, view_up) {
-            (Some(grid), Some(up)) => {
-                grid.shape_and_groups_at(x, up, shape, with_groups.then_some(&mut shape_groups[..]))
-            }
+        let has_shape = match (&self.shapes, view) {
+            (Some(grid), Some(view)) => grid.shape_and_groups_at(
+                x,
+                view,
+                shape,
+                with_groups.then_some(&mut shape_groups[..]),
+            ),
             _ => false,
         };
         // Group sums: totals always, per band where the combination reads

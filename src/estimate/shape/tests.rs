@@ -13,8 +13,8 @@ const DOWN_DEEP: [f64; 4] = [0.7, 0.1, 0.1, 0.1];
 
 /// Weight 1 for photons travelling toward the viewer's side, else 0: the
 /// grid then holds each hemisphere's band shares.
-fn hemisphere(p: &Photon, up: bool) -> f64 {
-    f64::from(u8::from((p.direction.z > 0.0) == up))
+fn hemisphere(p: &Photon, view: usize) -> f64 {
+    f64::from(u8::from((p.direction.z > 0.0) == (view == VIEW_UP)))
 }
 
 fn pick(shares: &[f64; 4], u: f64) -> u16 {
@@ -70,7 +70,7 @@ fn grid_reads_the_band_shares_of_each_hemisphere() {
     let n = 400_000;
     let m = map(n);
     let voxels = 64;
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, false, &[], &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, false, &[], 2, &hemisphere).unwrap();
     let [nx, ny, nz] = g.dims();
     assert!(nx * ny * nz >= 32 && nz >= 3, "{:?}", g.dims());
     let per_voxel_hemisphere = n as f64 / (nx * ny * nz) as f64 / 2.0;
@@ -120,7 +120,7 @@ fn voxels_follow_the_photon_count() {
         max: Vec3::new(10.0, 10.0, 0.0),
     };
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], 2, &hemisphere).unwrap();
     let mut out = [0.0; 4];
     assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
     assert!(g.shape_at(Vec3::new(5.0, 5.0, -3.0), false, &mut out));
@@ -151,12 +151,34 @@ fn shapes_are_not_blended_across_an_iop_jump() {
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
     let mut out = [0.0; 2];
     for (x_z, want) in [(-1.95, [1.0, 0.0]), (-2.05, [0.0, 1.0])] {
-        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[2.0], &hemisphere).unwrap();
+        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[2.0], 2, &hemisphere).unwrap();
         assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert_eq!(out, want, "at z = {x_z}");
         // Without the jump the site is between two centres and mixes them.
-        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[], &hemisphere).unwrap();
+        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[], 2, &hemisphere).unwrap();
         assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert!(out[0] > 0.0 && out[1] > 0.0, "{out:?}");
     }
+}
+
+/// A third viewing direction holds its own weights' shares: with photons
+/// of four bands travelling up, the view that weighs only band 2 (as a
+/// wider truncated peak weighs some photons less than another) reads
+/// [0, 0, 1, 0] where the plain view reads even shares, so an estimate
+/// looking down at a target gets the band shape of its own phase weights.
+#[test]
+fn each_view_holds_its_own_shares() {
+    let m = map(40_000);
+    let weight = |p: &Photon, view: usize| match view {
+        VIEW_UP_TARGET => f64::from(u8::from(p.band == 2 && p.direction.z > 0.0)),
+        v => hemisphere(p, v),
+    };
+    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], 3, &weight).unwrap();
+    assert_eq!(g.views(), 3);
+    let x = Vec3::new(5.0, 5.0, -3.0);
+    let mut out = [0.0; 4];
+    assert!(g.shape_and_groups_at(x, VIEW_UP_TARGET, &mut out, None));
+    assert_eq!(out, [0.0, 0.0, 1.0, 0.0]);
+    assert!(g.shape_and_groups_at(x, VIEW_UP, &mut out, None));
+    assert!(out.iter().all(|&s| s > 0.1), "{out:?}");
 }
