@@ -32,7 +32,9 @@ use super::peak::TruncatedPhase;
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
 use crate::estimate::groups::{GroupSums, Groups, CHANNELS, GROUPS};
-use crate::estimate::shape::{BandShapeGrid, VIEW_DOWN, VIEW_UP, VIEW_UP_TARGET};
+use crate::estimate::shape::{
+    direction_bin, BandShapeGrid, GridPlan, DIRECTION_BINS, VIEW_DOWN, VIEW_UP, VIEW_UP_TARGET,
+};
 use crate::estimate::spectral::{
     combine, combine_with_coarse, combine_with_shape, BandSums, SpectralMode,
 };
@@ -70,6 +72,12 @@ pub struct Scratch {
     group_coarse: GroupSums,
     group_expanded: GroupSums,
     shape_groups: Vec<f64>,
+    /// An oblique estimate's found photons' weights per direction bin, at
+    /// the local and the expanded scale, then the bins' weights as views
+    /// of the grid; one bin's shares and group parts while mixing.
+    bin_sums: [[f64; DIRECTION_BINS]; 2],
+    bin_views: Vec<(usize, f64)>,
+    bin_shape: Vec<f64>,
     /// Inelastic light: the found photons' weights through the Raman
     /// phase function, the isotropic one (fluorescence) and the elastic
     /// one, per band, at the local scale and at the expanded one
@@ -115,6 +123,9 @@ impl Scratch {
             group_coarse: GroupSums::new(bands),
             group_expanded: GroupSums::new(bands),
             shape_groups: vec![0.0; GROUPS * bands],
+            bin_sums: [[0.0; DIRECTION_BINS]; 2],
+            bin_views: Vec::with_capacity(DIRECTION_BINS),
+            bin_shape: Vec::new(),
             inelastic: std::array::from_fn(|_| BandSums::new(bands)),
             phase_density: [vec![0.0; bands], vec![0.0; bands]],
             elastic_density: vec![0.0; bands],
@@ -148,7 +159,29 @@ pub struct Estimator<'a> {
     pub inelastic: Option<&'a Inelastic>,
     /// The Raman phase function (photon weights for the Raman source).
     raman_phase: PhaseFunction,
+    /// The sun's direction of travel under a flat surface, for the
+    /// direction bins of the band shapes ([`direction_bin`]).
+    sun_w: Vec3,
 }
+
+/// Which band shape of the grid an estimate takes: one viewing direction's,
+/// or for an oblique ray the direction bins' weighed by the found photons'
+/// weights toward it.
+#[derive(Clone, Copy)]
+pub(super) enum ShapeView {
+    Fixed(usize),
+    Binned,
+}
+
+/// Rays looking down within 20 degrees of the vertical take the grid's
+/// shapes for a ray looking straight down: the upwelling light is smooth
+/// in angle, and that is the view sensors have.
+const FIXED_DOWN_COS: f32 = 0.94;
+/// Rays looking up within 3 degrees of the vertical take the shapes for a
+/// ray looking straight up: the refracted sun is 20-40 degrees off the
+/// vertical, where the truncated peak's edge weighs its aureole most, so a
+/// ray looking up a little toward it weighs the light already otherwise.
+const FIXED_UP_COS: f32 = 0.9986;
 
 /// Most voxels of a band-shape grid, and most bytes (the budget charges
 /// [`Estimator::shape_grid_bytes`]).
@@ -180,6 +213,12 @@ impl<'a> Estimator<'a> {
             layered: scene.water.is_layered(),
             inelastic: scene.inelastic.as_ref(),
             raman_phase: crate::optics::inelastic::raman_phase(),
+            sun_w: {
+                let d = scene.sun.direction.as_dvec3();
+                crate::optics::surface::refract(d, glam::DVec3::Z, 1.0, scene.surface.n_water)
+                    .unwrap_or(glam::DVec3::NEG_Z)
+                    .as_vec3()
+            },
             phases: [
                 scene.estimate.forward_peak_deg,
                 scene.estimate.forward_peak_down_deg,
@@ -193,16 +232,15 @@ impl<'a> Estimator<'a> {
             }),
         };
         if spectral == SpectralMode::Grid {
-            let voxels = Self::shape_voxels(scene, VOLUME_LAYERS.map(|l| map.layer_photons(l)));
-            let shapes = BandShapeGrid::build(
-                map,
-                scene.domain.size_m,
-                voxels,
-                scene.horizontally_uniform(),
-                &scene.water.depth_boundaries(),
-                Self::shape_views(scene),
-                &|p: &crate::photon::Photon, view: usize| est.shape_weight(p, view),
-            )?;
+            let boundaries = scene.water.depth_boundaries();
+            let plan = Self::shape_plan(
+                scene,
+                VOLUME_LAYERS.map(|l| map.layer_photons(l)),
+                &boundaries,
+            );
+            let shapes = BandShapeGrid::build(map, &plan, &|p: &crate::photon::Photon, view| {
+                est.shape_weight(p, view)
+            })?;
             est.shapes = Some(shapes);
         }
         Ok(est)
@@ -213,6 +251,12 @@ impl<'a> Estimator<'a> {
     /// below ([`VIEW_DOWN`]), as a volume estimate there weighs it: the
     /// local mixture of the truncated phase functions.
     fn shape_weight(&self, p: &crate::photon::Photon, view: usize) -> f64 {
+        let base = Self::fixed_views(self.scene);
+        if view >= base {
+            return f64::from(u8::from(
+                direction_bin(p.direction, self.sun_w) == view - base,
+            ));
+        }
         let toward_viewer = if view == VIEW_DOWN { -Vec3::Z } else { Vec3::Z };
         let iop = self.scene.water.iop(p.position, p.band as usize);
         let b = iop.b();
@@ -225,11 +269,11 @@ impl<'a> Estimator<'a> {
         )
     }
 
-    /// Viewing directions of the band-shape grid: light travelling up and
-    /// down, and a third, light travelling up as rays looking down at a
+    /// Fixed viewing directions of the band-shape grid: light travelling
+    /// up and down, and a third, light travelling up as rays looking down at a
     /// target weigh it, in a scene with targets whose peak for those rays
     /// (`forward_peak_target_deg`) differs from the one looking down.
-    fn shape_views(scene: &Scene) -> usize {
+    fn fixed_views(scene: &Scene) -> usize {
         let e = &scene.estimate;
         if scene.target_extents.is_empty() || e.forward_peak_target_deg == e.forward_peak_down_deg {
             2
@@ -238,19 +282,29 @@ impl<'a> Estimator<'a> {
         }
     }
 
+    /// Viewing directions of the band-shape grid: [`Self::fixed_views`],
+    /// then one per direction bin for oblique rays.
+    fn shape_views(scene: &Scene) -> usize {
+        Self::fixed_views(scene) + DIRECTION_BINS
+    }
+
+    /// The band shape for an estimate toward `toward_viewer`: a fixed
+    /// view's for rays near the vertical, the direction bins' otherwise.
+    fn shape_for(&self, toward_viewer: Vec3, at_target: bool) -> ShapeView {
+        let z = toward_viewer.z;
+        if z >= FIXED_DOWN_COS || z <= -FIXED_UP_COS {
+            ShapeView::Fixed(self.shape_view(toward_viewer, at_target))
+        } else {
+            ShapeView::Binned
+        }
+    }
+
     /// The band-shape grid's view for an estimate toward `toward_viewer`
     /// (`at_target`: a ray looking down at a target).
     fn shape_view(&self, toward_viewer: Vec3, at_target: bool) -> usize {
         match (toward_viewer.z > 0.0, at_target) {
             (false, _) => VIEW_DOWN,
-            (true, true)
-                if self
-                    .shapes
-                    .as_ref()
-                    .is_some_and(|g| g.views() > VIEW_UP_TARGET) =>
-            {
-                VIEW_UP_TARGET
-            }
+            (true, true) if Self::fixed_views(self.scene) > VIEW_UP_TARGET => VIEW_UP_TARGET,
             (true, _) => VIEW_UP,
         }
     }
@@ -265,8 +319,15 @@ impl<'a> Estimator<'a> {
     /// so do those of paths split over targets (`Scene::target_split_gain`).
     fn shape_voxels(scene: &Scene, [down, up]: [u64; 2]) -> usize {
         let nb = scene.bands.len();
-        let by_bytes =
-            (MAX_SHAPE_BYTES / BandShapeGrid::bytes(1, nb, Self::shape_views(scene))) as usize;
+        let one = GridPlan {
+            size_m: scene.domain.size_m,
+            voxels: 1,
+            layers_only: true,
+            boundaries_m: &[],
+            columns: &[],
+            views: Self::shape_views(scene),
+        };
+        let by_bytes = (MAX_SHAPE_BYTES / BandShapeGrid::bytes(&one, nb)) as usize;
         let growth = (scene.photons as f64 / crate::scene::settings::POLICY_PHOTONS)
             .sqrt()
             .max(1.0);
@@ -277,16 +338,35 @@ impl<'a> Estimator<'a> {
         BandShapeGrid::planned_voxels(photons, nb, per_band, MAX_SHAPE_VOXELS.min(by_bytes))
     }
 
+    /// The band-shape grid of `scene` over a map of `volume_photons`
+    /// volume photons ([down, up] layers), its layers ending at the depths
+    /// `boundaries` where the IOPs jump and its cells at the targets'
+    /// footprints.
+    fn shape_plan<'s>(
+        scene: &'s Scene,
+        volume_photons: [u64; 2],
+        boundaries: &'s [f64],
+    ) -> GridPlan<'s> {
+        GridPlan {
+            size_m: scene.domain.size_m,
+            voxels: Self::shape_voxels(scene, volume_photons),
+            layers_only: scene.horizontally_uniform(),
+            boundaries_m: boundaries,
+            columns: &scene.target_extents,
+            views: Self::shape_views(scene),
+        }
+    }
+
     /// Bytes of the band-shape grid `Estimator::new` builds for `scene` over
     /// a map of `volume_photons` volume photons ([down, up] layers; 0
     /// unless `spectral = "grid"`), for the memory budget.
     pub fn shape_grid_bytes(scene: &Scene, volume_photons: [u64; 2]) -> u64 {
         match scene.estimate.spectral {
-            SpectralMode::Grid => BandShapeGrid::bytes(
-                Self::shape_voxels(scene, volume_photons),
-                scene.bands.len(),
-                Self::shape_views(scene),
-            ),
+            SpectralMode::Grid => {
+                let boundaries = scene.water.depth_boundaries();
+                let plan = Self::shape_plan(scene, volume_photons, &boundaries);
+                BandShapeGrid::bytes(&plan, scene.bands.len())
+            }
             _ => 0,
         }
     }
@@ -427,7 +507,7 @@ impl<'a> Estimator<'a> {
             }
             (w, cos > 0.0, phases)
         };
-        let view = Some(self.shape_view(toward_viewer, at_target));
+        let view = Some(self.shape_for(toward_viewer, at_target));
         let classes = if self.shapes.is_some() {
             // Light travelling toward the viewer looking down travels up.
             let (light, heavy) = if toward_viewer.z > 0.0 {

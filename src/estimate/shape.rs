@@ -36,6 +36,7 @@
 //! estimates (the floor's band shape is the reflectance times the
 //! incident light, which the expanded search gives well).
 
+use crate::bounds::Aabb;
 use crate::error::Result;
 use crate::photon::VOLUME_LAYERS;
 use crate::store::PhotonQuery;
@@ -43,6 +44,11 @@ use glam::Vec3;
 
 /// Vertical histogram bins for the equal-count layers.
 const Z_BINS: usize = 4096;
+/// Narrowest column of cells over a target (m): the light a ray looking
+/// down at a target weighs comes from 30 degrees and more off its axis,
+/// from around a small target as much as from it, and a narrower column
+/// holds too few photons for steady shapes.
+const MIN_COLUMN_M: f32 = 2.0;
 /// Most depth layers of a grid.
 const MAX_LAYERS: usize = 64;
 
@@ -53,15 +59,9 @@ pub struct BandShapeGrid {
     /// whose rays looking down at a target truncate the phase functions'
     /// forward peak otherwise, [`VIEW_UP_TARGET`].
     views: usize,
-    /// Cells along x and y, layers along z.
-    n: [usize; 3],
-    size_m: [f32; 2],
-    /// Layer edges from the top (highest z) down, `n[2] + 1` values.
-    z_edges: Vec<f32>,
-    /// Layer centres, top down.
-    z_centres: Vec<f32>,
-    /// Depths where the IOPs jump (z, negative), never interpolated across.
-    jumps: Vec<f32>,
+    /// Cells along x and y (from 0), layers along the depth (from the
+    /// surface down, so that every axis ascends).
+    axes: [Axis; 3],
     /// Per voxel (x fastest, then y, then z) and viewing direction: the
     /// band shares (sum 1), or all zero where no photon fell.
     shapes: Vec<f32>,
@@ -71,6 +71,51 @@ pub struct BandShapeGrid {
 }
 
 use crate::photon::GROUPS;
+
+/// Direction bins of the shapes for oblique rays (see
+/// [`direction_bin`]).
+pub const DIRECTION_BINS: usize = 9;
+
+/// Cosines of the angles from the refracted sun's direction (8, 16, 28 and
+/// 45 degrees) that bound the bins of light travelling down around it.
+const SUN_BIN_COS: [f32; 4] = [
+    0.990_27,
+    0.961_26,
+    0.882_95,
+    std::f32::consts::FRAC_1_SQRT_2,
+];
+
+/// The bin of a photon travelling along `dir` (unit), for the band shapes
+/// of oblique rays: light travelling down in four cones around the
+/// refracted sun's direction of travel `sun_w` (the aureole, whose band
+/// shape at depth differs most from the diffuse light's), then steep and
+/// shallow; light travelling up in three bands of elevation.
+///
+/// Why: the viewing directions above weigh the photons for a ray looking
+/// straight up or down. A ray looking elsewhere (a final-gather ray off a
+/// target's face, a tilted camera) weighs other photons most, and with the
+/// vertical shapes a target 3 m deep read its face's red bands 3–6 %
+/// high, the green 2 % low (the vertical view looking up weighs the
+/// aureole's red-rich light, which a gather ray near the sun leaves to its
+/// forward peak). For such a ray the estimate weighs each bin's shape by
+/// its own photons' weights toward the ray
+/// ([`BandShapeGrid::mixed_shape_and_groups_at`]).
+pub fn direction_bin(dir: Vec3, sun_w: Vec3) -> usize {
+    if dir.z < 0.0 {
+        let c = dir.dot(sun_w);
+        match SUN_BIN_COS.iter().position(|&b| c >= b) {
+            Some(i) => i,
+            None if dir.z < -0.5 => 4,
+            None => 5,
+        }
+    } else if dir.z < 0.5 {
+        6
+    } else if dir.z < 0.87 {
+        7
+    } else {
+        8
+    }
+}
 
 /// The shape of light travelling up, seen by a ray looking down.
 pub const VIEW_UP: usize = 0;
@@ -97,30 +142,42 @@ impl BandShapeGrid {
         ((volume_photons / per_voxel.max(1)) as usize).clamp(1, max_voxels.max(1))
     }
 
-    /// Bytes of a grid of `voxels` voxels over `bands` bands and `views`
-    /// viewing directions, at its peak while building (f64 sums per group,
-    /// then the f32 shares and group parts).
-    pub fn bytes(voxels: usize, bands: usize, views: usize) -> u64 {
+    /// Bytes of the grid `plan` describes over `bands` bands, at its peak
+    /// while building (f64 sums per group, then the f32 shares and group
+    /// parts).
+    pub fn bytes(plan: &GridPlan, bands: usize) -> u64 {
         let per = GROUPS * std::mem::size_of::<f64>() + (1 + GROUPS) * std::mem::size_of::<f32>();
-        (voxels * views * bands * per) as u64
+        (plan.most_cells() * plan.views * bands * per) as u64
     }
 
-    /// Build the grid from the volume photons of `map` over a domain of
-    /// `size_m`, with about `voxels` voxels; `weight(photon, view)` is a
-    /// photon's phase weight toward a viewer in each of `views` viewing
-    /// directions ([`VIEW_UP`], [`VIEW_DOWN`], [`VIEW_UP_TARGET`]). With `layers_only` (a scene whose light field cannot vary
-    /// across the domain) the voxels are depth layers spanning the domain:
-    /// the grid resolves only what varies, and each layer gathers as many
-    /// photons as the grid's cells of that depth would together.
+    /// Cells along x and y and layers along z for about `voxels` voxels,
+    /// before target columns and IOP jumps add their edges.
+    fn base_dims(voxels: usize, layers_only: bool) -> [usize; 3] {
+        if layers_only {
+            return [1, 1, voxels.clamp(1, MAX_LAYERS)];
+        }
+        let nz = ((voxels as f64).cbrt().round() as usize).clamp(1, MAX_LAYERS);
+        let nxy = ((voxels as f64 / nz as f64).sqrt().round() as usize).max(1);
+        [nxy, nxy, nz]
+    }
+
+    /// Build the grid `plan` describes from the volume photons of `map`;
+    /// `weight(photon, view)` is a photon's phase weight toward a viewer
+    /// in each of the plan's viewing directions ([`VIEW_UP`],
+    /// [`VIEW_DOWN`], [`VIEW_UP_TARGET`]).
     pub fn build(
         map: &dyn PhotonQuery,
-        size_m: [f64; 2],
-        voxels: usize,
-        layers_only: bool,
-        boundaries_m: &[f64],
-        views: usize,
+        plan: &GridPlan,
         weight: &(dyn Fn(&crate::photon::Photon, usize) -> f64 + Sync),
     ) -> Result<BandShapeGrid> {
+        let GridPlan {
+            size_m,
+            voxels,
+            layers_only,
+            boundaries_m,
+            columns,
+            views,
+        } = *plan;
         let bands = map.bands().len();
         // Pass 1: the depth distribution of the photons, below the surface
         // down to the deepest (from the map's index).
@@ -135,56 +192,40 @@ impl BandShapeGrid {
             map.for_each_photon(layer, &mut |p| hist[bin(p.position.z)] += 1)?;
         }
         let total: u64 = hist.iter().sum();
-        let (nz, nxy) = if layers_only {
-            (voxels.clamp(1, MAX_LAYERS), 1)
-        } else {
-            let nz = ((voxels as f64).cbrt().round() as usize).clamp(1, MAX_LAYERS);
-            (
-                nz,
-                ((voxels as f64 / nz as f64).sqrt().round() as usize).max(1),
-            )
-        };
-        // Equal-count layers.
+        let [nxy, _, nz] = Self::base_dims(voxels, layers_only);
+        // Equal-count layers, as depths from the surface down.
         let mut z_edges = vec![0.0f32];
         let mut acc = 0u64;
         let mut next = 1;
         for (i, h) in hist.iter().enumerate() {
             acc += h;
             while next < nz && acc * nz as u64 >= total * next as u64 {
-                z_edges.push(-depth * (i + 1) as f32 / Z_BINS as f32);
+                z_edges.push(depth * (i + 1) as f32 / Z_BINS as f32);
                 next += 1;
             }
         }
-        while z_edges.len() < nz {
-            z_edges.push(-depth);
-        }
-        z_edges.push(-depth);
+        z_edges.push(depth);
         // Layers also end where the IOPs jump, and shapes are not blended
         // across such a depth (see `shape_and_groups_at`).
         let jumps: Vec<f32> = boundaries_m
             .iter()
-            .map(|&d| -d as f32)
-            .filter(|&z| z < 0.0 && z > -depth)
+            .map(|&d| d as f32)
+            .filter(|&d| d > 0.0 && d < depth)
             .collect();
-        z_edges.extend(&jumps);
-        z_edges.sort_by(|a, b| b.total_cmp(a));
-        z_edges.dedup();
-        let nz = z_edges.len() - 1;
-        let z_centres = z_edges.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
-        let size = [size_m[0] as f32, size_m[1] as f32];
+        let columns = if layers_only { &[][..] } else { columns };
         let mut grid = BandShapeGrid {
             bands,
             views,
-            n: [nxy, nxy, nz],
-            size_m: size,
-            z_edges,
-            z_centres,
-            jumps,
+            axes: [
+                Axis::across(size_m[0], nxy, columns.iter().map(|b| [b.min.x, b.max.x])),
+                Axis::across(size_m[1], nxy, columns.iter().map(|b| [b.min.y, b.max.y])),
+                Axis::new(z_edges, jumps),
+            ],
             shapes: Vec::new(),
             deviations: Vec::new(),
         };
         // Pass 2: weighted power per voxel, viewing direction, group and band.
-        let cells = nxy * nxy * nz;
+        let cells = grid.axes.iter().map(Axis::cells).product::<usize>();
         let per_voxel = GROUPS * bands;
         let mut sums = vec![0f64; cells * views * per_voxel];
         for layer in VOLUME_LAYERS {
@@ -228,7 +269,7 @@ impl BandShapeGrid {
 
     /// Cells along x and y and layers along z.
     pub fn dims(&self) -> [usize; 3] {
-        self.n
+        self.axes.each_ref().map(Axis::cells)
     }
 
     /// Bytes held.
@@ -236,19 +277,9 @@ impl BandShapeGrid {
         ((self.shapes.len() + self.deviations.len()) * std::mem::size_of::<f32>()) as u64
     }
 
-    fn layer_of(&self, z: f32) -> usize {
-        // Edges run from the top down.
-        self.z_edges[1..]
-            .iter()
-            .position(|&e| z >= e)
-            .unwrap_or(self.n[2] - 1)
-    }
-
     fn voxel_of(&self, p: Vec3) -> usize {
-        let [nx, ny, _] = self.n;
-        let cx = ((p.x / self.size_m[0] * nx as f32) as usize).min(nx - 1);
-        let cy = ((p.y / self.size_m[1] * ny as f32) as usize).min(ny - 1);
-        (self.layer_of(p.z) * ny + cy) * nx + cx
+        let [ax, ay, az] = &self.axes;
+        (az.cell_of(-p.z) * ay.cells() + ay.cell_of(p.y)) * ax.cells() + ax.cell_of(p.x)
     }
 
     /// The band shares at `x` of the in-scatter travelling up (`up`) or
@@ -264,6 +295,56 @@ impl BandShapeGrid {
         self.views
     }
 
+    /// The band shares at `x` of light weighed by `weights`, pairs of a
+    /// viewing direction (a [`direction_bin`]'s view) and its weight,
+    /// into `out`, and with `groups` each photon group's part, both mixed
+    /// alike; `scratch` holds a view's shares and group parts while
+    /// mixing (`(1 + GROUPS) * bands` values). False where no view with
+    /// weight holds shares around x.
+    pub fn mixed_shape_and_groups_at(
+        &self,
+        x: Vec3,
+        weights: &[(usize, f64)],
+        out: &mut [f64],
+        mut groups: Option<&mut [f64]>,
+        scratch: &mut Vec<f64>,
+    ) -> bool {
+        let nb = self.bands;
+        scratch.resize((1 + GROUPS) * nb, 0.0);
+        let (one, one_groups) = scratch.split_at_mut(nb);
+        out.iter_mut().for_each(|o| *o = 0.0);
+        if let Some(g) = groups.as_deref_mut() {
+            g.iter_mut().for_each(|o| *o = 0.0);
+        }
+        let mut total = 0.0;
+        for &(view, w) in weights {
+            if w <= 0.0 || !w.is_finite() {
+                continue;
+            }
+            let with_groups = groups.is_some();
+            if !self.shape_and_groups_at(x, view, one, with_groups.then_some(&mut *one_groups)) {
+                continue;
+            }
+            total += w;
+            out.iter_mut()
+                .zip(one.iter())
+                .for_each(|(o, s)| *o += w * s);
+            if let Some(g) = groups.as_deref_mut() {
+                g.iter_mut()
+                    .zip(one_groups.iter())
+                    .for_each(|(o, s)| *o += w * s);
+            }
+        }
+        if total <= 0.0 {
+            return false;
+        }
+        out.iter_mut().for_each(|o| *o /= total);
+        if let Some(g) = groups {
+            g.iter_mut().for_each(|o| *o /= total);
+        }
+        true
+    }
+
     /// [`BandShapeGrid::shape_at`], and with `groups` (`GROUPS` runs of
     /// bands) each photon group's part of the shares, interpolated alike.
     pub fn shape_and_groups_at(
@@ -273,38 +354,13 @@ impl BandShapeGrid {
         out: &mut [f64],
         mut groups: Option<&mut [f64]>,
     ) -> bool {
-        let [nx, ny, nz] = self.n;
         let (h, views) = (view, self.views);
         debug_assert!(h < views);
-        // Fractional cell coordinates of x relative to the centres.
-        let axis = |v: f32, size: f32, n: usize| -> (usize, usize, f32) {
-            let c = (v / size * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
-            let i0 = c.floor() as usize;
-            let i1 = (i0 + 1).min(n - 1);
-            (i0, i1, c - i0 as f32)
-        };
-        let (x0, x1, fx) = axis(x.x, self.size_m[0], nx);
-        let (y0, y1, fy) = axis(x.y, self.size_m[1], ny);
-        // Layers: centres are uneven.
-        let zc = &self.z_centres;
-        let (z0, z1, fz) = if x.z >= zc[0] {
-            (0, 0, 0.0)
-        } else if x.z <= zc[nz - 1] {
-            (nz - 1, nz - 1, 0.0)
-        } else {
-            let k = zc.iter().position(|&c| c < x.z).unwrap_or(nz - 1);
-            let (za, zb) = (zc[k - 1], zc[k]);
-            // A jump in the IOPs between x and a centre: only the layer on
-            // x's side of it describes x.
-            let between = |hi: f32, lo: f32| self.jumps.iter().any(|&j| j < hi && j >= lo);
-            if between(za, x.z) {
-                (k, k, 0.0)
-            } else if between(x.z, zb) {
-                (k - 1, k - 1, 0.0)
-            } else {
-                (k - 1, k, (za - x.z) / (za - zb))
-            }
-        };
+        let [ax, ay, az] = &self.axes;
+        let (nx, ny) = (ax.cells(), ay.cells());
+        let (x0, x1, fx) = ax.bracket(x.x);
+        let (y0, y1, fy) = ay.bracket(x.y);
+        let (z0, z1, fz) = az.bracket(-x.z);
         out.iter_mut().for_each(|o| *o = 0.0);
         if let Some(g) = groups.as_deref_mut() {
             g.iter_mut().for_each(|o| *o = 0.0);
@@ -344,6 +400,130 @@ impl BandShapeGrid {
             g.iter_mut().for_each(|o| *o /= weight);
         }
         true
+    }
+}
+
+/// What a band-shape grid resolves: the domain of `size_m` in about
+/// `voxels` voxels, as depth layers alone with `layers_only` (a scene whose
+/// light field cannot vary across the domain: the grid resolves only what
+/// varies, and each layer gathers as many photons as the grid's cells of
+/// that depth would together); layers end at the depths `boundaries_m`
+/// where the IOPs jump, and cells at the footprints of `columns` (the
+/// targets), so that the light over a target is not blended with the light
+/// beside it; `views` viewing directions.
+#[derive(Clone, Copy)]
+pub struct GridPlan<'a> {
+    pub size_m: [f64; 2],
+    pub voxels: usize,
+    pub layers_only: bool,
+    pub boundaries_m: &'a [f64],
+    pub columns: &'a [Aabb],
+    pub views: usize,
+}
+
+impl GridPlan<'_> {
+    /// Most voxels the grid can have: its cells across the domain with the
+    /// columns' edges, times its layers with every jump's edge.
+    fn most_cells(&self) -> usize {
+        let [nxy, _, nz] = BandShapeGrid::base_dims(self.voxels, self.layers_only);
+        let across = |size: f64, edges: fn(&Aabb) -> [f32; 2]| {
+            if self.layers_only {
+                1
+            } else {
+                Axis::across(size, nxy, self.columns.iter().map(edges)).cells()
+            }
+        };
+        across(self.size_m[0], |b| [b.min.x, b.max.x])
+            * across(self.size_m[1], |b| [b.min.y, b.max.y])
+            * (nz + self.boundaries_m.len())
+    }
+}
+
+/// One axis of the grid: ascending cell edges, their centres, and the
+/// walls (edges) that interpolation does not cross.
+struct Axis {
+    edges: Vec<f32>,
+    centres: Vec<f32>,
+    walls: Vec<f32>,
+}
+
+impl Axis {
+    /// Cells between the ascending `edges` (sorted and deduplicated here),
+    /// never blended across `walls`.
+    fn new(mut edges: Vec<f32>, walls: Vec<f32>) -> Axis {
+        edges.extend(&walls);
+        edges.sort_by(f32::total_cmp);
+        edges.dedup();
+        if edges.len() < 2 {
+            edges.push(edges.first().copied().unwrap_or(0.0) + 1.0);
+        }
+        let centres = edges.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+        Axis {
+            edges,
+            centres,
+            walls,
+        }
+    }
+
+    /// `n` even cells over `[0, size]`, with walls at each of `spans`'
+    /// ends (a target's extent, wrapped into the periodic domain). An even
+    /// edge closer than half a cell to a wall gives way to it, so no cell
+    /// beside a target is a sliver with few photons.
+    fn across(size: f64, n: usize, spans: impl Iterator<Item = [f32; 2]>) -> Axis {
+        let size = size as f32;
+        let step = size / n as f32;
+        let mut walls: Vec<f32> = Vec::new();
+        for [lo, hi] in spans {
+            let widen = 0.5 * (MIN_COLUMN_M - (hi - lo)).max(0.0);
+            let (lo, hi) = (lo - widen, hi + widen);
+            if hi - lo >= size {
+                continue;
+            }
+            for e in [lo, hi] {
+                let e = e.rem_euclid(size);
+                if e > 0.0 && e < size {
+                    walls.push(e);
+                }
+            }
+        }
+        let even = (0..=n).map(|i| i as f32 * step).filter(|&e| {
+            e <= 0.0 || e >= size || walls.iter().all(|w| (w - e).abs() >= 0.5 * step)
+        });
+        Axis::new(even.collect(), walls)
+    }
+
+    fn cells(&self) -> usize {
+        self.centres.len()
+    }
+
+    /// The cell holding `v` (clamped to the axis).
+    fn cell_of(&self, v: f32) -> usize {
+        self.edges[1..self.edges.len() - 1]
+            .partition_point(|&e| e <= v)
+            .min(self.cells() - 1)
+    }
+
+    /// The two cells whose centres bracket `v` and the weight of the
+    /// second, clamped at the ends; where a wall lies between `v` and a
+    /// centre, only the cell on `v`'s side describes it.
+    fn bracket(&self, v: f32) -> (usize, usize, f32) {
+        let c = &self.centres;
+        let n = c.len();
+        if v <= c[0] {
+            return (0, 0, 0.0);
+        }
+        if v >= c[n - 1] {
+            return (n - 1, n - 1, 0.0);
+        }
+        let k = c.partition_point(|&x| x <= v).clamp(1, n - 1);
+        let (lo, hi) = (c[k - 1], c[k]);
+        if self.walls.iter().any(|&w| w > lo && w <= v) {
+            (k, k, 0.0)
+        } else if self.walls.iter().any(|&w| w > v && w < hi) {
+            (k - 1, k - 1, 0.0)
+        } else {
+            (k - 1, k, (v - lo) / (hi - lo))
+        }
     }
 }
 

@@ -286,7 +286,7 @@ impl Estimator<'_> {
         classes: Classes,
         weight: &PhotonWeight,
         surface: Option<(Vec3, SurfaceId)>,
-        view: Option<usize>,
+        view: Option<ShapeView>,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -302,6 +302,9 @@ impl Estimator<'_> {
             group_coarse,
             group_expanded,
             shape_groups,
+            bin_sums,
+            bin_views,
+            bin_shape,
             inelastic,
             phase_density,
             elastic_density,
@@ -333,9 +336,12 @@ impl Estimator<'_> {
         let outer = self.region(x, surface, r_outer);
         let small = outer.capped(r_local);
         let big = outer.capped(r_big);
-        // The band shape from the grid, where the grid mode has one here.
-        let has_shape = match (&self.shapes, view) {
-            (Some(grid), Some(view)) => grid.shape_and_groups_at(
+        // The band shape from the grid, where the grid mode has one here:
+        // a fixed view's now; the direction bins' once their weights are
+        // summed below.
+        let binned = self.shapes.is_some() && matches!(view, Some(ShapeView::Binned));
+        let mut has_shape = match (&self.shapes, view) {
+            (Some(grid), Some(ShapeView::Fixed(view))) => grid.shape_and_groups_at(
                 x,
                 view,
                 shape,
@@ -343,8 +349,12 @@ impl Estimator<'_> {
             ),
             _ => false,
         };
+        if binned {
+            *bin_sums = [[0.0; DIRECTION_BINS]; 2];
+        }
         // Group sums: totals always, per band where the combination reads
-        // bands (naive: local and coarse; compensated: expanded).
+        // bands (naive: local and coarse; compensated: expanded, unless a
+        // shape is found).
         if with_groups {
             group_local.clear(!compensated);
             group_coarse.clear(!compensated);
@@ -396,6 +406,13 @@ impl Estimator<'_> {
                     inelastic[k + 1].add(band, w_phases[1]);
                     inelastic[k + 2].add(band, w);
                 }
+            }
+            // An oblique estimate's weights per direction bin: [local,
+            // expanded], as the level counts them.
+            let counted = [in_local && !heavy, in_big && heavy];
+            if binned && (counted[0] || counted[1]) {
+                let scale = usize::from(!counted[0]);
+                bin_sums[scale][direction_bin(n.photon.direction, self.sun_w)] += w;
             }
             if in_local && !heavy {
                 moments_local[0] += w;
@@ -454,6 +471,25 @@ impl Estimator<'_> {
                 iso_density[e] = il[e] / v_local + ib[e] / v_big;
                 elastic_density[e] = el[e] / v_local + eb[e] / v_big;
             }
+        }
+        if binned {
+            // Each bin weighs in as its photons' density toward the viewer.
+            let v_big = if v_big > 0.0 { v_big } else { f64::INFINITY };
+            let base = self.shapes.as_ref().map_or(0, |g| g.views()) - DIRECTION_BINS;
+            bin_views.clear();
+            bin_views.extend(
+                (0..DIRECTION_BINS)
+                    .map(|d| (base + d, bin_sums[0][d] / v_local + bin_sums[1][d] / v_big)),
+            );
+            has_shape = self.shapes.as_ref().is_some_and(|g| {
+                g.mixed_shape_and_groups_at(
+                    x,
+                    bin_views,
+                    shape,
+                    with_groups.then_some(&mut shape_groups[..]),
+                    bin_shape,
+                )
+            });
         }
         let groups = with_groups.then_some(Groups {
             local: group_local,

@@ -17,6 +17,18 @@ fn hemisphere(p: &Photon, view: usize) -> f64 {
     f64::from(u8::from((p.direction.z > 0.0) == (view == VIEW_UP)))
 }
 
+/// A grid over the 10 m x 10 m test domain, without target columns.
+fn plan(voxels: usize, boundaries_m: &[f64], views: usize) -> GridPlan<'_> {
+    GridPlan {
+        size_m: [10.0, 10.0],
+        voxels,
+        layers_only: false,
+        boundaries_m,
+        columns: &[],
+        views,
+    }
+}
+
 fn pick(shares: &[f64; 4], u: f64) -> u16 {
     let mut acc = 0.0;
     for (i, s) in shares.iter().enumerate() {
@@ -70,7 +82,7 @@ fn grid_reads_the_band_shares_of_each_hemisphere() {
     let n = 400_000;
     let m = map(n);
     let voxels = 64;
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], voxels, false, &[], 2, &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, &plan(voxels, &[], 2), &hemisphere).unwrap();
     let [nx, ny, nz] = g.dims();
     assert!(nx * ny * nz >= 32 && nz >= 3, "{:?}", g.dims());
     let per_voxel_hemisphere = n as f64 / (nx * ny * nz) as f64 / 2.0;
@@ -120,7 +132,7 @@ fn voxels_follow_the_photon_count() {
         max: Vec3::new(10.0, 10.0, 0.0),
     };
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], 2, &hemisphere).unwrap();
+    let g = BandShapeGrid::build(&m, &plan(8, &[], 2), &hemisphere).unwrap();
     let mut out = [0.0; 4];
     assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
     assert!(g.shape_at(Vec3::new(5.0, 5.0, -3.0), false, &mut out));
@@ -151,11 +163,11 @@ fn shapes_are_not_blended_across_an_iop_jump() {
     let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
     let mut out = [0.0; 2];
     for (x_z, want) in [(-1.95, [1.0, 0.0]), (-2.05, [0.0, 1.0])] {
-        let g = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[2.0], 2, &hemisphere).unwrap();
+        let g = BandShapeGrid::build(&m, &plan(4, &[2.0], 2), &hemisphere).unwrap();
         assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert_eq!(out, want, "at z = {x_z}");
         // Without the jump the site is between two centres and mixes them.
-        let blind = BandShapeGrid::build(&m, [10.0, 10.0], 4, false, &[], 2, &hemisphere).unwrap();
+        let blind = BandShapeGrid::build(&m, &plan(4, &[], 2), &hemisphere).unwrap();
         assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert!(out[0] > 0.0 && out[1] > 0.0, "{out:?}");
     }
@@ -173,7 +185,7 @@ fn each_view_holds_its_own_shares() {
         VIEW_UP_TARGET => f64::from(u8::from(p.band == 2 && p.direction.z > 0.0)),
         v => hemisphere(p, v),
     };
-    let g = BandShapeGrid::build(&m, [10.0, 10.0], 8, false, &[], 3, &weight).unwrap();
+    let g = BandShapeGrid::build(&m, &plan(8, &[], 3), &weight).unwrap();
     assert_eq!(g.views(), 3);
     let x = Vec3::new(5.0, 5.0, -3.0);
     let mut out = [0.0; 4];
@@ -181,4 +193,150 @@ fn each_view_holds_its_own_shares() {
     assert_eq!(out, [0.0, 0.0, 1.0, 0.0]);
     assert!(g.shape_and_groups_at(x, VIEW_UP, &mut out, None));
     assert!(out.iter().all(|&s| s > 0.1), "{out:?}");
+}
+
+/// Cells end at a target's footprint and shapes are not blended across it:
+/// with every photon over a 2 m square band 0 and every other photon band
+/// 1, a site over the square reads [1, 0] and a site just beside it [0, 1]
+/// exactly, where the even cells (5 m here) would mix the two.
+#[test]
+fn the_light_over_a_target_keeps_its_own_shape() {
+    let photons = (0..20_000u64).map(|i| {
+        let mut rng = Pcg32::new(9, i);
+        let position = Vec3::new(
+            10.0 * rng.uniform_f32(),
+            10.0 * rng.uniform_f32(),
+            -8.0 * rng.uniform_f32(),
+        );
+        let over = (4.0..6.0).contains(&position.x) && (4.0..6.0).contains(&position.y);
+        let p = Photon {
+            position,
+            direction: Vec3::Z,
+            band: u16::from(!over),
+            power: 1.0,
+            group: 0,
+        };
+        (p, volume_layer(p.direction))
+    });
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -8.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
+    let target = [Aabb {
+        min: Vec3::new(4.0, 4.0, -6.0),
+        max: Vec3::new(6.0, 6.0, -5.0),
+    }];
+    let with_column = GridPlan {
+        columns: &target,
+        ..plan(8, &[], 2)
+    };
+    let g = BandShapeGrid::build(&m, &with_column, &hemisphere).unwrap();
+    assert_eq!(g.dims()[0], 3, "{:?}", g.dims());
+    let mut out = [0.0; 2];
+    for (x, y, want) in [
+        (5.0, 5.0, [1.0, 0.0]),
+        (4.1, 5.9, [1.0, 0.0]),
+        (3.9, 5.0, [0.0, 1.0]),
+        (5.0, 6.1, [0.0, 1.0]),
+    ] {
+        assert!(g.shape_at(Vec3::new(x, y, -2.0), true, &mut out));
+        assert_eq!(out, want, "at ({x}, {y})");
+    }
+    // The even cells alone blend the square's light with its surroundings'.
+    let blind = BandShapeGrid::build(&m, &plan(8, &[], 2), &hemisphere).unwrap();
+    assert!(blind.shape_at(Vec3::new(5.0, 5.0, -2.0), true, &mut out));
+    assert!(out[0] < 0.5 && out[1] > 0.5, "{out:?}");
+    // A target across the periodic edge has its cells at both ends.
+    let wrapped = [Aabb {
+        min: Vec3::new(-1.0, 4.0, -6.0),
+        max: Vec3::new(1.0, 6.0, -5.0),
+    }];
+    let plan = GridPlan {
+        columns: &wrapped,
+        ..plan(8, &[], 2)
+    };
+    assert_eq!(plan.most_cells(), 4 * 3 * 2);
+    let g = BandShapeGrid::build(&m, &plan, &hemisphere).unwrap();
+    assert_eq!(g.dims(), [4, 3, 2]);
+}
+
+/// The bins partition every direction: light travelling down falls in the
+/// cones around the sun by its angle to it, then by steepness; light
+/// travelling up by its elevation.
+#[test]
+fn direction_bins_partition_the_sphere() {
+    let sun = Vec3::new(0.37, 0.0, -0.93).normalize();
+    let at = |deg: f32| {
+        let t = deg.to_radians();
+        // Turned from the sun toward the +y axis.
+        (sun * t.cos() + Vec3::Y * t.sin()).normalize()
+    };
+    for (dir, want) in [
+        (sun, 0),
+        (at(10.0), 1),
+        (at(20.0), 2),
+        (at(40.0), 3),
+        (-Vec3::Z, 2),
+        (Vec3::new(-0.6, 0.0, -0.8), 4),
+        (Vec3::new(0.0, 0.95, -0.31), 5),
+        (Vec3::new(0.0, 0.9, 0.44), 6),
+        (Vec3::new(0.0, 0.6, 0.8), 7),
+        (Vec3::Z, 8),
+    ] {
+        assert_eq!(direction_bin(dir, sun), want, "{dir:?}");
+    }
+    let mut rng = Pcg32::new(3, 0);
+    let mut seen = [0u32; DIRECTION_BINS];
+    for _ in 0..10_000 {
+        let z = 1.0 - 2.0 * rng.uniform_f32();
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * rng.uniform_f32();
+        seen[direction_bin(Vec3::new(s * phi.cos(), s * phi.sin(), z), sun)] += 1;
+    }
+    assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
+}
+
+/// Bins mixed by weight: with every photon of bin 0 in band 0 and every
+/// other in band 1, weights 3 on bin 0's view and 1 on bin 8's read
+/// [0.75, 0.25]; a bin without photons where the site is drops out.
+#[test]
+fn binned_shapes_mix_by_weight() {
+    let sun = -Vec3::Z;
+    let photons = (0..20_000u64).map(|i| {
+        let mut rng = Pcg32::new(4, i);
+        let position = Vec3::new(
+            10.0 * rng.uniform_f32(),
+            10.0 * rng.uniform_f32(),
+            -8.0 * rng.uniform_f32(),
+        );
+        let direction = if i % 2 == 0 { sun } else { Vec3::Z };
+        let p = Photon {
+            position,
+            direction,
+            band: u16::from(direction_bin(direction, sun) != 0),
+            power: 1.0,
+            group: (i % 16) as u8,
+        };
+        (p, volume_layer(p.direction))
+    });
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -8.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
+    let weight =
+        |p: &Photon, view: usize| f64::from(u8::from(direction_bin(p.direction, sun) == view));
+    let g = BandShapeGrid::build(&m, &plan(8, &[], DIRECTION_BINS), &weight).unwrap();
+    let x = Vec3::new(5.0, 5.0, -3.0);
+    let (mut out, mut groups, mut scratch) = ([0.0; 2], vec![0.0; GROUPS * 2], Vec::new());
+    let weights = [(0, 3.0), (8, 1.0), (4, 5.0)];
+    assert!(g.mixed_shape_and_groups_at(x, &weights, &mut out, Some(&mut groups), &mut scratch));
+    assert!(
+        (out[0] - 0.75).abs() < 1e-12 && (out[1] - 0.25).abs() < 1e-12,
+        "{out:?}"
+    );
+    // Each bin's shape is exact here, so no group moves it.
+    assert!(groups.iter().all(|d| d.abs() < 1e-6), "{groups:?}");
+    assert!(!g.mixed_shape_and_groups_at(x, &[(4, 1.0)], &mut out, None, &mut scratch));
 }
