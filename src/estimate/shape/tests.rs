@@ -232,7 +232,7 @@ fn the_light_over_a_target_keeps_its_own_shape() {
         ..plan(8, &[], 2)
     };
     let g = BandShapeGrid::build(&m, &with_column, &hemisphere).unwrap();
-    assert_eq!(g.dims()[0], 3, "{:?}", g.dims());
+    assert_eq!((g.dims(), g.columns()), ([2, 2, 2], 1));
     let mut out = [0.0; 2];
     for (x, y, want) in [
         (5.0, 5.0, [1.0, 0.0]),
@@ -256,9 +256,18 @@ fn the_light_over_a_target_keeps_its_own_shape() {
         columns: &wrapped,
         ..plan(8, &[], 2)
     };
-    assert_eq!(plan.most_cells(), 4 * 3 * 2);
+    assert_eq!(plan.most_cells(), (2 * 2 + 1) * 2);
     let g = BandShapeGrid::build(&m, &plan, &hemisphere).unwrap();
-    assert_eq!(g.dims(), [4, 3, 2]);
+    let mut out = [0.0; 2];
+    // Photons at x < 1 and x > 9 (y 4-6) are band 1 but fall in the
+    // column: it reads them on both sides of the edge.
+    for x in [0.5, 9.5] {
+        assert!(g.shape_at(Vec3::new(x, 5.0, -2.0), true, &mut out));
+        assert_eq!(out, [0.0, 1.0], "at x = {x}");
+    }
+    // Beside it, the even cells hold part of the square's band 0.
+    assert!(g.shape_at(Vec3::new(1.5, 5.0, -2.0), true, &mut out));
+    assert!(out[0] > 0.0, "{out:?}");
 }
 
 /// The bins partition every direction: light travelling down falls in the
