@@ -357,14 +357,7 @@ impl BandShapeGrid {
                     .for_each(|(o, s)| *o += w * s);
             }
         }
-        if total <= 0.0 {
-            return false;
-        }
-        out.iter_mut().for_each(|o| *o /= total);
-        if let Some(g) = groups {
-            g.iter_mut().for_each(|o| *o /= total);
-        }
-        true
+        normalised(total, out, groups)
     }
 
     /// [`BandShapeGrid::shape_at`], and with `groups` (`GROUPS` runs of
@@ -430,15 +423,21 @@ impl BandShapeGrid {
                 }
             }
         }
-        if weight <= 0.0 {
-            return false;
-        }
-        out.iter_mut().for_each(|o| *o /= weight);
-        if let Some(g) = groups {
-            g.iter_mut().for_each(|o| *o /= weight);
-        }
-        true
+        normalised(weight, out, groups)
     }
+}
+
+/// Divide the shares `out` and the group parts `groups` by the weight
+/// summed into them; false (and nothing to read) without weight.
+fn normalised(weight: f64, out: &mut [f64], groups: Option<&mut [f64]>) -> bool {
+    if weight <= 0.0 {
+        return false;
+    }
+    out.iter_mut().for_each(|o| *o /= weight);
+    if let Some(g) = groups {
+        g.iter_mut().for_each(|o| *o /= weight);
+    }
+    true
 }
 
 /// What a band-shape grid resolves: the domain of `size_m` in about

@@ -17,6 +17,21 @@ fn hemisphere(p: &Photon, view: usize) -> f64 {
     f64::from(u8::from((p.direction.z > 0.0) == (view == VIEW_UP)))
 }
 
+/// `photons` in the 10 x 10 x 8 m test box, over `bands` bands of
+/// 500-530 nm.
+fn box_map(photons: impl IntoIterator<Item = (Photon, u16)>, bands: usize) -> InMemoryMap {
+    let bounds = Aabb {
+        min: Vec3::new(0.0, 0.0, -8.0),
+        max: Vec3::new(10.0, 10.0, 0.0),
+    };
+    InMemoryMap::new(
+        photons,
+        BandGrid::even(500.0, 530.0, bands).unwrap(),
+        bounds,
+    )
+    .unwrap()
+}
+
 /// A grid over the 10 m x 10 m test domain, without target columns.
 fn plan(voxels: usize, boundaries_m: &[f64], views: usize) -> GridPlan<'_> {
     GridPlan {
@@ -66,11 +81,7 @@ fn map(n: u64) -> InMemoryMap {
         };
         (photon, volume_layer(photon.direction))
     });
-    let bounds = Aabb {
-        min: Vec3::new(0.0, 0.0, -8.0),
-        max: Vec3::new(10.0, 10.0, 0.0),
-    };
-    InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap()
+    box_map(photons, 4)
 }
 
 /// Away from the 4 m change (more than a layer's height), the grid reads
@@ -127,11 +138,7 @@ fn voxels_follow_the_photon_count() {
         };
         (p, volume_layer(p.direction))
     });
-    let bounds = Aabb {
-        min: Vec3::new(0.0, 0.0, -8.0),
-        max: Vec3::new(10.0, 10.0, 0.0),
-    };
-    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 4).unwrap(), bounds).unwrap();
+    let m = box_map(photons, 4);
     let g = BandShapeGrid::build(&m, &plan(8, &[], 2), &hemisphere).unwrap();
     let mut out = [0.0; 4];
     assert!(!g.shape_at(Vec3::new(5.0, 5.0, -3.0), true, &mut out));
@@ -218,11 +225,7 @@ fn the_light_over_a_target_keeps_its_own_shape() {
         };
         (p, volume_layer(p.direction))
     });
-    let bounds = Aabb {
-        min: Vec3::new(0.0, 0.0, -8.0),
-        max: Vec3::new(10.0, 10.0, 0.0),
-    };
-    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
+    let m = box_map(photons, 2);
     let target = [Aabb {
         min: Vec3::new(4.0, 4.0, -6.0),
         max: Vec3::new(6.0, 6.0, -5.0),
@@ -329,11 +332,7 @@ fn binned_shapes_mix_by_weight() {
         };
         (p, volume_layer(p.direction))
     });
-    let bounds = Aabb {
-        min: Vec3::new(0.0, 0.0, -8.0),
-        max: Vec3::new(10.0, 10.0, 0.0),
-    };
-    let m = InMemoryMap::new(photons, BandGrid::even(500.0, 530.0, 2).unwrap(), bounds).unwrap();
+    let m = box_map(photons, 2);
     let weight =
         |p: &Photon, view: usize| f64::from(u8::from(direction_bin(p.direction, sun) == view));
     let g = BandShapeGrid::build(&m, &plan(8, &[], DIRECTION_BINS), &weight).unwrap();
