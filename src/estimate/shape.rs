@@ -95,10 +95,10 @@ const SUN_BIN_COS: [f32; 4] = [
 /// shallow; light travelling up in three bands of elevation.
 ///
 /// Why: the viewing directions above weigh the photons for a ray looking
-/// straight up or down. A ray looking elsewhere (a final-gather ray off a
-/// target's face, a tilted camera) weighs other photons most, and with the
-/// vertical shapes a target 3 m deep read its face's red bands 3–6 %
-/// high, the green 2 % low (the vertical view looking up weighs the
+/// straight up or down. A ray looking up elsewhere (a final-gather ray off
+/// a target's face) weighs other photons most, and with the vertical
+/// shapes a target 3 m deep read its face's red bands 3–6 % high, the
+/// green 2 % low (the vertical view looking up weighs the
 /// aureole's red-rich light, which a gather ray near the sun leaves to its
 /// forward peak). For such a ray the estimate weighs each bin's shape by
 /// its own photons' weights toward the ray
