@@ -475,7 +475,7 @@ impl Estimator<'_> {
         if binned {
             // Each bin weighs in as its photons' density toward the viewer.
             let v_big = if v_big > 0.0 { v_big } else { f64::INFINITY };
-            let base = self.shapes.as_ref().map_or(0, |g| g.views()) - DIRECTION_BINS;
+            let base = Self::fixed_views(self.scene);
             bin_views.clear();
             bin_views.extend(
                 (0..DIRECTION_BINS)
