@@ -187,9 +187,11 @@ impl MapFile {
             e.offset as usize,
             e.length as usize,
         );
-        decoder
+        let decoded = decoder
             .decode(self.blob(t), e, out)
-            .map_err(|err| Error::tile(&self.path, t, err.to_string()))?;
+            .map_err(|err| Error::tile(&self.path, t, err.to_string()));
+        self.release_pages(e.offset as usize, e.length as usize);
+        decoded?;
         let nbands = self.header.bands.len();
         if let Some(p) = out.iter().find(|p| p.band() as usize >= nbands) {
             return Err(Error::tile(
@@ -199,6 +201,44 @@ impl MapFile {
             ));
         }
         Ok(())
+    }
+
+    /// Drop the pages wholly inside `len` bytes at `offset` from the
+    /// process's mapping, once a tile there is decoded: they stay in the
+    /// page cache (a tile decoded again faults them back in without a disk
+    /// read), but no longer count in the process's resident set. Without
+    /// this a render's resident set grows by every tile it has ever
+    /// decoded, the whole map in the end, over the anonymous memory the
+    /// budget bounds: a scheduler that enforces memory by RSS would kill a
+    /// run that keeps its budget. Pages shared with a neighbouring tile stay.
+    fn release_pages(&self, offset: usize, len: usize) {
+        #[cfg(target_os = "linux")]
+        {
+            // SAFETY: sysconf has no preconditions.
+            let page = match unsafe { libc::sysconf(libc::_SC_PAGESIZE) } {
+                p if p > 0 => p as usize,
+                _ => return,
+            };
+            let start = offset.next_multiple_of(page);
+            let end = (offset + len) / page * page;
+            if end > start {
+                // SAFETY: the map is a read-only shared mapping of a file
+                // that no one writes while it is open (its checksums are
+                // checked on every decode): pages dropped here read back
+                // the same bytes on the next access, so a slice borrowed
+                // from them elsewhere sees no change. Advice only: failure
+                // changes nothing.
+                let _ = unsafe {
+                    self.mmap.unchecked_advise_range(
+                        memmap2::UncheckedAdvice::DontNeed,
+                        start,
+                        end - start,
+                    )
+                };
+            }
+        }
+        #[cfg(not(target_os = "linux"))]
+        let _ = (offset, len);
     }
 }
 

@@ -253,6 +253,7 @@ fn sharded_stages_within_64mib() {
     ]);
     let r: EmitReport = report_of(&run, &report);
     assert_peak_within_64mib("merge", r.peak_memory);
+    let map_bytes = std::fs::metadata(&map).unwrap().len();
     for i in 0..2 {
         let out = dir.path().join(format!("part{i}"));
         let tiles = format!("{i}/2");
@@ -274,5 +275,13 @@ fn sharded_stages_within_64mib() {
         let m: littoral::job::distributed::parts::PartManifest =
             report_of(&run, &out.join("part.json"));
         assert_peak_within_64mib(&format!("render part {i}"), m.peak_memory);
+        // A decoded tile's pages leave the resident set: the file pages
+        // resident at once (the binary, its libraries and the tiles being
+        // decoded) stay below the map's size, which every tile was read from.
+        assert!(
+            m.peak_memory.file_bytes < map_bytes,
+            "render part {i}: {} bytes of file pages resident, the map is {map_bytes}",
+            m.peak_memory.file_bytes
+        );
     }
 }
