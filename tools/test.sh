@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # littoral's whole test suite on a fresh machine (Debian 12, a Rust
-# toolchain, Python 3.9 or newer): installs what the tests need where it is
+# toolchain, Python 3.10 or newer): installs what the tests need where it is
 # missing, then runs every test.
 #
 #   1. Debian packages (as root): GDAL (gdal-bin) and Chromium, which read
@@ -8,7 +8,8 @@
 #      cannot make a virtual environment; Slurm and munge, brought up as
 #      a single-node cluster by .ci/slurm-up.sh for the `littoral plan` test.
 #   2. A Python virtual environment ($LITTORAL_VENV, default .venv) with
-#      Spectral Python, OpenEXR and numpy for the client tests, and the
+#      Spectral Python, OpenEXR, numpy and nanodisort (DISORT, for the
+#      atmosphere) for the client tests, and the
 #      Python package (pip install ./python) with its test extras.
 #   3. cargo test --locked; pytest python/tests; cargo fmt --all --check;
 #      cargo clippy --all-targets and on the Python bindings, -D warnings.
@@ -50,7 +51,8 @@ export PATH="$venv/bin:$PATH"
 export PYO3_PYTHON="$venv/bin/python"
 export PIP_ROOT_USER_ACTION=ignore PIP_DISABLE_PIP_VERSION_CHECK=1
 pip() { python -m pip -q "$@"; }
-python -c "import spectral, OpenEXR, numpy" >/dev/null 2>&1 || pip install spectral OpenEXR numpy
+python -c "import spectral, OpenEXR, numpy, nanodisort" >/dev/null 2>&1 ||
+  pip install spectral OpenEXR numpy nanodisort
 
 # 3. The tests. The Python package is built with the test profile, so that
 # it shares the build cargo test just made.

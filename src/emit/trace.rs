@@ -164,7 +164,7 @@ pub fn trace(
     );
     let dir = match source {
         Source::Sun => scene.sun.direction,
-        Source::Sky => scene.sky.model.sample_travel(rng),
+        Source::Sky => scene.sky.model.sample_travel(band, rng),
     };
     let first = tallies.part(band);
     let tally = &mut tallies.at(first).tally;

@@ -82,6 +82,7 @@ impl EmitJob<'_> {
         let report = EmitReport {
             emission: em.report,
             map: MapSummary::written(&em.map, provenance.digest_hex(), Some(&self.map)),
+            atmosphere: report::AtmosphereReport::of(self.scene),
             timings_s: EmitTimings {
                 scene: self.scene_seconds,
                 emit_and_store: emit_s,

@@ -409,6 +409,7 @@ pub(super) fn publish_run(
     let report = RunReport {
         integrator,
         Ed_above_surface: ed_above,
+        atmosphere: report::AtmosphereReport::of(scene),
         emission,
         bands,
         map,

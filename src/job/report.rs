@@ -84,6 +84,9 @@ pub struct EmitReport {
     #[serde(flatten)]
     pub emission: EmissionReport,
     pub map: MapSummary,
+    /// The atmosphere's part, with `[atmosphere]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atmosphere: Option<AtmosphereReport>,
     pub timings_s: EmitTimings,
     /// Peak anonymous memory (what `--mem-budget` bounds) and peak mapped
     /// file pages, apart.
@@ -229,6 +232,90 @@ pub struct RunBands {
     pub fwhm_nm: Vec<f32>,
 }
 
+/// The atmosphere and the light it brought to the surface, per band
+/// (`[atmosphere]`; over a black surface: light the sea sends back up and
+/// the air returns is not in it).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[allow(non_snake_case)]
+pub struct AtmosphereReport {
+    pub profile: String,
+    pub surface_pressure_hpa: f64,
+    pub ozone_du: f64,
+    pub day_of_year: Option<f64>,
+    pub sun_zenith_deg: f64,
+    /// Photons per band traced for the sky.
+    pub sky_photons: u64,
+    pub tau_rayleigh: Vec<f64>,
+    pub tau_aerosol: Vec<f64>,
+    pub aerosol_ssa: Vec<f64>,
+    pub tau_ozone: Vec<f64>,
+    pub tau_gas: Vec<f64>,
+    /// The sun's beam-normal irradiance at the top (with the Earth–Sun
+    /// distance).
+    pub toa_irradiance: Vec<f64>,
+    /// E_d(0+): the sun's beam and the sky, on a horizontal plane.
+    pub Ed_direct: Vec<f64>,
+    pub Ed_diffuse: Vec<f64>,
+    /// The sky's irradiance counted by the photons reaching the surface,
+    /// an independent estimate of `Ed_diffuse`, and its standard error.
+    pub Ed_diffuse_flux: Vec<f64>,
+    pub Ed_diffuse_flux_stderr: Vec<f64>,
+    /// Direct transmittance exp(-tau / mu0) and the total downward one,
+    /// E_d(0+) / (E_0 mu0).
+    pub t_direct: Vec<f64>,
+    pub t_down: Vec<f64>,
+    /// Irradiance leaving the top and absorbed in the air.
+    pub up_at_top: Vec<f64>,
+    pub absorbed: Vec<f64>,
+}
+
+impl AtmosphereReport {
+    /// The report of `scene`'s atmosphere, none without one.
+    pub fn of(scene: &crate::scene::Scene) -> Option<AtmosphereReport> {
+        let a = scene.atmosphere.as_ref()?;
+        let col = |f: &dyn Fn(&crate::scene::BandAtmosphere) -> f64| -> Vec<f64> {
+            a.bands.iter().map(f).collect()
+        };
+        let mu0 = scene.sun.zenith_rad.cos();
+        Some(AtmosphereReport {
+            profile: a.spec.profile.name.to_string(),
+            surface_pressure_hpa: a.spec.surface_pressure_hpa,
+            ozone_du: a.spec.ozone_du,
+            day_of_year: a.day_of_year,
+            sun_zenith_deg: scene.sun.zenith_rad.to_degrees(),
+            sky_photons: a.sky_photons,
+            tau_rayleigh: col(&|b| b.tau.rayleigh),
+            tau_aerosol: col(&|b| b.tau.aerosol_scattering + b.tau.aerosol_absorption),
+            aerosol_ssa: col(&|b| {
+                let t = b.tau.aerosol_scattering + b.tau.aerosol_absorption;
+                if t > 0.0 {
+                    b.tau.aerosol_scattering / t
+                } else {
+                    1.0
+                }
+            }),
+            tau_ozone: col(&|b| b.tau.ozone),
+            tau_gas: col(&|b| b.tau.gas),
+            toa_irradiance: col(&|b| b.toa_irradiance),
+            Ed_direct: col(&|b| b.direct),
+            Ed_diffuse: col(&|b| b.diffuse),
+            Ed_diffuse_flux: col(&|b| b.diffuse_flux),
+            Ed_diffuse_flux_stderr: col(&|b| b.diffuse_flux_se),
+            t_direct: col(&|b| b.direct_transmittance),
+            t_down: col(&|b| {
+                let top = b.toa_irradiance * mu0;
+                if top > 0.0 {
+                    (b.direct + b.diffuse) / top
+                } else {
+                    0.0
+                }
+            }),
+            up_at_top: col(&|b| b.up_at_top),
+            absorbed: col(&|b| b.absorbed),
+        })
+    }
+}
+
 /// The report of `littoral render`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
@@ -259,6 +346,9 @@ pub struct RunReport {
     /// is `above_surface.Ed` (photon map only).
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub Ed_above_surface: Vec<f64>,
+    /// The atmosphere's part, with `[atmosphere]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atmosphere: Option<AtmosphereReport>,
     pub estimate: EstimateSettings,
     pub sensor: SensorSummary,
     pub cache: CacheStats,

@@ -2,6 +2,7 @@
 //! sky's radiance distribution, the sea surface, local majorants for delta
 //! tracking and the water's refractive index per band.
 
+pub mod atmosphere;
 pub mod inelastic;
 pub mod iop;
 pub mod majorant;

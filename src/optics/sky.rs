@@ -10,7 +10,8 @@
 //! ```
 //!
 //! so that any distribution keeps the horizontal irradiance. g is the same
-//! in every band (a shape, not a colour).
+//! in every band (a shape, not a colour), except for a sky computed
+//! through an `[atmosphere]` (`table`), whose shape changes with the band.
 //!
 //! - `isotropic`: g = 1.
 //! - `cie-clear`: the CIE standard clear sky (CIE S 011/E:2003, ISO
@@ -25,13 +26,21 @@
 //!
 //! Emission draws sky photons in proportion to g(s) cos Z by rejection
 //! from the cosine-weighted hemisphere, against the bound f(0) phi(90°) /
-//! norm, which no direction exceeds.
+//! norm, which no direction exceeds (a table: by its cells' shares).
+//!
+//! - `table`: the mean radiance of each cell of the atmosphere's sky grid
+//!   ([`crate::optics::atmosphere::transport`]), per band.
 //!
 //! Not for: the sun's disc (the sun is its own source), or polarisation.
 
+use crate::optics::atmosphere::transport::{
+    cell_of, point_in_cell, projected_solid_angle, AZIMUTH_BINS, CELLS,
+};
 use crate::optics::phase::cosine_hemisphere;
 use crate::rng::Pcg32;
 use glam::{DVec3, Vec3};
+use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// The CIE type 12 coefficients (gradation a, b; indicatrix c, d, e).
 const CIE_CLEAR: [f64; 5] = [-1.0, -0.32, 10.0, -3.0, 0.45];
@@ -47,6 +56,55 @@ pub enum SkyModel {
         /// 1 / (the hemisphere integral of f phi cos Z / pi).
         scale: f64,
     },
+    /// A sky computed through an atmosphere: per band, constant over each
+    /// cell of [`crate::optics::atmosphere::transport`]'s grid.
+    Table(Arc<SkyTable>),
+}
+
+/// A per-band sky, constant over the cells of the atmosphere's sky grid
+/// (`transport::ZENITH_BINS` x `transport::AZIMUTH_BINS`, azimuth from the
+/// sun's, folded about its vertical plane).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyTable {
+    /// The sun's azimuth (radians, the scene's frame, toward the sun).
+    sun_azimuth: f64,
+    /// g per band and cell (band-major), each band's hemisphere integral of
+    /// g cos Z being pi.
+    g: Vec<f64>,
+    /// Per band, the cumulative share of the irradiance over the cells.
+    cdf: Vec<f64>,
+}
+
+impl SkyTable {
+    /// The table of mean cell radiances `radiance[band][cell]` (any unit)
+    /// for the sun at azimuth `sun_azimuth` (radians). A band with no sky
+    /// light is isotropic (it carries no power either way).
+    pub fn new(sun_azimuth: f64, radiance: &[Vec<f64>]) -> SkyTable {
+        let mut g = Vec::with_capacity(radiance.len() * CELLS);
+        let mut cdf = Vec::with_capacity(radiance.len() * CELLS);
+        for l in radiance {
+            let e: f64 = (0..CELLS)
+                .map(|c| l[c].max(0.0) * projected_solid_angle(c / AZIMUTH_BINS))
+                .sum();
+            let mut acc = 0.0;
+            for (c, &v) in l.iter().enumerate().take(CELLS) {
+                let v = if e > 0.0 { v.max(0.0) * PI / e } else { 1.0 };
+                g.push(v);
+                acc += v * projected_solid_angle(c / AZIMUTH_BINS) / PI;
+                cdf.push(acc);
+            }
+        }
+        SkyTable {
+            sun_azimuth,
+            g,
+            cdf,
+        }
+    }
+
+    fn cell(&self, s: Vec3) -> usize {
+        let phi = f64::from(s.y).atan2(f64::from(s.x)) - self.sun_azimuth;
+        cell_of(f64::from(s.z), phi)
+    }
 }
 
 impl SkyModel {
@@ -75,9 +133,9 @@ impl SkyModel {
         }
     }
 
-    /// g(s) for the sky element toward `s` (unit, pointing up; 0 below the
-    /// horizon).
-    pub fn relative(&self, s: Vec3) -> f64 {
+    /// g(s) in `band` for the sky element toward `s` (unit, pointing up; 0
+    /// below the horizon).
+    pub fn relative(&self, band: usize, s: Vec3) -> f64 {
         match self {
             SkyModel::Isotropic => 1.0,
             SkyModel::CieClear { sun, scale } => {
@@ -86,10 +144,26 @@ impl SkyModel {
                 }
                 scale * cie_relative(s.as_dvec3().normalize(), *sun)
             }
+            SkyModel::Table(t) => {
+                if s.z <= 0.0 {
+                    return 0.0;
+                }
+                t.g[band * CELLS + t.cell(s)]
+            }
         }
     }
 
-    /// An upper bound of g over the hemisphere.
+    /// g(s) for the sky element toward `s` in every band at once: one
+    /// lookup, read per band.
+    pub fn at(&self, s: Vec3) -> SkyAt<'_> {
+        match self {
+            SkyModel::Table(t) if s.z > 0.0 => SkyAt::Cell(t, t.cell(s)),
+            _ => SkyAt::Same(self.relative(0, s)),
+        }
+    }
+
+    /// An upper bound of g over the hemisphere (the CIE sky's and the
+    /// isotropic one's; a table is sampled directly).
     pub fn max_relative(&self) -> f64 {
         match self {
             SkyModel::Isotropic => 1.0,
@@ -98,20 +172,56 @@ impl SkyModel {
                 // f is largest at chi = 0, phi at the horizon (phi = 1).
                 scale * (1.0 + c * (1.0 - (d * std::f64::consts::FRAC_PI_2).exp()) + e)
             }
+            SkyModel::Table(t) => t.g.iter().copied().fold(0.0, f64::max),
         }
     }
 
-    /// The direction of travel (down) of a sky photon, drawn in proportion
-    /// to g(s) cos Z.
-    pub fn sample_travel(&self, rng: &mut Pcg32) -> Vec3 {
+    /// The direction of travel (down) of a sky photon of `band`, drawn in
+    /// proportion to g(s) cos Z: by rejection from the cosine-weighted
+    /// hemisphere, or for a table a cell by its share of the irradiance,
+    /// then a direction cosine-weighted within it, on either side of the
+    /// sun's vertical plane.
+    pub fn sample_travel(&self, band: usize, rng: &mut Pcg32) -> Vec3 {
+        if let SkyModel::Table(t) = self {
+            let cdf = &t.cdf[band * CELLS..(band + 1) * CELLS];
+            let u = rng.uniform_f64() * cdf[CELLS - 1];
+            let c = cdf.partition_point(|&v| v <= u).min(CELLS - 1);
+            let (mu, phi) = point_in_cell(
+                c / AZIMUTH_BINS,
+                c % AZIMUTH_BINS,
+                [rng.uniform_f64(), rng.uniform_f64()],
+            );
+            let phi = if rng.uniform_f64() < 0.5 { phi } else { -phi } + t.sun_azimuth;
+            let sz = (1.0 - mu * mu).max(0.0).sqrt();
+            return -Vec3::new((sz * phi.cos()) as f32, (sz * phi.sin()) as f32, mu as f32);
+        }
         let max = self.max_relative();
         loop {
             let travel = cosine_hemisphere(-Vec3::Z, rng);
             if matches!(self, SkyModel::Isotropic)
-                || rng.uniform_f64() * max < self.relative(-travel)
+                || rng.uniform_f64() * max < self.relative(0, -travel)
             {
                 return travel;
             }
+        }
+    }
+}
+
+/// g toward one sky element, in every band ([`SkyModel::at`]).
+#[derive(Clone, Copy, Debug)]
+pub enum SkyAt<'a> {
+    /// The same in every band.
+    Same(f64),
+    /// A table's cell.
+    Cell(&'a SkyTable, usize),
+}
+
+impl SkyAt<'_> {
+    /// g in `band`.
+    pub fn band(&self, band: usize) -> f64 {
+        match *self {
+            SkyAt::Same(g) => g,
+            SkyAt::Cell(t, c) => t.g[band * CELLS + c],
         }
     }
 }

@@ -425,6 +425,8 @@ const SOLAR_FILE: &str = "astm_g173_solar.csv";
 const SOLAR_CSV: &str = include_str!("../../data/astm_g173_solar.csv");
 const BOTTOM_FILE: &str = "bottom_reflectance_asu_wasi.csv";
 const BOTTOM_CSV: &str = include_str!("../../data/bottom_reflectance_asu_wasi.csv");
+const OZONE_FILE: &str = "ozone_leckner1978.csv";
+const OZONE_CSV: &str = include_str!("../../data/ozone_leckner1978.csv");
 const CIE_FILE: &str = "cie1931_2deg_cmf.csv";
 const CIE_CSV: &str = include_str!("../../data/cie1931_2deg_cmf.csv");
 
@@ -460,6 +462,13 @@ pub fn bricaud_a_phi() -> (&'static Table, &'static Table) {
 pub fn bricaud_a_p() -> (&'static Table, &'static Table) {
     let t = bricaud();
     (&t[2], &t[3])
+}
+
+/// Ozone absorption per atm-cm of ozone (1/cm at STP), 300–800 nm: Bird &
+/// Riordan (1986) after Leckner (1978).
+pub fn ozone_absorption() -> &'static Table {
+    static CELL: OnceLock<Vec<Table>> = OnceLock::new();
+    &embedded(&CELL, OZONE_FILE, OZONE_CSV, &["k_o3_per_atm_cm"])[0]
 }
 
 /// The three ASTM G173-03 spectra.

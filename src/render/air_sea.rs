@@ -25,7 +25,7 @@ pub type InWater<'f> = dyn FnMut(Vec3, Vec3, &mut Pcg32, &mut [f64]) -> Result<(
 
 /// The radiance per band (W m^-2 sr^-1 nm^-1) of an isotropic sky of
 /// `scene`'s horizontal irradiance; a direction's is this times
-/// `scene.sky.model.relative(s)`.
+/// `scene.sky.model.relative(band, s)`.
 pub fn sky_radiance(scene: &Scene) -> Vec<f64> {
     scene
         .sky
@@ -170,9 +170,9 @@ fn leave_surface(
 /// zero in the others; `sky_l` is the isotropic sky's radiance.
 fn set_sky(scene: &Scene, sky_l: &[f64], s: Vec3, out: &mut [f64]) {
     let (l, rest) = out.split_at_mut(sky_l.len());
-    let g = scene.sky.model.relative(s);
-    for (o, v) in l.iter_mut().zip(sky_l) {
-        *o = v * g;
+    let g = scene.sky.model.at(s);
+    for (b, (o, v)) in l.iter_mut().zip(sky_l).enumerate() {
+        *o = v * g.band(b);
     }
     rest.iter_mut().for_each(|o| *o = 0.0);
 }

@@ -10,6 +10,7 @@ use crate::Error;
 use std::path::PathBuf;
 use Step::{Index as I, Key as K};
 
+mod atmosphere;
 mod estimate;
 mod floor;
 mod light;
@@ -394,8 +395,18 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         inputs: Default::default(),
     };
 
-    let sun = light::sun(&ctx, &f.sun)?;
-    let sky = light::sky(&ctx, &f.sky, &sun)?;
+    let has_air = f.atmosphere.is_some();
+    let sun = light::sun(&ctx, &f.sun, has_air)?;
+    let sky = light::sky(&ctx, &f.sky, &sun, has_air)?;
+    let (sun, sky, atmosphere) = match &f.atmosphere {
+        None => (sun, sky, None),
+        Some(a) => {
+            let spec = atmosphere::spec(&ctx, a)?;
+            let (sun, sky, light) =
+                atmosphere::light(&ctx, a, spec, &sun, f.sun.day_of_year, f.seed)?;
+            (sun, sky, Some(std::sync::Arc::new(light)))
+        }
+    };
     light::check_emits(&ctx, &f, &sun, &sky)?;
     let (surface, water_index) = light::surface(&ctx, &f.surface)?;
 
@@ -451,6 +462,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         bands: ctx.bands.clone(),
         sun,
         sky,
+        atmosphere,
         surface,
         water_index,
         domain,

@@ -39,6 +39,72 @@ pub struct SceneFile {
     pub render: RenderFile,
     #[serde(default)]
     pub georef: GeorefFile,
+    pub atmosphere: Option<AtmosphereFile>,
+}
+
+/// `[atmosphere]`: plane-parallel layers over the sea
+/// (`optics::atmosphere`).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtmosphereFile {
+    /// An AFGL reference atmosphere (`optics::atmosphere::profile::PROFILES`).
+    pub profile: Option<String>,
+    pub surface_pressure_hpa: Option<f64>,
+    pub ozone_du: Option<f64>,
+    pub rayleigh: Option<RayleighFile>,
+    /// Other gases' absorption: a CSV of wavelength (nm) and optical depth.
+    pub gas_tau_file: Option<String>,
+    /// Photons per band for the sky at the surface.
+    pub sky_photons: Option<u64>,
+    pub aerosol: Option<AerosolFile>,
+}
+
+/// `[atmosphere] rayleigh`: `true`, `false` or `{ tau = X }`.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum RayleighFile {
+    On(bool),
+    Tau(RayleighTau),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RayleighTau {
+    pub tau: f64,
+}
+
+/// `[atmosphere.aerosol]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AerosolFile {
+    pub model: AerosolModel,
+    pub tau_550: f64,
+    pub angstrom: Option<f64>,
+    pub ssa: Option<f64>,
+    pub phase: Option<AerosolPhaseFile>,
+    pub scale_height_km: Option<f64>,
+    pub top_km: Option<f64>,
+}
+
+/// `[atmosphere.aerosol] model`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AerosolModel {
+    Custom,
+}
+
+/// `[atmosphere.aerosol] phase`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AerosolPhaseFile {
+    pub kind: AerosolPhaseKind,
+    pub g: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AerosolPhaseKind {
+    HenyeyGreenstein,
 }
 
 /// `[georef]`: where the scene's frame sits on a map.
@@ -210,6 +276,8 @@ pub struct SunFile {
     pub azimuth_deg: f64,
     pub spectrum: Option<String>,
     pub irradiance: Option<f64>,
+    /// With an atmosphere: the day of the year, for the Earth–Sun distance.
+    pub day_of_year: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -217,9 +285,9 @@ pub struct SunFile {
 pub struct SkyFile {
     pub spectrum: Option<String>,
     pub radiance: Option<f64>,
-    /// How the radiance spreads over the sky (`optics::sky`).
-    #[serde(default)]
-    pub distribution: SkyDistribution,
+    /// How the radiance spreads over the sky (`optics::sky`; default
+    /// isotropic).
+    pub distribution: Option<SkyDistribution>,
 }
 
 /// `[sky] distribution`.

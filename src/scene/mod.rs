@@ -73,6 +73,46 @@ pub struct Sky {
     pub model: crate::optics::sky::SkyModel,
 }
 
+/// An `[atmosphere]` and the light it brings to the surface.
+#[derive(Clone, Debug)]
+pub struct AtmosphereLight {
+    pub spec: crate::optics::atmosphere::AtmosphereSpec,
+    /// `[sun] day_of_year`, if given (the top's irradiance is scaled by its
+    /// Earth–Sun distance).
+    pub day_of_year: Option<f64>,
+    /// Photons per band traced for the sky, and the seed of their streams.
+    pub sky_photons: u64,
+    pub sky_seed: u64,
+    /// Per band.
+    pub bands: Vec<BandAtmosphere>,
+    /// The sky's mean radiance per band and cell of the sky grid
+    /// (`optics::atmosphere::transport`), W m^-2 sr^-1 nm^-1.
+    pub sky_radiance: Vec<Vec<f64>>,
+}
+
+/// One band of an atmosphere: its optical depths and the light at the
+/// surface and the top (irradiances in W m^-2 nm^-1, on a horizontal
+/// plane, over a black surface).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BandAtmosphere {
+    pub nm: f64,
+    pub tau: crate::optics::atmosphere::Totals,
+    /// exp(-tau / mu0).
+    pub direct_transmittance: f64,
+    /// Beam-normal irradiance at the top.
+    pub toa_irradiance: f64,
+    /// E_d(0+): the sun's beam and the sky.
+    pub direct: f64,
+    pub diffuse: f64,
+    /// The sky's irradiance counted by the photons reaching the surface
+    /// (an independent estimate of `diffuse`) and its standard error.
+    pub diffuse_flux: f64,
+    pub diffuse_flux_se: f64,
+    /// Leaving the top of the atmosphere, and absorbed in the air.
+    pub up_at_top: f64,
+    pub absorbed: f64,
+}
+
 /// A horizontal rectangle (m) over the domain: where paths entering the
 /// water over a target split.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -255,6 +295,9 @@ pub struct Scene {
     pub bands: BandGrid,
     pub sun: Sun,
     pub sky: Sky,
+    /// The atmosphere and what it did to the light (`[atmosphere]`); the
+    /// sun and sky above are then the light at the surface.
+    pub atmosphere: Option<std::sync::Arc<AtmosphereLight>>,
     /// The sea surface, its index the reference the renderers trace
     /// geometry with (the mean of `water_index`).
     pub surface: SeaSurface,
@@ -360,6 +403,98 @@ pub struct Overrides {
 }
 
 impl Scene {
+    /// The scene's atmosphere as JSON (`littoral scene atmosphere`), none
+    /// without one: per band the layers, the light at the surface and the
+    /// sky per cell; with `toa` also the radiance leaving the top (the sky's
+    /// photons traced again, from the same streams).
+    pub fn atmosphere_json(&self, toa: bool) -> Option<serde_json::Value> {
+        use crate::optics::atmosphere::{transport, Column, RayleighSetting};
+        let a = self.atmosphere.as_ref()?;
+        let spec = &a.spec;
+        let centers = self.bands.centers_nm();
+        let bands: Vec<serde_json::Value> = a
+            .bands
+            .iter()
+            .enumerate()
+            .map(|(b, band)| {
+                let column = Column::new(spec, b, f64::from(centers[b]));
+                let toa_radiance = toa.then(|| {
+                    let l = transport::band_light(
+                        &column,
+                        self.sun.zenith_rad,
+                        a.sky_photons,
+                        a.sky_seed,
+                        b as u64,
+                        true,
+                    );
+                    let f0 = band.toa_irradiance;
+                    l.toa
+                        .unwrap_or_default()
+                        .iter()
+                        .map(|v| v * f0)
+                        .collect::<Vec<_>>()
+                });
+                let layers: Vec<serde_json::Value> = column
+                    .layers
+                    .iter()
+                    .map(|l| {
+                        serde_json::json!({
+                            "bottom_km": l.bottom_km, "top_km": l.top_km,
+                            "rayleigh": l.rayleigh,
+                            "aerosol_scattering": l.aerosol_scattering,
+                            "aerosol_absorption": l.aerosol_absorption,
+                            "ozone": l.ozone, "gas": l.gas,
+                        })
+                    })
+                    .collect();
+                let q = match column.rayleigh_phase {
+                    crate::optics::phase::PhaseFunction::Rayleigh { q } => q,
+                    _ => 1.0,
+                };
+                serde_json::json!({
+                    "band": band,
+                    "rayleigh_q": q,
+                    "layers": layers,
+                    "sky_radiance": a.sky_radiance[b],
+                    "toa_radiance": toa_radiance,
+                })
+            })
+            .collect();
+        let rayleigh = match spec.rayleigh {
+            RayleighSetting::Standard => serde_json::json!("standard"),
+            RayleighSetting::Tau(t) => serde_json::json!({ "tau": t }),
+            RayleighSetting::Off => serde_json::json!("off"),
+        };
+        let aerosol = spec.aerosol.map(|x| {
+            let (scale_height_km, top_km) = match x.height {
+                crate::optics::atmosphere::AerosolHeight::ScaleHeight(h) => (Some(h), None),
+                crate::optics::atmosphere::AerosolHeight::Top(t) => (None, Some(t)),
+            };
+            serde_json::json!({
+                "tau_550": x.tau_550, "angstrom": x.angstrom, "ssa": x.ssa, "g": x.g,
+                "scale_height_km": scale_height_km, "top_km": top_km,
+            })
+        });
+        Some(serde_json::json!({
+            "profile": spec.profile.name,
+            "surface_pressure_hpa": spec.surface_pressure_hpa,
+            "ozone_du": spec.ozone_du,
+            "rayleigh": rayleigh,
+            "aerosol": aerosol,
+            "sun_zenith_deg": self.sun.zenith_rad.to_degrees(),
+            "day_of_year": a.day_of_year,
+            "sky_photons": a.sky_photons,
+            "sky_grid": {
+                "zenith_bins": transport::ZENITH_BINS,
+                "azimuth_bins": transport::AZIMUTH_BINS,
+                "zenith_step_deg": 90.0 / transport::ZENITH_BINS as f64,
+                "azimuth_step_deg": 180.0 / transport::AZIMUTH_BINS as f64,
+                "cells": "zenith-major; sky: the zenith angle of the sky element and its azimuth from the sun's; top: the zenith angle of the travel direction and its azimuth from the direction toward the sun",
+            },
+            "bands": bands,
+        }))
+    }
+
     /// Paths traced per path emitted, on average, from splitting over the
     /// targets: 1 + (target_split - 1) x the share of the domain their
     /// footprints cover (overlapping footprints counted twice, at most the

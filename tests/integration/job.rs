@@ -276,7 +276,7 @@ fn typed_report_round_trips() {
 }
 
 /// Every number an emission report and a render report hold (photon map
-/// and path integrator) has its unit in the report's `units`, keyed by the
+/// and path integrator, the latter with an atmosphere) has its unit in the report's `units`, keyed by the
 /// field's path (`[]` for an element of a list of records).
 #[test]
 fn every_number_in_a_report_has_a_unit() {
@@ -315,7 +315,11 @@ fn every_number_in_a_report_has_a_unit() {
     let scene = s.scene(&scene_text("k = 50", ""));
     let emitted = s.emit(&scene);
     let photon_map = s.render(&scene);
-    let path = s.scene(&scene_text("", "[render]\nintegrator = \"path\""));
+    // The path integrator's scene has an atmosphere, so that its block's
+    // numbers are checked too.
+    let air = "[render]\nintegrator = \"path\"\n[atmosphere]\nsky_photons = 1000";
+    let path = s
+        .scene(&scene_text("", air).replace("irradiance = 1.0", "spectrum = \"extraterrestrial\""));
     let traced = render_job(&path, &s.dir.path().join("path"), 0);
     let reports = [
         serde_json::to_value(&emitted).unwrap(),

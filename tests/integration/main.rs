@@ -3,6 +3,7 @@
 mod common;
 
 mod against_path;
+mod atmosphere;
 mod band_shapes;
 mod cache;
 mod cli;

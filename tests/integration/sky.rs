@@ -53,7 +53,7 @@ fn reflected_share(sky: &SkyModel) -> f64 {
         for j in 0..na {
             let a = (j as f64 + 0.5) * std::f64::consts::TAU / na as f64;
             let s = glam::Vec3::new((sz * a.cos()) as f32, (sz * a.sin()) as f32, mu as f32);
-            sum += sky.relative(s) * fresnel_reflectance(mu, 1.0, N_WATER) * mu;
+            sum += sky.relative(0, s) * fresnel_reflectance(mu, 1.0, N_WATER) * mu;
         }
     }
     sum / PI / nm as f64 * std::f64::consts::TAU / na as f64
@@ -94,7 +94,10 @@ fn emission_draws_sky_photons_from_the_distribution() {
 #[test]
 fn the_surface_reflects_the_zenith_sky() {
     let dir = tempdir();
-    let g = scene("cie-clear", 20_000).sky.model.relative(glam::Vec3::Z);
+    let g = scene("cie-clear", 20_000)
+        .sky
+        .model
+        .relative(0, glam::Vec3::Z);
     assert!(
         (g - 1.0).abs() > 0.1,
         "the zenith differs from the mean: {g}"
@@ -199,7 +202,7 @@ fn sky_through_a_rough_surface_matches_a_quadrature() {
     let tracer = PathTracer::new(&scene);
     let integrators: [(&str, &dyn Integrator); 2] = [("photon map", &marcher), ("path", &tracer)];
     let sky = &scene.sky.model;
-    let g = |v: DVec3| sky.relative(v.as_vec3());
+    let g = |v: DVec3| sky.relative(0, v.as_vec3());
     let g_max = (0..=90)
         .flat_map(|i| (0..360).map(move |j| (i, j)))
         .map(|(i, j): (i32, i32)| {

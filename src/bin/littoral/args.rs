@@ -164,6 +164,16 @@ pub enum SceneCommand {
     /// Print a scene file with keys changed, e.g. `littoral scene set
     /// base.toml sensor.pixels=[48,48] 'water.phase={kind="petzold"}'`.
     Set(SetArgs),
+    /// Print a scene's atmosphere as JSON: per band its layers' optical
+    /// depths, the sun's beam and the sky at the surface (irradiances and
+    /// the sky's radiance per cell), and what leaves the top.
+    Atmosphere {
+        file: PathBuf,
+        /// Also the radiance leaving the top of the atmosphere per cell
+        /// (over a black surface).
+        #[arg(long)]
+        toa: bool,
+    },
 }
 
 #[derive(Args)]

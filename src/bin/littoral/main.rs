@@ -29,6 +29,17 @@ fn run(cli: Cli) -> AnyResult<()> {
             cli::print(&format!("{}: {}\n", file.display(), scene.summary()))
         }
         Command::Scene(SceneCommand::Set(a)) => cli::print(&a.scene()?.text()),
+        Command::Scene(SceneCommand::Atmosphere { file, toa }) => {
+            let scene = Scene::load(&file, &Overrides::default())?;
+            let Some(json) = scene.atmosphere_json(toa) else {
+                return Err(littoral::Error::invalid(
+                    "atmosphere",
+                    format!("{} has no [atmosphere]", file.display()),
+                )
+                .into());
+            };
+            cli::print(&format!("{}\n", serde_json::to_string_pretty(&json)?))
+        }
         Command::Emit(a) => run_emit(a),
         Command::Plan(a) => run_plan(a),
         Command::Render(a) => run_render(a),

@@ -149,6 +149,7 @@ impl MergeJob<'_> {
         let report = EmitReport {
             emission: em.report,
             map: MapSummary::written(&em.map, provenance, Some(&self.map)),
+            atmosphere: None,
             timings_s: EmitTimings {
                 scene: 0.0,
                 emit_and_store: seconds,

@@ -35,7 +35,7 @@ fn toward(zenith_deg: f64, azimuth_deg: f64) -> Vec3 {
 fn cie_clear_keeps_the_horizontal_irradiance() {
     for sun_zenith in [0.0, 30.0, 60.0, 80.0] {
         let sky = SkyModel::cie_clear(toward(sun_zenith, 40.0));
-        let integral = hemisphere(400, 900, 0.25, |s, mu| sky.relative(s) * mu);
+        let integral = hemisphere(400, 900, 0.25, |s, mu| sky.relative(0, s) * mu);
         assert!(
             (integral / PI - 1.0).abs() < 2e-3,
             "sun {sun_zenith}: {integral}"
@@ -56,22 +56,22 @@ fn cie_clear_follows_the_standard_formula() {
     let phi = |z: f64| 1.0 - (-0.32 / z.cos()).exp();
     let zenith = f(30f64.to_radians()) * phi(0.0);
     let at_sun = f(0.0) * phi(30f64.to_radians());
-    let got = sky.relative(toward(0.0, 0.0)) / sky.relative(toward(30.0, 0.0));
+    let got = sky.relative(0, toward(0.0, 0.0)) / sky.relative(0, toward(30.0, 0.0));
     assert!(
         (got - zenith / at_sun).abs() < 1e-5 * got,
         "{got} vs {}",
         zenith / at_sun
     );
     let opposite = f(100f64.to_radians()) * phi(70f64.to_radians());
-    let got = sky.relative(toward(70.0, 180.0)) / sky.relative(toward(0.0, 0.0));
+    let got = sky.relative(0, toward(70.0, 180.0)) / sky.relative(0, toward(0.0, 0.0));
     assert!((got - opposite / zenith).abs() < 1e-4 * got, "{got}");
     let max = sky.max_relative();
     for i in 0..90 {
         for j in 0..360 {
-            assert!(sky.relative(toward(i as f64 + 0.5, j as f64)) <= max);
+            assert!(sky.relative(0, toward(i as f64 + 0.5, j as f64)) <= max);
         }
     }
-    assert_eq!(SkyModel::Isotropic.relative(toward(50.0, 10.0)), 1.0);
+    assert_eq!(SkyModel::Isotropic.relative(0, toward(50.0, 10.0)), 1.0);
 }
 
 /// Sampled sky photons follow g cos Z: the share travelling within 30
@@ -86,7 +86,7 @@ fn sampled_sky_photons_follow_the_distribution() {
     let share = |inside: &dyn Fn(Vec3) -> bool| {
         hemisphere(400, 800, 0.5, |s, mu| {
             if inside(s) {
-                sky.relative(s) * mu / PI
+                sky.relative(0, s) * mu / PI
             } else {
                 0.0
             }
@@ -97,7 +97,7 @@ fn sampled_sky_photons_follow_the_distribution() {
     let n = 200_000;
     let (mut aureole, mut cap) = (0usize, 0usize);
     for _ in 0..n {
-        let s = -sky.sample_travel(&mut rng);
+        let s = -sky.sample_travel(0, &mut rng);
         aureole += usize::from(in_aureole(s));
         cap += usize::from(in_cap(s));
     }

@@ -4,6 +4,7 @@
 //! back down marched on).
 
 use super::*;
+use crate::optics::sky::SkyAt;
 
 impl RayMarcher<'_> {
     /// A marched ray meeting the floor or a target (`h`) with transmittance
@@ -84,7 +85,7 @@ impl RayMarcher<'_> {
         let n_ref = scene.surface.n_water;
         let to = if scene.surface.slope_variance <= 0.0 {
             let g = refract(dir.as_dvec3(), glam::DVec3::NEG_Z, n_ref, 1.0)
-                .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
+                .map_or(SkyAt::Same(0.0), |s| scene.sky.model.at(s.as_vec3()));
             // The reflected part goes on with probability q, its largest
             // reflectance (every ray past the critical angle, 2 % of those
             // looking straight up), each band weighted by r / q.
@@ -92,7 +93,7 @@ impl RayMarcher<'_> {
             for (b, t) in tr.iter_mut().enumerate() {
                 let n = scene.water_index[b];
                 let r = fresnel_reflectance(dir.z as f64, n, 1.0);
-                out[b] += *t * (1.0 - r) * n * n * g * self.sky_l[b];
+                out[b] += *t * (1.0 - r) * n * n * g.band(b) * self.sky_l[b];
                 *t *= r;
                 q = q.max(r);
             }
@@ -112,10 +113,10 @@ impl RayMarcher<'_> {
                 }
             };
             if ev.transmitted {
-                let g = scene.sky.model.relative(ev.direction);
+                let g = scene.sky.model.at(ev.direction);
                 for (b, t) in tr.iter().enumerate() {
                     let n = scene.water_index[b];
-                    out[b] += t * weight(b) * n * n * g * self.sky_l[b];
+                    out[b] += t * weight(b) * n * n * g.band(b) * self.sky_l[b];
                 }
                 return Segment::Ended;
             }

@@ -6,6 +6,7 @@
 
 use super::*;
 use crate::optics::inelastic::{Absorbers, Kind};
+use crate::optics::sky::SkyAt;
 
 impl PathTracer<'_> {
     /// A path meeting the floor or a target (`h`): the sun directly, then
@@ -71,11 +72,16 @@ impl PathTracer<'_> {
         let n_w = scene.surface.n_water;
         if scene.surface.slope_variance <= 0.0 {
             let g = refract(dir.as_dvec3(), DVec3::NEG_Z, n_w, 1.0)
-                .map_or(0.0, |s| scene.sky.model.relative(s.as_vec3()));
+                .map_or(SkyAt::Same(0.0), |s| scene.sky.model.at(s.as_vec3()));
             for (b, x) in w.iter_mut().enumerate() {
                 let n = scene.water_index[b];
                 let r = fresnel_reflectance(dir.z as f64, n, 1.0);
-                add(out, target, b, *x * (1.0 - r) * (n * n) * g * self.sky_l[b]);
+                add(
+                    out,
+                    target,
+                    b,
+                    *x * (1.0 - r) * (n * n) * g.band(b) * self.sky_l[b],
+                );
                 *x *= r;
             }
             return Some(Vec3::new(dir.x, dir.y, -dir.z));
@@ -87,10 +93,10 @@ impl PathTracer<'_> {
             }
         }
         if ev.transmitted {
-            let g = scene.sky.model.relative(ev.direction);
+            let g = scene.sky.model.at(ev.direction);
             for (b, x) in w.iter().enumerate() {
                 let n = scene.water_index[b];
-                add(out, target, b, x * (n * n) * g * self.sky_l[b]);
+                add(out, target, b, x * (n * n) * g.band(b) * self.sky_l[b]);
             }
             return None;
         }

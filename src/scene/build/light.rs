@@ -4,8 +4,10 @@
 use super::*;
 use crate::optics::sky::SkyModel;
 
-/// The sun: position and direct normal irradiance per band.
-pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
+/// The sun: position and direct normal irradiance per band (with an
+/// atmosphere, `atmosphere`, at its top: scaled by the Earth–Sun distance
+/// of `day_of_year`).
+pub(super) fn sun(ctx: &Ctx, s: &SunFile, atmosphere: bool) -> Result<Sun> {
     let nb = ctx.bands.len();
     if !finite_in(s.zenith_deg, 0.0, 89.0) {
         return Err(ctx.err(
@@ -21,8 +23,14 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
         (Some(name), None) => {
             let solar = |which| ctx.per_band(tables::solar(which), &key("spectrum"));
             match name.as_str() {
+                "astm-g173-direct" if atmosphere => {
+                    let what = "'astm-g173-direct' is the beam at the ground after an atmosphere: with [atmosphere] give the sun at its top, \"extraterrestrial\" (ASTM G173's) or a .csv file";
+                    return Err(ctx.err(&key("spectrum"), what));
+                }
                 "astm-g173-direct" => solar(SolarSpectrum::DirectCircumsolar)?,
-                "astm-g173-extraterrestrial" => solar(SolarSpectrum::Extraterrestrial)?,
+                "astm-g173-extraterrestrial" | "extraterrestrial" => {
+                    solar(SolarSpectrum::Extraterrestrial)?
+                }
                 csv if csv.ends_with(".csv") => {
                     let t =
                         Table::from_csv_file(&ctx.file(csv, &key("spectrum"))?, "sun.spectrum")?;
@@ -30,7 +38,7 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
                 }
                 other => {
                     let what = format!(
-                        "'{other}': use \"astm-g173-direct\", \"astm-g173-extraterrestrial\" or a .csv file"
+                        "'{other}': use \"astm-g173-direct\", \"extraterrestrial\" (\"astm-g173-extraterrestrial\") or a .csv file"
                     );
                     return Err(ctx.err(&key("spectrum"), what));
                 }
@@ -53,6 +61,18 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
             return Err(ctx.err(&key("irradiance"), what));
         }
     };
+    let sun_irr = match s.day_of_year {
+        None => sun_irr,
+        Some(_) if !atmosphere => {
+            let what = "only with [atmosphere]: without one the sun's spectrum is the irradiance at the surface";
+            return Err(ctx.err(&key("day_of_year"), what));
+        }
+        Some(d) => {
+            ctx.within(&key("day_of_year"), d, 1.0, 366.0, "must be at least 1", "")?;
+            let f = crate::optics::atmosphere::earth_sun_factor(d);
+            sun_irr.iter().map(|e| e * f).collect()
+        }
+    };
     let (zen, az) = (s.zenith_deg.to_radians(), s.azimuth_deg.to_radians());
     let toward_sun = Vec3::new(
         (zen.sin() * az.cos()) as f32,
@@ -70,9 +90,20 @@ pub(super) fn sun(ctx: &Ctx, s: &SunFile) -> Result<Sun> {
 
 /// The sky: horizontal diffuse irradiance per band, and how its radiance
 /// spreads over the hemisphere.
-pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
+pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun, atmosphere: bool) -> Result<Sky> {
     let nb = ctx.bands.len();
     let key = |k| [K("sky"), K(k)];
+    if atmosphere {
+        let set = [
+            ("spectrum", s.spectrum.is_some()),
+            ("radiance", s.radiance.is_some()),
+            ("distribution", s.distribution.is_some()),
+        ];
+        if let Some((k, _)) = set.iter().find(|(_, set)| *set) {
+            let what = "with [atmosphere] the sky comes from the atmosphere: leave [sky] out";
+            return Err(ctx.err(&key(k), what));
+        }
+    }
     let sky_irr = match (&s.spectrum, s.radiance) {
         (None, None) => vec![0.0; nb],
         (Some(n), None) if n == "none" => vec![0.0; nb],
@@ -99,7 +130,7 @@ pub(super) fn sky(ctx: &Ctx, s: &SkyFile, sun: &Sun) -> Result<Sky> {
             return Err(ctx.err(&key("radiance"), what));
         }
     };
-    let model = match s.distribution {
+    let model = match s.distribution.unwrap_or_default() {
         SkyDistribution::Isotropic => SkyModel::Isotropic,
         SkyDistribution::CieClear => SkyModel::cie_clear(-sun.direction),
     };

@@ -1,0 +1,281 @@
+//! Light through the atmosphere to the surface: the direct beam exactly,
+//! the sky by Monte Carlo with local estimates.
+//!
+//! For each band, photons of the sun's beam at the top of the atmosphere
+//! are traced through the column ([`super::Column`]) over a black surface.
+//! Free paths are drawn in optical depth and cross the homogeneous layers
+//! exactly; absorption is carried by weight (the weight times the layer's
+//! single-scattering albedo at each collision), with Russian roulette
+//! below a weight of [`ROULETTE_WEIGHT`]; the scattering is Rayleigh's or
+//! the aerosol's in proportion to their shares in the layer.
+//!
+//! **The sky at the surface** is the radiance arriving from each sky
+//! element, averaged over a grid of [`ZENITH_BINS`] x [`AZIMUTH_BINS`]
+//! cells (5° of zenith by 10° of azimuth from the sun's, folded about the
+//! sun's vertical plane, where the sky is symmetric). Each collision adds
+//! its local estimate to every cell: for light scattered into the
+//! direction -s toward the surface, with weight w after the collision,
+//!
+//! ```text
+//! L(s) += mu0 / N  w  p(cos Theta) exp(-tau' / mu_s) / mu_s
+//! ```
+//!
+//! per unit beam-normal irradiance at the top, where p is the layer's
+//! phase mixture, tau' the optical depth below the collision and mu_s the
+//! cosine of the element's zenith angle: the collision density's
+//! contribution to the horizontally averaged radiance. The direction in
+//! each cell is drawn once per collision (the same offset in every cell),
+//! cosine-weighted within it, so that each cell's estimate is unbiased for
+//! its cosine-weighted mean radiance and the cells' sum is the diffuse
+//! irradiance exactly in expectation. The photons that reach the surface
+//! after scattering give an independent estimate of that irradiance
+//! (`diffuse_flux`), and those that leave at the top the reflectance of
+//! the atmosphere over a black surface. The same local estimate toward the
+//! top of the atmosphere gives the path radiance a sensor above it sees
+//! over a black surface (`toa`, on request).
+//!
+//! Deterministic: each band's photons draw from their own stream of a
+//! fixed seed, whatever the number of threads.
+
+use super::Column;
+use crate::optics::phase::{scatter, PhaseFunction};
+use crate::rng::Pcg32;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Sky cells in zenith (5° each).
+pub const ZENITH_BINS: usize = 18;
+/// Sky cells in azimuth from the sun's (10° each, 0–180°).
+pub const AZIMUTH_BINS: usize = 18;
+/// Cells of the sky grid.
+pub const CELLS: usize = ZENITH_BINS * AZIMUTH_BINS;
+/// Weight below which a photon plays Russian roulette (survives with
+/// probability weight / this, at this weight).
+pub const ROULETTE_WEIGHT: f64 = 0.05;
+
+const ZENITH_STEP: f64 = PI / 2.0 / ZENITH_BINS as f64;
+const AZIMUTH_STEP: f64 = PI / AZIMUTH_BINS as f64;
+
+/// The light one band's column brings to a black surface, per unit
+/// beam-normal irradiance at the top of the atmosphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandLight {
+    /// Direct transmittance along the sun's path, exp(-tau / mu0).
+    pub direct_transmittance: f64,
+    /// Mean radiance of each sky cell at the surface (sr^-1), zenith-major.
+    pub sky: Vec<f64>,
+    /// The diffuse irradiance at the surface from the cells: sum of L
+    /// times each cell's projected solid angle.
+    pub diffuse: f64,
+    /// The diffuse irradiance from the photons reaching the surface, and
+    /// its standard error.
+    pub diffuse_flux: f64,
+    pub diffuse_flux_se: f64,
+    /// Irradiance leaving the top of the atmosphere (over a black surface).
+    pub up_at_top: f64,
+    /// Irradiance absorbed in the air.
+    pub absorbed: f64,
+    /// Mean radiance of each cell leaving the top, zenith-major (cells of
+    /// the travel direction's zenith and azimuth from the sun's), if asked.
+    pub toa: Option<Vec<f64>>,
+}
+
+/// The cell of a direction `s` (unit, up) with azimuth `phi` measured from
+/// the sun's.
+pub fn cell_of(cos_zenith: f64, phi: f64) -> usize {
+    let z = cos_zenith.clamp(0.0, 1.0).acos();
+    let iz = ((z / ZENITH_STEP) as usize).min(ZENITH_BINS - 1);
+    let a = phi.rem_euclid(2.0 * PI);
+    let a = if a > PI { 2.0 * PI - a } else { a };
+    let ia = ((a / AZIMUTH_STEP) as usize).min(AZIMUTH_BINS - 1);
+    iz * AZIMUTH_BINS + ia
+}
+
+/// The cosines of zenith bounding zenith row `iz` ([upper edge's, lower
+/// edge's]: the first is the larger).
+pub fn zenith_cosines(iz: usize) -> [f64; 2] {
+    [
+        (iz as f64 * ZENITH_STEP).cos(),
+        ((iz + 1) as f64 * ZENITH_STEP).cos(),
+    ]
+}
+
+/// The projected solid angle of a cell (both mirror halves): the integral
+/// of cos Z over it.
+pub fn projected_solid_angle(iz: usize) -> f64 {
+    let [a, b] = zenith_cosines(iz);
+    // Integral of mu dmu over the row, times 2 x the azimuth step.
+    0.5 * (a * a - b * b) * 2.0 * AZIMUTH_STEP
+}
+
+/// A direction in cell (`iz`, `ia`), cosine-weighted within it, from `u`
+/// in [0, 1)^2: (cos Z, azimuth from the sun's).
+pub fn point_in_cell(iz: usize, ia: usize, u: [f64; 2]) -> (f64, f64) {
+    let [a, b] = zenith_cosines(iz);
+    let mu = (b * b + u[0] * (a * a - b * b)).sqrt();
+    (mu, (ia as f64 + u[1]) * AZIMUTH_STEP)
+}
+
+/// Trace `photons` photons of the sun at zenith `sun_zenith` (radians)
+/// through `column` over a black surface, from stream `stream` of `seed`;
+/// with `toa`, also the radiance leaving the top.
+pub fn band_light(
+    column: &Column,
+    sun_zenith: f64,
+    photons: u64,
+    seed: u64,
+    stream: u64,
+    toa: bool,
+) -> BandLight {
+    let mu0 = sun_zenith.cos();
+    let total = column.total();
+    let mut rng = Pcg32::new(seed, stream);
+    let mut sky = vec![0.0; CELLS];
+    let mut top = toa.then(|| vec![0.0; CELLS]);
+    let (mut flux, mut flux2, mut up, mut absorbed) = (0.0, 0.0, 0.0, 0.0);
+    // Directions of travel; the sun's azimuth is 0, so sunlight travels
+    // toward azimuth pi.
+    let sun = DVec3::new(-sun_zenith.sin(), 0.0, -mu0);
+    let mut cells = Cells::default();
+    for _ in 0..photons {
+        let mut dir = sun;
+        let mut tau = 0.0f64;
+        let mut w = 1.0f64;
+        let mut scattered = false;
+        let mut arrived = 0.0;
+        loop {
+            let step = rng.exponential(1.0) * dir.z.abs();
+            let next = if dir.z < 0.0 { tau + step } else { tau - step };
+            if next >= total {
+                if scattered {
+                    arrived = w;
+                }
+                break;
+            }
+            if next <= 0.0 {
+                up += w;
+                break;
+            }
+            tau = next;
+            let layer = column.layer_at(tau);
+            let kept = w * layer.ssa();
+            absorbed += w - kept;
+            w = kept;
+            let share = layer.rayleigh_share();
+            cells.draw(&mut rng);
+            let below = total - tau;
+            cells.add(
+                &mut sky,
+                column,
+                share,
+                dir,
+                w,
+                |mu| (-below / mu).exp() / mu,
+                true,
+            );
+            if let Some(t) = top.as_mut() {
+                cells.add(t, column, share, dir, w, |mu| (-tau / mu).exp() / mu, false);
+            }
+            let phase = if rng.uniform_f64() < share {
+                &column.rayleigh_phase
+            } else {
+                &column.aerosol_phase
+            };
+            let mu = phase.sample_cos(rng.uniform_f64());
+            let phi = 2.0 * PI * rng.uniform_f64();
+            dir = scatter(dir.as_vec3(), mu as f32, phi as f32)
+                .as_dvec3()
+                .normalize();
+            scattered = true;
+            if w < ROULETTE_WEIGHT {
+                if rng.uniform_f64() * ROULETTE_WEIGHT >= w {
+                    absorbed += w;
+                    break;
+                }
+                absorbed -= ROULETTE_WEIGHT - w;
+                w = ROULETTE_WEIGHT;
+            }
+        }
+        flux += arrived;
+        flux2 += arrived * arrived;
+    }
+    let n = photons.max(1) as f64;
+    let scale = mu0 / n;
+    sky.iter_mut().for_each(|v| *v *= scale);
+    if let Some(t) = top.as_mut() {
+        t.iter_mut().for_each(|v| *v *= scale);
+    }
+    let diffuse = (0..CELLS)
+        .map(|c| sky[c] * projected_solid_angle(c / AZIMUTH_BINS))
+        .sum();
+    let mean = flux / n;
+    let var = (flux2 / n - mean * mean).max(0.0) / n;
+    BandLight {
+        direct_transmittance: (-total / mu0).exp(),
+        sky,
+        diffuse,
+        diffuse_flux: mu0 * mean,
+        diffuse_flux_se: mu0 * var.sqrt(),
+        up_at_top: mu0 * up / n,
+        absorbed: mu0 * absorbed / n,
+        toa: top,
+    }
+}
+
+/// The cells' directions for one collision: the same offset in every cell.
+#[derive(Default)]
+struct Cells {
+    /// Per zenith row: cos Z and sin Z.
+    rows: [(f64, f64); ZENITH_BINS],
+    /// Per azimuth column: cos and sin of the azimuth.
+    cols: [(f64, f64); AZIMUTH_BINS],
+}
+
+impl Cells {
+    fn draw(&mut self, rng: &mut Pcg32) {
+        let u = [rng.uniform_f64(), rng.uniform_f64()];
+        for iz in 0..ZENITH_BINS {
+            let (mu, _) = point_in_cell(iz, 0, u);
+            self.rows[iz] = (mu, (1.0 - mu * mu).max(0.0).sqrt());
+        }
+        for ia in 0..AZIMUTH_BINS {
+            let (_, phi) = point_in_cell(0, ia, u);
+            self.cols[ia] = (phi.cos(), phi.sin());
+        }
+    }
+
+    /// Add to `out` the local estimate of weight `w` for a photon travelling
+    /// along `dir` toward each cell: light going down to the surface
+    /// (`down`: travel -s for the sky element s) or up to the top (travel
+    /// s), attenuated by `atten(mu)`.
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        &self,
+        out: &mut [f64],
+        column: &Column,
+        share: f64,
+        dir: DVec3,
+        w: f64,
+        atten: impl Fn(f64) -> f64,
+        down: bool,
+    ) {
+        let sign = if down { -1.0 } else { 1.0 };
+        for (iz, &(mu, sz)) in self.rows.iter().enumerate() {
+            let a = w * atten(mu);
+            if a == 0.0 {
+                continue;
+            }
+            let row = &mut out[iz * AZIMUTH_BINS..(iz + 1) * AZIMUTH_BINS];
+            for (o, &(c, s)) in row.iter_mut().zip(&self.cols) {
+                // The travel direction: sign * (sz cos, sz sin, mu).
+                let cos = sign * (dir.x * sz * c + dir.y * sz * s + dir.z * mu);
+                *o += a * mixture(column, share, cos);
+            }
+        }
+    }
+}
+
+fn mixture(column: &Column, share: f64, cos: f64) -> f64 {
+    let r = |p: &PhaseFunction| p.eval(cos);
+    share * r(&column.rayleigh_phase) + (1.0 - share) * r(&column.aerosol_phase)
+}

@@ -1,0 +1,232 @@
+//! Validation of `[atmosphere]` and the light it brings to the surface:
+//! the sun's beam through the air and the sky, per band.
+
+use super::*;
+use crate::optics::atmosphere::transport::{band_light, CELLS};
+use crate::optics::atmosphere::{
+    profile, Aerosol, AerosolHeight, AtmosphereSpec, Column, RayleighSetting,
+};
+use crate::optics::sky::{SkyModel, SkyTable};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// Photons per band for the sky at the surface, by default.
+pub const DEFAULT_SKY_PHOTONS: u64 = 50_000;
+
+/// Mixed into the scene's seed for the sky's photons.
+const SKY_KEY: u64 = 0x736b_795f_7472_6163;
+
+/// The atmosphere of `a`, its columns built on the scene's bands.
+pub(super) fn spec(ctx: &Ctx, a: &AtmosphereFile) -> Result<AtmosphereSpec> {
+    let key = |k| [K("atmosphere"), K(k)];
+    let name = a.profile.as_deref().unwrap_or("us-standard-1976");
+    let Some(profile) = profile::profile(name) else {
+        return Err(ctx.err(
+            &key("profile"),
+            format!(
+                "'{name}' is not a profile: use one of {}",
+                profile::PROFILES.join(", ")
+            ),
+        ));
+    };
+    let surface_pressure_hpa = a.surface_pressure_hpa.unwrap_or(profile.p_hpa[0]);
+    ctx.within(
+        &key("surface_pressure_hpa"),
+        surface_pressure_hpa,
+        500.0,
+        1100.0,
+        "must be at least 500 hPa",
+        "hPa",
+    )?;
+    let ozone_du = a.ozone_du.unwrap_or_else(|| profile.ozone_du());
+    ctx.within(
+        &key("ozone_du"),
+        ozone_du,
+        0.0,
+        1000.0,
+        "must be >= 0",
+        "DU",
+    )?;
+    let rayleigh = match &a.rayleigh {
+        None | Some(RayleighFile::On(true)) => RayleighSetting::Standard,
+        Some(RayleighFile::On(false)) => RayleighSetting::Off,
+        Some(RayleighFile::Tau(t)) => {
+            ctx.within(&key("rayleigh"), t.tau, 0.0, 10.0, "tau must be >= 0", "")?;
+            RayleighSetting::Tau(t.tau)
+        }
+    };
+    let gas_tau = match &a.gas_tau_file {
+        None => None,
+        Some(name) => {
+            let steps = key("gas_tau_file");
+            let t = Table::from_csv_file(&ctx.file(name, &steps)?, "atmosphere.gas_tau_file")?;
+            let v = ctx.per_band(&t, &steps)?;
+            if let Some((b, x)) = v.iter().enumerate().find(|(_, x)| x.is_nan() || **x < 0.0) {
+                let nm = ctx.bands.centers_nm()[b];
+                return Err(ctx.err(&steps, format!("optical depth {x} at {nm} nm is negative")));
+            }
+            Some(v)
+        }
+    };
+    let aerosol = a.aerosol.as_ref().map(|x| aerosol(ctx, x)).transpose()?;
+    let ozone_table = tables::ozone_absorption();
+    let (lo, hi) = ozone_table.range_nm();
+    let ozone_per_atm_cm = ctx
+        .bands
+        .centers_nm()
+        .iter()
+        .zip(ctx.bands.fwhm_nm())
+        .map(|(&c, &w)| {
+            let c = f64::from(c);
+            if (lo..=hi).contains(&c) {
+                ozone_table.band_average(c, f64::from(w)).unwrap_or(0.0)
+            } else if c > hi {
+                0.0
+            } else {
+                ozone_table.at(lo).unwrap_or(0.0)
+            }
+        })
+        .collect();
+    Ok(AtmosphereSpec {
+        profile,
+        surface_pressure_hpa,
+        ozone_du,
+        rayleigh,
+        aerosol,
+        gas_tau,
+        ozone_per_atm_cm,
+    })
+}
+
+fn aerosol(ctx: &Ctx, a: &AerosolFile) -> Result<Aerosol> {
+    let key = |k| [K("atmosphere"), K("aerosol"), K(k)];
+    let AerosolModel::Custom = a.model;
+    ctx.within(&key("tau_550"), a.tau_550, 0.0, 10.0, "must be >= 0", "")?;
+    let angstrom = a.angstrom.unwrap_or(1.0);
+    ctx.within(
+        &key("angstrom"),
+        angstrom,
+        -1.0,
+        4.0,
+        "must be at least -1",
+        "",
+    )?;
+    let ssa = a.ssa.unwrap_or(1.0);
+    ctx.within(&key("ssa"), ssa, 0.0, 1.0, "must be >= 0", "")?;
+    let g = match &a.phase {
+        None => 0.7,
+        Some(p) => {
+            let AerosolPhaseKind::HenyeyGreenstein = p.kind;
+            if !(p.g.is_finite() && p.g.abs() < 0.99) {
+                return Err(ctx.err(&key("phase"), "g must lie between -0.99 and 0.99"));
+            }
+            p.g
+        }
+    };
+    let height = match (a.scale_height_km, a.top_km) {
+        (Some(h), None) => {
+            ctx.within(
+                &key("scale_height_km"),
+                h,
+                0.1,
+                100.0,
+                "must be at least 0.1 km",
+                "km",
+            )?;
+            AerosolHeight::ScaleHeight(h)
+        }
+        (None, Some(t)) => {
+            ctx.within(
+                &key("top_km"),
+                t,
+                0.01,
+                100.0,
+                "must be at least 0.01 km",
+                "km",
+            )?;
+            AerosolHeight::Top(t)
+        }
+        (None, None) => AerosolHeight::ScaleHeight(2.0),
+        (Some(_), Some(_)) => {
+            return Err(ctx.err(&key("top_km"), "give scale_height_km or top_km, not both"))
+        }
+    };
+    Ok(Aerosol {
+        tau_550: a.tau_550,
+        angstrom,
+        ssa,
+        g,
+        height,
+    })
+}
+
+/// The sun's beam and the sky at the surface under `spec`, for the sun
+/// `sun` whose irradiance is the beam-normal irradiance at the top of the
+/// atmosphere: the sun of the surface (its beam through the air), the sky
+/// and what the atmosphere did, per band.
+pub(super) fn light(
+    ctx: &Ctx,
+    a: &AtmosphereFile,
+    spec: AtmosphereSpec,
+    sun: &Sun,
+    day_of_year: Option<f64>,
+    seed: u64,
+) -> Result<(Sun, Sky, AtmosphereLight)> {
+    let photons = a.sky_photons.unwrap_or(DEFAULT_SKY_PHOTONS);
+    if !(100..=100_000_000).contains(&photons) {
+        return Err(ctx.err(
+            &[K("atmosphere"), K("sky_photons")],
+            "must be between 100 and 100000000",
+        ));
+    }
+    let centers = ctx.bands.centers_nm();
+    let seed = crate::rng::mix64(seed ^ SKY_KEY);
+    let lights: Vec<_> = (0..centers.len())
+        .into_par_iter()
+        .map(|b| {
+            let column = Column::new(&spec, b, f64::from(centers[b]));
+            let l = band_light(&column, sun.zenith_rad, photons, seed, b as u64, false);
+            (column.totals(), l)
+        })
+        .collect();
+    let toa = &sun.irradiance;
+    let mut bands = Vec::with_capacity(lights.len());
+    let mut radiance = Vec::with_capacity(lights.len());
+    for (b, (totals, l)) in lights.into_iter().enumerate() {
+        let f0 = toa[b];
+        radiance.push(l.sky.iter().map(|v| v * f0).collect::<Vec<_>>());
+        bands.push(BandAtmosphere {
+            nm: f64::from(centers[b]),
+            tau: totals,
+            direct_transmittance: l.direct_transmittance,
+            toa_irradiance: f0,
+            direct: f0 * sun.zenith_rad.cos() * l.direct_transmittance,
+            diffuse: f0 * l.diffuse,
+            diffuse_flux: f0 * l.diffuse_flux,
+            diffuse_flux_se: f0 * l.diffuse_flux_se,
+            up_at_top: f0 * l.up_at_top,
+            absorbed: f0 * l.absorbed,
+        });
+    }
+    debug_assert!(radiance.iter().all(|r| r.len() == CELLS));
+    let surface_sun = Sun {
+        irradiance: bands
+            .iter()
+            .map(|b| b.toa_irradiance * b.direct_transmittance)
+            .collect(),
+        ..sun.clone()
+    };
+    let sky = Sky {
+        irradiance: bands.iter().map(|b| b.diffuse).collect(),
+        model: SkyModel::Table(Arc::new(SkyTable::new(sun.azimuth_rad, &radiance))),
+    };
+    let light = AtmosphereLight {
+        spec,
+        day_of_year,
+        sky_photons: photons,
+        sky_seed: seed,
+        bands,
+        sky_radiance: radiance,
+    };
+    Ok((surface_sun, sky, light))
+}

@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""DISORT's answer for the atmosphere `littoral scene atmosphere --toa` printed.
+
+Reads that JSON (argument 1) and solves each band's column with DISORT
+(nanodisort, libRadtran's C DISORT), layer by layer with littoral's own
+optical depths, single-scattering albedos and phase functions (depolarised
+Rayleigh and Henyey-Greenstein, mixed by their scattering optical depths),
+the sun's beam at its top and a black surface. Prints JSON, per band:
+
+* ``direct``, ``diffuse``: the beam's and the sky's irradiance at the surface;
+* ``up_at_top``: the irradiance leaving the top;
+* ``sky``: the mean radiance of each of littoral's sky cells at the surface
+  (cosine-weighted over 3 x 3 directions within the cell), and ``toa``: the
+  same for the light leaving the top.
+
+DISORT's azimuth is measured from the beam's direction of travel (phi =
+phi0 is forward scattering for light going down). littoral's sky cells
+measure the sky element's azimuth from the sun's, so the light from a cell
+at phi travels at phi from the beam: the same number. Its top cells measure
+the travel direction from the direction toward the sun: phi + 180 from the
+beam.
+"""
+
+import json
+import math
+import sys
+
+import numpy as np
+import nanodisort as nd
+
+NSTR = 32
+NMOM = 256
+NPHASE = 721
+SUB = 3
+
+
+def cell_directions(zenith_bins, azimuth_bins):
+    """Per cell, the (mu, phi_deg) sub-directions: mu^2 uniform (cosine
+    weight), phi uniform within the cell."""
+    dz = math.pi / 2 / zenith_bins
+    da = 180.0 / azimuth_bins
+    mus, phis = [], []
+    for iz in range(zenith_bins):
+        a, b = math.cos(iz * dz), math.cos((iz + 1) * dz)
+        for k in range(SUB):
+            u = (k + 0.5) / SUB
+            mus.append(math.sqrt(b * b + u * (a * a - b * b)))
+    for ia in range(azimuth_bins):
+        for k in range(SUB):
+            phis.append((ia + (k + 0.5) / SUB) * da)
+    return mus, phis
+
+
+def solve(band, sun_zenith_deg, mus, phis):
+    layers = [l for l in band["layers"] if sum(v for k, v in l.items() if not k.endswith("_km")) > 0]
+    # littoral lists the layers from the top down, as DISORT numbers them.
+    q = band["rayleigh_q"]
+    g = band.get("aerosol_g", 0.0)
+    ds = nd.DisortState()
+    ds.nstr = NSTR
+    ds.nlyr = len(layers)
+    ds.nmom = NMOM
+    ds.ntau = 2
+    # umu ascending: light going down (negative), then up.
+    down = sorted(-m for m in mus)
+    up = sorted(mus)
+    ds.numu = len(down) + len(up)
+    ds.nphi = len(phis)
+    ds.nphase = NPHASE
+    ds.usrtau = True
+    ds.usrang = True
+    ds.lamber = True
+    ds.quiet = True
+    ds.intensity_correction = True
+    ds.old_intensity_correction = False
+    ds.allocate()
+    tau = np.array([sum(v for k, v in l.items() if not k.endswith("_km")) for l in layers])
+    sca_r = np.array([l["rayleigh"] for l in layers])
+    sca_a = np.array([l["aerosol_scattering"] for l in layers])
+    sca = sca_r + sca_a
+    ds.dtauc = tau
+    # DISORT's conservative case (albedo exactly 1, where no ozone absorbs)
+    # can fail; an albedo 1e-9 below changes nothing measurable.
+    ds.ssalb = np.minimum(np.where(tau > 0, sca / tau, 0.0), 1.0 - 1e-9)
+    share = np.where(sca > 0, sca_r / np.where(sca > 0, sca, 1.0), 1.0)
+    # Legendre coefficients g_l (p = sum (2l+1) g_l P_l, p normalised to 1
+    # over 4 pi / 4 pi): Rayleigh 1 + 2q/(3+q) P2, HG g^l.
+    ell = np.arange(NMOM + 1)
+    ray = np.zeros(NMOM + 1)
+    ray[0] = 1.0
+    ray[2] = 2.0 * q / (5.0 * (3.0 + q))
+    hg = g ** ell
+    ds.pmom = (share[None, :] * ray[:, None] + (1 - share[None, :]) * hg[:, None])
+    mu_p = np.linspace(-1.0, 1.0, NPHASE)
+    p_ray = 3.0 / (3.0 + q) * (1.0 + q * mu_p ** 2)
+    p_hg = (1 - g * g) / (1 + g * g - 2 * g * mu_p) ** 1.5
+    ds.mu_phase = mu_p
+    ds.phase = share[:, None] * p_ray[None, :] + (1 - share[:, None]) * p_hg[None, :]
+    ds.utau = np.array([0.0, tau.sum()])
+    ds.umu = np.array(down + up)
+    ds.phi = np.array(phis)
+    ds.fbeam = band["band"]["toa_irradiance"]
+    ds.umu0 = math.cos(math.radians(sun_zenith_deg))
+    ds.phi0 = 0.0
+    ds.albedo = 0.0
+    ds.fisot = 0.0
+    ds.solve()
+    return ds, down, up
+
+
+def main():
+    d = json.load(open(sys.argv[1]))
+    grid = d["sky_grid"]
+    nz, na = grid["zenith_bins"], grid["azimuth_bins"]
+    mus, phis = cell_directions(nz, na)
+    g = (d.get("aerosol") or {}).get("g", 0.0)
+    out = []
+    for band in d["bands"]:
+        band["aerosol_g"] = g
+        ds, down, up = solve(band, d["sun_zenith_deg"], mus, phis)
+        uu = np.asarray(ds.uu)  # (numu, ntau, nphi)
+        nd_ = len(down)
+        sky, toa = [], []
+        for iz in range(nz):
+            for ia in range(na):
+                s_sky, s_toa = 0.0, 0.0
+                for k in range(SUB):
+                    mu = mus[iz * SUB + k]
+                    i_down = down.index(-mu)
+                    i_up = nd_ + up.index(mu)
+                    for j in range(SUB):
+                        # Sky: travel at phi from the beam.
+                        s_sky += uu[i_down, 1, ia * SUB + j]
+                        # Top: travel at phi + 180 from the beam; by the
+                        # symmetry about the beam's plane, phi' = 180 - phi.
+                        s_toa += uu[i_up, 0, (na - 1 - ia) * SUB + (SUB - 1 - j)]
+                sky.append(s_sky / SUB ** 2)
+                toa.append(s_toa / SUB ** 2)
+        out.append(
+            {
+                "nm": band["band"]["nm"],
+                "direct": float(ds.rfldir[1]),
+                "diffuse": float(ds.rfldn[1]),
+                "up_at_top": float(ds.flup[0]),
+                "sky": sky,
+                "toa": toa,
+            }
+        )
+    json.dump(out, sys.stdout)
+
+
+if __name__ == "__main__":
+    main()
