@@ -267,6 +267,18 @@ pub struct AtmosphereReport {
     /// Irradiance leaving the top and absorbed in the air.
     pub up_at_top: Vec<f64>,
     pub absorbed: Vec<f64>,
+    /// With the sensor above the surface: its height, the direct
+    /// transmittance from the ground to it along its view, and the path
+    /// radiance it sees (light scattered into the view that never reached
+    /// the surface) with its standard error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub t_view: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub L_path: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub L_path_stderr: Vec<f64>,
 }
 
 impl AtmosphereReport {
@@ -312,6 +324,19 @@ impl AtmosphereReport {
             }),
             up_at_top: col(&|b| b.up_at_top),
             absorbed: col(&|b| b.absorbed),
+            altitude_m: a.view.as_ref().map(|v| v.altitude_m),
+            t_view: a
+                .view
+                .as_ref()
+                .map_or(Vec::new(), |v| v.transmittance.clone()),
+            L_path: a
+                .view
+                .as_ref()
+                .map_or(Vec::new(), |v| v.path_radiance.clone()),
+            L_path_stderr: a
+                .view
+                .as_ref()
+                .map_or(Vec::new(), |v| v.path_radiance_se.clone()),
         })
     }
 }

@@ -1,5 +1,6 @@
-//! Camera rays: an orthographic nadir sensor (a ground sample distance) and
-//! a pinhole camera, both above the water.
+//! Camera rays: an orthographic sensor (a ground sample distance, looking
+//! down at nadir or along `[sensor] view_zenith_deg`) and a pinhole camera,
+//! both above the water.
 
 use crate::scene::{Sensor, SensorKind};
 use glam::Vec3;
@@ -23,13 +24,17 @@ pub fn ray(sensor: &Sensor, px: usize, py: usize, u: f32, v: f32) -> CameraRay {
     match &sensor.kind {
         SensorKind::Orthographic { gsd_m, center_m } => {
             let gsd = *gsd_m as f32;
+            // The ray meets the mean surface at the pixel's ground point,
+            // coming from the sensor's direction.
+            let ground = Vec3::new(
+                center_m[0] as f32 + sx * w as f32 * gsd,
+                center_m[1] as f32 + sy * h as f32 * gsd,
+                0.0,
+            );
+            let toward = sensor.toward;
             CameraRay {
-                origin: Vec3::new(
-                    center_m[0] as f32 + sx * w as f32 * gsd,
-                    center_m[1] as f32 + sy * h as f32 * gsd,
-                    ORTHO_HEIGHT_M,
-                ),
-                direction: -Vec3::Z,
+                origin: ground + toward * (ORTHO_HEIGHT_M / toward.z),
+                direction: -toward,
             }
         }
         SensorKind::Pinhole {

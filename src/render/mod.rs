@@ -24,6 +24,7 @@
 //! `job::outputs` and `job::distributed::tile_file`) or file formats (see
 //! `cube`).
 
+pub mod air;
 pub mod air_sea;
 pub mod camera;
 pub mod march;
@@ -371,6 +372,10 @@ pub fn render_tile(
     let mut acc = Moments::new(nb, channels);
     let mut sample = vec![0f64; nb * channels];
     let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
+    // With the sensor above the surface: the radiance leaving the surface
+    // at each ground point, before the air.
+    let air = air::AirView::new(scene);
+    let (mut surface, mut surface_sum) = (vec![0f64; nb], vec![0f64; nb]);
     let mut se = vec![0f64; nb];
     for py in 0..th {
         for px in 0..tw {
@@ -378,6 +383,7 @@ pub fn render_tile(
             let pixel = (gy * w + gx) as u64;
             acc.clear();
             water_sum.iter_mut().for_each(|v| *v = 0.0);
+            surface_sum.iter_mut().for_each(|v| *v = 0.0);
             for s in 0..spp {
                 let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
                 let (u, v) = if spp == 1 {
@@ -386,16 +392,29 @@ pub fn render_tile(
                     (rng.uniform_f32(), rng.uniform_f32())
                 };
                 let ray = camera::ray(&scene.sensor, gx, gy, u, v);
-                light.camera(ray, &mut rng, &mut sample, &mut water)?;
+                match &air {
+                    Some(a) => {
+                        a.camera(light, ray, &mut rng, &mut sample, &mut water, &mut surface)?
+                    }
+                    None => {
+                        light.camera(ray, &mut rng, &mut sample, &mut water)?;
+                        surface.copy_from_slice(&sample[..nb]);
+                    }
+                }
                 acc.add(&sample);
                 water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
+                surface_sum
+                    .iter_mut()
+                    .zip(&surface)
+                    .for_each(|(a, v)| *a += v);
             }
             let base = (py * tw + px) * nb;
             for (b, m) in acc.mean().enumerate() {
                 let lw = water_sum[b] / spp as f64;
+                let leaving = surface_sum[b] / spp as f64;
                 values[base + b] = m as f32;
                 products[0][base + b] = lw as f32;
-                products[1][base + b] = (m - lw) as f32;
+                products[1][base + b] = (leaving - lw) as f32;
                 products[2][base + b] = if ed[b] > 0.0 {
                     (lw / ed[b]) as f32
                 } else {

@@ -404,7 +404,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
             let spec = atmosphere::spec(&ctx, a)?;
             let (sun, sky, light) =
                 atmosphere::light(&ctx, a, spec, &sun, f.sun.day_of_year, f.seed)?;
-            (sun, sky, Some(std::sync::Arc::new(light)))
+            (sun, sky, Some(light))
         }
     };
     light::check_emits(&ctx, &f, &sun, &sky)?;
@@ -428,6 +428,12 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     let geometry = geo.build();
     floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;
     let (sensor, radiometers) = sensor::sensor_and_radiometers(&ctx, &f, &domain, &geometry, ov)?;
+    let atmosphere = atmosphere.map(|mut a| {
+        if sensor.altitude_m.is_some() {
+            a.view = Some(atmosphere::view(&a, &sun, &sensor, f.seed));
+        }
+        std::sync::Arc::new(a)
+    });
     let (estimate, render) = estimate::estimate_and_render(&ctx, &f, ov)?;
     let georef = georef(&ctx, &f)?;
     let mut inputs = ctx.inputs.take();

@@ -145,6 +145,14 @@ pub struct SensorFile {
     /// A real sensor's bands to write the cubes in as well
     /// (`spectral::response::SpectralResponse::named`).
     pub response: Option<String>,
+    /// With an `[atmosphere]`: the sensor's height above the sea (m); at or
+    /// above the atmosphere's top (120 km) it sees the top of the
+    /// atmosphere.
+    pub altitude_m: Option<f64>,
+    /// Orthographic: the angle of the view from the vertical and its
+    /// azimuth (toward the sensor, counter-clockwise from +x).
+    pub view_zenith_deg: Option<f64>,
+    pub view_azimuth_deg: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

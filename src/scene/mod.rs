@@ -88,6 +88,25 @@ pub struct AtmosphereLight {
     /// The sky's mean radiance per band and cell of the sky grid
     /// (`optics::atmosphere::transport`), W m^-2 sr^-1 nm^-1.
     pub sky_radiance: Vec<Vec<f64>>,
+    /// Each band's column, for the renderers' paths through the air.
+    pub columns: Vec<crate::optics::atmosphere::Column>,
+    /// With `[sensor] altitude_m`: the air between the ground and the
+    /// sensor.
+    pub view: Option<ViewLight>,
+}
+
+/// What the air between the ground and a sensor above it does, per band,
+/// along the sensor's view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewLight {
+    pub altitude_m: f64,
+    /// Direct transmittance from the ground to the sensor.
+    pub transmittance: Vec<f64>,
+    /// Path radiance at the sensor (light scattered into the view that
+    /// never reached the surface; W m^-2 sr^-1 nm^-1) and its standard
+    /// error.
+    pub path_radiance: Vec<f64>,
+    pub path_radiance_se: Vec<f64>,
 }
 
 /// One band of an atmosphere: its optical depths and the light at the
@@ -268,6 +287,12 @@ pub struct Sensor {
     /// A real sensor whose bands the cubes are also written in
     /// (`[sensor] response`).
     pub response: Option<crate::spectral::response::SpectralResponse>,
+    /// Orthographic: the unit direction from the ground toward the sensor
+    /// (+z: nadir view).
+    pub toward: Vec3,
+    /// Height of the sensor above the sea (m), seeing through the
+    /// `[atmosphere]`; none: just above the surface.
+    pub altitude_m: Option<f64>,
 }
 
 /// An in-water (or above-water, at negative depth) radiance meter.
@@ -492,6 +517,19 @@ impl Scene {
                 "cells": "zenith-major; sky: the zenith angle of the sky element and its azimuth from the sun's; top: the zenith angle of the travel direction and its azimuth from the direction toward the sun",
             },
             "bands": bands,
+            "view": a.view.as_ref().map(|v| {
+                let toward = self.sensor.toward.as_dvec3();
+                let phi = (toward.y.atan2(toward.x) - self.sun.azimuth_rad).to_degrees();
+                serde_json::json!({
+                    "altitude_m": v.altitude_m,
+                    "view_zenith_deg": toward.z.clamp(-1.0, 1.0).acos().to_degrees(),
+                    "view_azimuth_from_sun_deg": phi.rem_euclid(360.0),
+                    "depth": a.columns.iter().map(|c| c.depth_at(v.altitude_m * 1e-3)).collect::<Vec<_>>(),
+                    "transmittance": v.transmittance,
+                    "path_radiance": v.path_radiance,
+                    "path_radiance_se": v.path_radiance_se,
+                })
+            }),
         }))
     }
 

@@ -11,7 +11,10 @@ the sun's beam at its top and a black surface. Prints JSON, per band:
 * ``up_at_top``: the irradiance leaving the top;
 * ``sky``: the mean radiance of each of littoral's sky cells at the surface
   (cosine-weighted over 3 x 3 directions within the cell), and ``toa``: the
-  same for the light leaving the top.
+  same for the light leaving the top;
+* ``path_radiance``: with a sensor above the surface (``view``), the
+  radiance going up toward it at its level (over a black surface: the path
+  radiance), in its exact direction.
 
 DISORT's azimuth is measured from the beam's direction of travel (phi =
 phi0 is forward scattering for light going down). littoral's sky cells
@@ -51,7 +54,7 @@ def cell_directions(zenith_bins, azimuth_bins):
     return mus, phis
 
 
-def solve(band, sun_zenith_deg, mus, phis):
+def solve(band, sun_zenith_deg, mus, phis, levels=None):
     layers = [l for l in band["layers"] if sum(v for k, v in l.items() if not k.endswith("_km")) > 0]
     # littoral lists the layers from the top down, as DISORT numbers them.
     q = band["rayleigh_q"]
@@ -60,11 +63,12 @@ def solve(band, sun_zenith_deg, mus, phis):
     ds.nstr = NSTR
     ds.nlyr = len(layers)
     ds.nmom = NMOM
-    ds.ntau = 2
+    levels = levels if levels is not None else [0.0, None]
+    ds.ntau = len(levels)
     # umu ascending: light going down (negative), then up.
-    down = sorted(-m for m in mus)
+    down = sorted(-m for m in mus) if mus else []
     up = sorted(mus)
-    ds.numu = len(down) + len(up)
+    ds.numu = len(down) + len(up) if levels[-1] is None else len(up)
     ds.nphi = len(phis)
     ds.nphase = NPHASE
     ds.usrtau = True
@@ -96,8 +100,8 @@ def solve(band, sun_zenith_deg, mus, phis):
     p_hg = (1 - g * g) / (1 + g * g - 2 * g * mu_p) ** 1.5
     ds.mu_phase = mu_p
     ds.phase = share[:, None] * p_ray[None, :] + (1 - share[:, None]) * p_hg[None, :]
-    ds.utau = np.array([0.0, tau.sum()])
-    ds.umu = np.array(down + up)
+    ds.utau = np.array([tau.sum() if l is None else min(l, tau.sum()) for l in levels])
+    ds.umu = np.array(down + up) if levels[-1] is None else np.array(up)
     ds.phi = np.array(phis)
     ds.fbeam = band["band"]["toa_irradiance"]
     ds.umu0 = math.cos(math.radians(sun_zenith_deg))
@@ -136,8 +140,17 @@ def main():
                         s_toa += uu[i_up, 0, (na - 1 - ia) * SUB + (SUB - 1 - j)]
                 sky.append(s_sky / SUB ** 2)
                 toa.append(s_toa / SUB ** 2)
+        view = d.get("view")
+        path = None
+        if view:
+            b = len(out)
+            mu = math.cos(math.radians(view["view_zenith_deg"]))
+            phi = (view["view_azimuth_from_sun_deg"] + 180.0) % 360.0
+            vs, _, _ = solve(band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b]])
+            path = float(np.asarray(vs.uu)[0, 0, 0])
         out.append(
             {
+                "path_radiance": path,
                 "nm": band["band"]["nm"],
                 "direct": float(ds.rfldir[1]),
                 "diffuse": float(ds.rfldn[1]),

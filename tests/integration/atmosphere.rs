@@ -252,3 +252,125 @@ fn the_atmosphere_sets_the_sun_and_sky_at_the_surface() {
         "{f}"
     );
 }
+
+/// The path radiance a sensor above the surface sees, against DISORT's
+/// upward radiance at the sensor's level in its exact direction over a
+/// black surface, within 3 sigma plus 1 % (Rayleigh) or 2 % (aerosol):
+/// at 3 km and above the atmosphere, at nadir and off nadir.
+#[test]
+fn the_path_radiance_matches_disort() {
+    if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
+        return;
+    }
+    let rayleigh = "[atmosphere]\nsky_photons = 20000";
+    let aerosol = "[atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.3\nangstrom = 1.0\nssa = 0.9\nphase = { kind = \"henyey-greenstein\", g = 0.7 }\nscale_height_km = 1.5";
+    let sensor = |alt: f64, vz: f64, va: f64| {
+        format!("[sensor]\npixels = [4, 4]\ngsd_m = 1.0\naltitude_m = {alt:?}\nview_zenith_deg = {vz:?}\nview_azimuth_deg = {va:?}")
+    };
+    let cases = [
+        (rayleigh, 60.0, sensor(700e3, 40.0, 180.0), 0.01),
+        (rayleigh, 30.0, sensor(3e3, 0.0, 0.0), 0.01),
+        (aerosol, 30.0, sensor(3e3, 30.0, 120.0), 0.02),
+        (aerosol, 45.0, sensor(700e3, 50.0, 0.0), 0.02),
+    ];
+    let mut failures = Vec::new();
+    for (air, sun, view, tol) in cases {
+        let s = scene(&format!("{air}\n{view}"), sun, 1);
+        let json = s.atmosphere_json(false).unwrap();
+        let d = disort(&json);
+        let v = &json["view"];
+        for (b, band) in d.iter().enumerate() {
+            let want = band["path_radiance"].as_f64().unwrap();
+            let got = v["path_radiance"][b].as_f64().unwrap();
+            let se = v["path_radiance_se"][b].as_f64().unwrap();
+            if (got - want).abs() > 3.0 * se + tol * want {
+                failures.push(format!(
+                    "sun {sun}, {view:?}, band {b}: {got} +- {se} against {want}"
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Through air that only absorbs (ozone, no Rayleigh, no aerosol) a
+/// sensor above the atmosphere sees each pixel's radiance leaving the
+/// surface times the direct transmittance exp(-tau / mu_v), exactly,
+/// off nadir too; the water-leaving radiance and R_rs are the surface's.
+#[test]
+fn a_sensor_above_absorbing_air_sees_the_surface_attenuated() {
+    let dir = tempdir();
+    let air = "[atmosphere]\nrayleigh = false\nozone_du = 400.0\nsky_photons = 1000";
+    let view = "[sensor]\npixels = [3, 2]\ngsd_m = 1.0\nsamples_per_pixel = 2\nview_zenith_deg = 35.0\nview_azimuth_deg = 60.0";
+    let at_surface = scene(&format!("{air}\n{view}"), 30.0, 3);
+    let above = scene(&format!("{air}\n{view}\naltitude_m = 800000.0"), 30.0, 3);
+    let t = above
+        .atmosphere
+        .as_ref()
+        .unwrap()
+        .view
+        .as_ref()
+        .unwrap()
+        .transmittance
+        .clone();
+    let mu_v = 35f64.to_radians().cos();
+    for (b, band) in above.atmosphere.as_ref().unwrap().bands.iter().enumerate() {
+        // The view direction is held in f32.
+        let want = (-band.tau.extinction() / mu_v).exp();
+        assert!((t[b] / want - 1.0).abs() < 1e-6, "{} {want}", t[b]);
+        assert!(band.tau.ozone > 0.0 || band.nm < 450.0);
+    }
+    let r0 = render_job(&at_surface, &dir.path().join("surface"), 0);
+    let r1 = render_job(&above, &dir.path().join("above"), 0);
+    let open = |p: &str| littoral::cube::EnviCube::open(Path::new(p)).unwrap();
+    let (c0, c1) = (open(&r0.outputs.hdr), open(&r1.outputs.hdr));
+    assert_eq!(c0.bands(), t.len());
+    for (b, tb) in t.iter().enumerate() {
+        let (v0, v1) = (c0.band(b).unwrap(), c1.band(b).unwrap());
+        for (x0, x1) in v0.iter().zip(&v1) {
+            let want = f64::from(*x0) * tb;
+            assert!(
+                (f64::from(*x1) - want).abs() <= 1e-6 * want.abs() + 1e-12,
+                "band {b}: {x1} against {want}"
+            );
+        }
+    }
+    let lw = |r: &littoral::job::report::RunReport| open(&r.outputs.products[0].hdr);
+    let (l0, l1) = (lw(&r0), lw(&r1));
+    for b in 0..l0.bands() {
+        assert_eq!(l0.band(b).unwrap(), l1.band(b).unwrap(), "L_w, band {b}");
+    }
+    let a = r1.atmosphere.unwrap();
+    assert_eq!(a.altitude_m, Some(800000.0));
+    assert!(a.L_path.iter().all(|&l| l == 0.0), "{:?}", a.L_path);
+}
+
+/// The sensor above the surface is refused without an atmosphere and for
+/// a pinhole camera; view angles only for an orthographic sensor.
+#[test]
+fn sensor_altitude_keys_are_checked() {
+    let base = MINIMAL_SCENE.replace("irradiance = 1.0", "spectrum = \"extraterrestrial\"");
+    let bad = [
+        ("[sensor]\naltitude_m = 3000.0", "sensor.altitude_m"),
+        (
+            "[atmosphere]\n[sensor]\naltitude_m = 0.5",
+            "sensor.altitude_m",
+        ),
+        (
+            "[atmosphere]\n[sensor]\nview_zenith_deg = 80.0",
+            "sensor.view_zenith_deg",
+        ),
+        (
+            "[atmosphere]\n[sensor]\nkind = \"pinhole\"\nposition_m = [5.0, 5.0, 20.0]\nlook_at_m = [5.0, 5.0, 0.0]\nfov_deg = 10.0\naltitude_m = 3000.0",
+            "sensor.altitude_m",
+        ),
+    ];
+    for (extra, key) in bad {
+        let text = format!("{base}\n{extra}\n");
+        let e = Scene::parse(&text, Path::new("bad.toml"), &Overrides::default())
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {extra}"))
+            .to_string();
+        assert!(e.contains(key), "{extra}: {e}");
+    }
+}

@@ -259,6 +259,68 @@ impl Column {
         t
     }
 
+    /// Optical depth from the top down to height `z_km` (0 above the top,
+    /// the whole column at and below the ground).
+    pub fn depth_at(&self, z_km: f64) -> f64 {
+        let i = self.layers.partition_point(|l| l.bottom_km >= z_km);
+        match self.layers.get(i) {
+            None => self.total(),
+            Some(l) => {
+                let f = ((l.top_km - z_km) / (l.top_km - l.bottom_km)).clamp(0.0, 1.0);
+                self.depth[i] + f * l.tau()
+            }
+        }
+    }
+
+    /// The height (km) at optical depth `depth` from the top: the inverse
+    /// of [`Self::depth_at`] (the top of the first layer for 0).
+    pub fn height_at(&self, depth: f64) -> f64 {
+        let i = self.depth[1..]
+            .partition_point(|&d| d < depth)
+            .min(self.layers.len() - 1);
+        let l = &self.layers[i];
+        let t = l.tau();
+        let f = if t > 0.0 {
+            ((depth - self.depth[i]) / t).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        l.top_km - f * (l.top_km - l.bottom_km)
+    }
+
+    /// The mean of `columns` (one per band, on the same layers): each
+    /// layer's optical depths averaged over the bands, the phase functions
+    /// the first column's.
+    pub fn mean(columns: &[Column]) -> Column {
+        let n = columns.len() as f64;
+        let mut c = columns[0].clone();
+        for (i, l) in c.layers.iter_mut().enumerate() {
+            let avg = |f: &dyn Fn(&Layer) -> f64| {
+                columns.iter().map(|c| f(&c.layers[i])).sum::<f64>() / n
+            };
+            l.rayleigh = avg(&|l| l.rayleigh);
+            l.aerosol_scattering = avg(&|l| l.aerosol_scattering);
+            l.aerosol_absorption = avg(&|l| l.aerosol_absorption);
+            l.ozone = avg(&|l| l.ozone);
+            l.gas = avg(&|l| l.gas);
+        }
+        let mut d = 0.0;
+        for (i, l) in c.layers.iter().enumerate() {
+            c.depth[i] = d;
+            d += l.tau();
+        }
+        let last = c.layers.len();
+        c.depth[last] = d;
+        c
+    }
+
+    /// The index of the layer holding height `z_km`.
+    pub fn layer_index(&self, z_km: f64) -> usize {
+        self.layers
+            .partition_point(|l| l.bottom_km >= z_km)
+            .min(self.layers.len() - 1)
+    }
+
     /// The layer at optical depth `tau` from the top (the last one at and
     /// below the ground).
     pub fn layer_at(&self, tau: f64) -> &Layer {

@@ -116,27 +116,36 @@ pub fn point_in_cell(iz: usize, ia: usize, u: [f64; 2]) -> (f64, f64) {
     (mu, (ia as f64 + u[1]) * AZIMUTH_STEP)
 }
 
+/// What became of the photons traced by [`trace`], per unit beam-normal
+/// irradiance at the top: sums over the photons.
+#[derive(Clone, Copy, Debug, Default)]
+struct Fates {
+    /// Weight reaching the surface after scattering, and its square.
+    arrived: f64,
+    arrived_sq: f64,
+    /// Weight leaving the top, and absorbed.
+    up: f64,
+    absorbed: f64,
+}
+
 /// Trace `photons` photons of the sun at zenith `sun_zenith` (radians)
-/// through `column` over a black surface, from stream `stream` of `seed`;
-/// with `toa`, also the radiance leaving the top.
-pub fn band_light(
+/// through `column` over a black surface, drawing from `rng`; at each
+/// collision `collide(tau, dir, w, share)` sees the optical depth from the
+/// top, the direction of travel before it, the weight after it and the
+/// layer's Rayleigh share of scattering.
+fn trace(
     column: &Column,
     sun_zenith: f64,
     photons: u64,
-    seed: u64,
-    stream: u64,
-    toa: bool,
-) -> BandLight {
+    rng: &mut Pcg32,
+    mut collide: impl FnMut(&mut Pcg32, f64, DVec3, f64, f64),
+) -> Fates {
     let mu0 = sun_zenith.cos();
     let total = column.total();
-    let mut rng = Pcg32::new(seed, stream);
-    let mut sky = vec![0.0; CELLS];
-    let mut top = toa.then(|| vec![0.0; CELLS]);
-    let (mut flux, mut flux2, mut up, mut absorbed) = (0.0, 0.0, 0.0, 0.0);
+    let mut f = Fates::default();
     // Directions of travel; the sun's azimuth is 0, so sunlight travels
     // toward azimuth pi.
     let sun = DVec3::new(-sun_zenith.sin(), 0.0, -mu0);
-    let mut cells = Cells::default();
     for _ in 0..photons {
         let mut dir = sun;
         let mut tau = 0.0f64;
@@ -153,29 +162,16 @@ pub fn band_light(
                 break;
             }
             if next <= 0.0 {
-                up += w;
+                f.up += w;
                 break;
             }
             tau = next;
             let layer = column.layer_at(tau);
             let kept = w * layer.ssa();
-            absorbed += w - kept;
+            f.absorbed += w - kept;
             w = kept;
             let share = layer.rayleigh_share();
-            cells.draw(&mut rng);
-            let below = total - tau;
-            cells.add(
-                &mut sky,
-                column,
-                share,
-                dir,
-                w,
-                |mu| (-below / mu).exp() / mu,
-                true,
-            );
-            if let Some(t) = top.as_mut() {
-                cells.add(t, column, share, dir, w, |mu| (-tau / mu).exp() / mu, false);
-            }
+            collide(rng, tau, dir, w, share);
             let phase = if rng.uniform_f64() < share {
                 &column.rayleigh_phase
             } else {
@@ -189,16 +185,58 @@ pub fn band_light(
             scattered = true;
             if w < ROULETTE_WEIGHT {
                 if rng.uniform_f64() * ROULETTE_WEIGHT >= w {
-                    absorbed += w;
+                    f.absorbed += w;
                     break;
                 }
-                absorbed -= ROULETTE_WEIGHT - w;
+                f.absorbed -= ROULETTE_WEIGHT - w;
                 w = ROULETTE_WEIGHT;
             }
         }
-        flux += arrived;
-        flux2 += arrived * arrived;
+        f.arrived += arrived;
+        f.arrived_sq += arrived * arrived;
     }
+    f
+}
+
+/// Trace `photons` photons of the sun at zenith `sun_zenith` (radians)
+/// through `column` over a black surface, from stream `stream` of `seed`;
+/// with `toa`, also the radiance leaving the top.
+pub fn band_light(
+    column: &Column,
+    sun_zenith: f64,
+    photons: u64,
+    seed: u64,
+    stream: u64,
+    toa: bool,
+) -> BandLight {
+    let mu0 = sun_zenith.cos();
+    let total = column.total();
+    let mut rng = Pcg32::new(seed, stream);
+    let mut sky = vec![0.0; CELLS];
+    let mut top = toa.then(|| vec![0.0; CELLS]);
+    let mut cells = Cells::default();
+    let f = trace(
+        column,
+        sun_zenith,
+        photons,
+        &mut rng,
+        |rng, tau, dir, w, share| {
+            cells.draw(rng);
+            let below = total - tau;
+            cells.add(
+                &mut sky,
+                column,
+                share,
+                dir,
+                w,
+                |mu| (-below / mu).exp() / mu,
+                true,
+            );
+            if let Some(t) = top.as_mut() {
+                cells.add(t, column, share, dir, w, |mu| (-tau / mu).exp() / mu, false);
+            }
+        },
+    );
     let n = photons.max(1) as f64;
     let scale = mu0 / n;
     sky.iter_mut().for_each(|v| *v *= scale);
@@ -208,18 +246,53 @@ pub fn band_light(
     let diffuse = (0..CELLS)
         .map(|c| sky[c] * projected_solid_angle(c / AZIMUTH_BINS))
         .sum();
-    let mean = flux / n;
-    let var = (flux2 / n - mean * mean).max(0.0) / n;
+    let mean = f.arrived / n;
+    let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
     BandLight {
         direct_transmittance: (-total / mu0).exp(),
         sky,
         diffuse,
         diffuse_flux: mu0 * mean,
         diffuse_flux_se: mu0 * var.sqrt(),
-        up_at_top: mu0 * up / n,
-        absorbed: mu0 * absorbed / n,
+        up_at_top: mu0 * f.up / n,
+        absorbed: mu0 * f.absorbed / n,
         toa: top,
     }
+}
+
+/// The path radiance a sensor at `depth` (optical depth from the top; 0
+/// above the atmosphere) sees looking down along the travel direction
+/// `view` (unit, up, azimuth from the sun's): the light scattered below it
+/// that never reached the (black) surface, per unit beam-normal irradiance
+/// at the top, by the local estimate at every collision below the sensor,
+/// with its standard error (from the photons' spread).
+pub fn path_radiance(
+    column: &Column,
+    sun_zenith: f64,
+    view: DVec3,
+    depth: f64,
+    photons: u64,
+    seed: u64,
+    stream: u64,
+) -> (f64, f64) {
+    let mu0 = sun_zenith.cos();
+    let mut rng = Pcg32::new(seed, stream);
+    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    for _ in 0..photons {
+        let mut one = 0.0;
+        trace(column, sun_zenith, 1, &mut rng, |_, tau, dir, w, share| {
+            if tau > depth {
+                let p = mixture(column, share, dir.dot(view));
+                one += w * p * (-(tau - depth) / view.z).exp() / view.z;
+            }
+        });
+        sum += one;
+        sum_sq += one * one;
+    }
+    let n = photons.max(1) as f64;
+    let mean = sum / n;
+    let var = (sum_sq / n - mean * mean).max(0.0) / n;
+    (mu0 * mean, mu0 * var.sqrt())
 }
 
 /// The cells' directions for one collision: the same offset in every cell.

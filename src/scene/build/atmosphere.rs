@@ -181,11 +181,14 @@ pub(super) fn light(
     }
     let centers = ctx.bands.centers_nm();
     let seed = crate::rng::mix64(seed ^ SKY_KEY);
-    let lights: Vec<_> = (0..centers.len())
-        .into_par_iter()
-        .map(|b| {
-            let column = Column::new(&spec, b, f64::from(centers[b]));
-            let l = band_light(&column, sun.zenith_rad, photons, seed, b as u64, false);
+    let columns: Vec<Column> = (0..centers.len())
+        .map(|b| Column::new(&spec, b, f64::from(centers[b])))
+        .collect();
+    let lights: Vec<_> = columns
+        .par_iter()
+        .enumerate()
+        .map(|(b, column)| {
+            let l = band_light(column, sun.zenith_rad, photons, seed, b as u64, false);
             (column.totals(), l)
         })
         .collect();
@@ -227,6 +230,56 @@ pub(super) fn light(
         sky_seed: seed,
         bands,
         sky_radiance: radiance,
+        columns,
+        view: None,
     };
     Ok((surface_sun, sky, light))
+}
+
+/// Photons per band for the path radiance, per photon of the sky: a
+/// collision adds to one direction here, to 324 cells there.
+const PATH_PHOTONS_PER_SKY_PHOTON: u64 = 4;
+
+/// Mixed into the scene's seed for the path radiance's photons.
+const PATH_KEY: u64 = 0x7061_7468_5f72_6164;
+
+/// The air between the ground and `sensor` (at `altitude_m`) along its
+/// view, for the sun `sun` (at the surface; its zenith and azimuth are the
+/// top's).
+pub(super) fn view(light: &AtmosphereLight, sun: &Sun, sensor: &Sensor, seed: u64) -> ViewLight {
+    let altitude_m = sensor.altitude_m.unwrap_or(0.0);
+    let z_km = altitude_m * 1e-3;
+    let toward = sensor.toward.as_dvec3().normalize();
+    // The view's azimuth from the sun's, in the transport's frame.
+    let phi = toward.y.atan2(toward.x) - sun.azimuth_rad;
+    let s = (1.0 - toward.z * toward.z).max(0.0).sqrt();
+    let view = glam::DVec3::new(s * phi.cos(), s * phi.sin(), toward.z);
+    let photons = light.sky_photons * PATH_PHOTONS_PER_SKY_PHOTON;
+    let seed = crate::rng::mix64(seed ^ PATH_KEY);
+    let per_band: Vec<(f64, f64, f64)> = light
+        .columns
+        .par_iter()
+        .enumerate()
+        .map(|(b, column)| {
+            let depth = column.depth_at(z_km);
+            let t = (-(column.total() - depth) / toward.z).exp();
+            let (l, se) = crate::optics::atmosphere::transport::path_radiance(
+                column,
+                sun.zenith_rad,
+                view,
+                depth,
+                photons,
+                seed,
+                b as u64,
+            );
+            let f0 = light.bands[b].toa_irradiance;
+            (t, l * f0, se * f0)
+        })
+        .collect();
+    ViewLight {
+        altitude_m,
+        transmittance: per_band.iter().map(|v| v.0).collect(),
+        path_radiance: per_band.iter().map(|v| v.1).collect(),
+        path_radiance_se: per_band.iter().map(|v| v.2).collect(),
+    }
 }

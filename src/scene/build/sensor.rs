@@ -23,6 +23,9 @@ pub(super) fn sensor_and_radiometers(
         look_at_m: None,
         fov_deg: None,
         response: None,
+        altitude_m: None,
+        view_zenith_deg: None,
+        view_azimuth_deg: None,
     };
     let s = f.sensor.as_ref().unwrap_or(&default);
     let pixels = s.pixels.unwrap_or([256, 256]);
@@ -113,11 +116,68 @@ pub(super) fn sensor_and_radiometers(
             Some(response)
         }
     };
+    let orthographic = matches!(kind, SensorKind::Orthographic { .. });
+    let toward = match (s.view_zenith_deg, s.view_azimuth_deg) {
+        (None, None) => Vec3::Z,
+        _ if !orthographic => {
+            let k = if s.view_zenith_deg.is_some() {
+                "view_zenith_deg"
+            } else {
+                "view_azimuth_deg"
+            };
+            return Err(ctx.err(
+                &sk(k),
+                "only for an orthographic sensor (a pinhole camera looks along look_at_m)",
+            ));
+        }
+        (z, a) => {
+            let z = z.unwrap_or(0.0);
+            ctx.within(
+                &sk("view_zenith_deg"),
+                z,
+                0.0,
+                70.0,
+                "must be >= 0",
+                "degrees",
+            )?;
+            let a = a.unwrap_or(0.0);
+            if !a.is_finite() {
+                return Err(ctx.err(&sk("view_azimuth_deg"), "must be a finite angle"));
+            }
+            let (z, a) = (z.to_radians(), a.to_radians());
+            Vec3::new(
+                (z.sin() * a.cos()) as f32,
+                (z.sin() * a.sin()) as f32,
+                z.cos() as f32,
+            )
+            .normalize()
+        }
+    };
+    let altitude_m =
+        match s.altitude_m {
+            None => None,
+            Some(_) if f.atmosphere.is_none() => return Err(ctx.err(
+                &sk("altitude_m"),
+                "only with [atmosphere]: without one the sensor sees the water from just above it",
+            )),
+            Some(_) if !orthographic => {
+                return Err(ctx.err(
+                    &sk("altitude_m"),
+                    "only for an orthographic sensor (a pinhole camera sits at position_m)",
+                ))
+            }
+            Some(h) => {
+                ctx.within(&sk("altitude_m"), h, 1.0, 1e6, "must be at least 1 m", "m")?;
+                Some(h)
+            }
+        };
     let sensor = Sensor {
         kind,
         pixels,
         samples_per_pixel: spp,
         response,
+        toward,
+        altitude_m,
     };
 
     Ok((sensor, radiometers(ctx, f, domain, geometry)?))
@@ -257,6 +317,8 @@ fn pinhole_footprint(
         pixels,
         samples_per_pixel: 1,
         response: None,
+        toward: Vec3::Z,
+        altitude_m: None,
     };
     let [sx, sy] = domain.size_m;
     let [w, h] = pixels;
