@@ -249,3 +249,6 @@ impl<'s> AirView<'s> {
         DVec3::new(p.x.rem_euclid(sx), p.y.rem_euclid(sy), 0.0)
     }
 }
+
+#[cfg(test)]
+mod tests;
