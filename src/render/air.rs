@@ -28,22 +28,49 @@
 //!   the domain. Light leaving the water near P reaches the sensor through
 //!   the air this way: the adjacency effect comes out of the transport.
 //!
+//! **Control variate for the scattered part.** One adjoint path per sample
+//! meets the ground in a fifth of the samples and sees there whatever the
+//! surface sends its way, sun glint included: at one sample per pixel that
+//! part alone was 30 % noise at the top of the atmosphere. So before the
+//! tiles, the render estimates the mean radiance leaving the surface per
+//! direction cell of the sky grid, sun glint taken out (`ENV_SAMPLES`
+//! integrator calls per cell at random points of the domain), and the
+//! scattered part of a table of that plus the exact glint from many
+//! adjoint paths (`POOLED_PATHS`, no integrator call). Each pixel's path
+//! then adds that mean plus its own difference W (L(P') - table - glint):
+//! unbiased whatever the table holds, with the glint's and the sky's
+//! sampling noise and the water's mean taken out of the pixel's variance.
+//!
 //! Not in it: light the surface sends up that the air returns down to the
 //! surface (the sky at the surface is over a black surface).
 
 use super::camera::CameraRay;
 use super::Integrator;
 use crate::error::Result;
+use crate::optics::atmosphere::transport::{cell_of, point_in_cell, AZIMUTH_BINS, CELLS};
 use crate::optics::atmosphere::Column;
 use crate::rng::Pcg32;
 use crate::scene::{Scene, ViewLight};
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// Height above the surface of the rays handed to the integrator (m).
 const RAY_HEIGHT_M: f64 = 10.0;
 
 /// A path's largest band weight below which it plays Russian roulette.
 const ROULETTE: f64 = 0.1;
+
+/// Integrator calls per direction cell for the mean radiance leaving the
+/// surface.
+pub const ENV_SAMPLES: u64 = 16;
+
+/// Adjoint paths for the scattered part of the mean radiance leaving the
+/// surface.
+pub const POOLED_PATHS: u64 = 400_000;
+
+/// Streams of the table's and the pooled paths' randoms.
+const ENV_KEY: u64 = 0x656e_765f_7461_626c;
+const POOLED_KEY: u64 = 0x706f_6f6c_6564_5f70;
 
 /// The air between the ground and a sensor above it.
 pub struct AirView<'s> {
@@ -60,11 +87,31 @@ pub struct AirView<'s> {
     pilot_share: Vec<f64>,
     toward: DVec3,
     altitude_km: f64,
+    /// Per direction cell and band (cell-major): the mean radiance leaving
+    /// the surface, sun glint taken out.
+    env: Vec<f64>,
+    /// Per band: the scattered part the table and the glint give, and its
+    /// standard error (from the chunks' spread).
+    pooled: Vec<f64>,
+    pooled_se: Vec<f64>,
 }
 
 impl<'s> AirView<'s> {
-    /// The air of `scene`, none unless its sensor has an altitude.
-    pub fn new(scene: &'s Scene) -> Option<AirView<'s>> {
+    /// The air of `scene` for the integrator `light`, none unless its
+    /// sensor has an altitude: the mean radiance leaving the surface and
+    /// its scattered part are estimated here (in parallel on the current
+    /// pool, the same for any number of threads).
+    pub fn new(scene: &'s Scene, light: &dyn Integrator) -> Result<Option<AirView<'s>>> {
+        let Some(mut air) = Self::air(scene) else {
+            return Ok(None);
+        };
+        air.env = air.environment(light)?;
+        (air.pooled, air.pooled_se) = air.pooled();
+        Ok(Some(air))
+    }
+
+    /// The air alone, before its tables.
+    fn air(scene: &'s Scene) -> Option<AirView<'s>> {
         let a = scene.atmosphere.as_deref()?;
         let view = a.view.as_ref()?;
         let columns = &a.columns[..];
@@ -94,7 +141,117 @@ impl<'s> AirView<'s> {
             pilot_share,
             toward: scene.sensor.toward.as_dvec3().normalize(),
             altitude_km: view.altitude_m * 1e-3,
+            env: vec![0.0; CELLS * nb],
+            pooled: vec![0.0; nb],
+            pooled_se: vec![0.0; nb],
         })
+    }
+
+    /// The sun glint per band leaving the surface toward `up` (unit).
+    fn glint(&self, up: DVec3, out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        if up.z > 0.0 {
+            super::air_sea::add_glint(self.scene, up.as_vec3(), out);
+        }
+    }
+
+    /// The direction cell of `up` (unit, leaving the surface).
+    fn cell(&self, up: DVec3) -> usize {
+        let phi = up.y.atan2(up.x) - self.scene.sun.azimuth_rad;
+        cell_of(up.z, phi)
+    }
+
+    /// The mean radiance leaving the surface per direction cell and band,
+    /// glint taken out: `ENV_SAMPLES` integrator calls per cell, at random
+    /// points of the domain and directions cosine-weighted within the
+    /// cell, on either side of the sun's vertical plane.
+    fn environment(&self, light: &dyn Integrator) -> Result<Vec<f64>> {
+        let nb = self.columns.len();
+        let channels = light.channels();
+        let seed = crate::rng::mix64(self.scene.seed ^ ENV_KEY);
+        let [sx, sy] = self.scene.domain.size_m;
+        let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
+            .into_par_iter()
+            .map(|c| {
+                let (mut sum, mut out, mut water, mut glint) = (
+                    vec![0.0; nb],
+                    vec![0.0; nb * channels],
+                    vec![0.0; nb],
+                    vec![0.0; nb],
+                );
+                for k in 0..ENV_SAMPLES {
+                    let mut rng = Pcg32::new(seed, c as u64 * ENV_SAMPLES + k);
+                    let u = [rng.uniform_f64(), rng.uniform_f64()];
+                    let (mu, phi) = point_in_cell(c / AZIMUTH_BINS, c % AZIMUTH_BINS, u);
+                    let phi = if rng.uniform_f64() < 0.5 { phi } else { -phi }
+                        + self.scene.sun.azimuth_rad;
+                    let sz = (1.0 - mu * mu).max(0.0).sqrt();
+                    let up = DVec3::new(sz * phi.cos(), sz * phi.sin(), mu.max(1e-3)).normalize();
+                    let at = DVec3::new(rng.uniform_f64() * sx, rng.uniform_f64() * sy, 0.0);
+                    let ray = CameraRay {
+                        origin: (at + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
+                        direction: (-up).as_vec3(),
+                    };
+                    light.camera(ray, &mut rng, &mut out, &mut water)?;
+                    self.glint(up, &mut glint);
+                    for b in 0..nb {
+                        sum[b] += (out[b] - glint[b]) / ENV_SAMPLES as f64;
+                    }
+                }
+                Ok(sum)
+            })
+            .collect();
+        let mut env = Vec::with_capacity(CELLS * nb);
+        for c in cells {
+            env.extend(c?);
+        }
+        Ok(env)
+    }
+
+    /// Per band, the scattered part of the table plus the glint, from
+    /// `POOLED_PATHS` adjoint paths (in chunks of their own streams, summed
+    /// in order), and its standard error from the chunks' spread.
+    fn pooled(&self) -> (Vec<f64>, Vec<f64>) {
+        let nb = self.columns.len();
+        let chunks = 64u64;
+        let per = POOLED_PATHS / chunks;
+        let seed = crate::rng::mix64(self.scene.seed ^ POOLED_KEY);
+        let sums: Vec<Vec<f64>> = (0..chunks)
+            .into_par_iter()
+            .map(|k| {
+                let mut sum = vec![0.0; nb];
+                let mut glint = vec![0.0; nb];
+                for i in 0..per {
+                    let mut rng = Pcg32::new(seed, k * per + i);
+                    self.adjoint(DVec3::ZERO, &mut rng, |_, _, dir, w| {
+                        let up = -dir;
+                        self.glint(up, &mut glint);
+                        let c = self.cell(up);
+                        for b in 0..nb {
+                            sum[b] += w[b] * (self.env[c * nb + b] + glint[b]);
+                        }
+                        Ok(())
+                    })
+                    .expect("the pooled paths call no integrator");
+                }
+                sum
+            })
+            .collect();
+        let k = chunks as f64;
+        (0..nb)
+            .map(|b| {
+                let means = sums.iter().map(|s| s[b] / per as f64);
+                let m = means.clone().sum::<f64>() / k;
+                let var = means.map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
+                (m, (var / k).sqrt())
+            })
+            .unzip()
+    }
+
+    /// Per band: the scattered part of the mean radiance leaving the
+    /// surface (the same for every pixel) and its standard error.
+    pub fn pooled_part(&self) -> (&[f64], &[f64]) {
+        (&self.pooled, &self.pooled_se)
     }
 
     /// The radiance at the sensor along camera ray `ray` (which meets the
@@ -120,19 +277,46 @@ impl<'s> AirView<'s> {
         for (o, p) in out.iter_mut().zip(&self.view.path_radiance) {
             *o += p;
         }
+        for (o, p) in out.iter_mut().zip(&self.pooled) {
+            *o += p;
+        }
         let ground = ray.origin.as_dvec3()
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
-        self.scattered(light, ground, rng, out)
+        let (mut tmp, mut tmp_water, mut glint) = (Vec::new(), Vec::new(), vec![0.0; nb]);
+        self.adjoint(ground, rng, |rng, meet, dir, w| {
+            let up = -dir;
+            let ray = CameraRay {
+                origin: (meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
+                direction: dir.as_vec3(),
+            };
+            tmp.resize(out.len(), 0.0);
+            tmp_water.resize(nb, 0.0);
+            light.camera(ray, rng, &mut tmp, &mut tmp_water)?;
+            // The difference from the pooled mean (channel 0); the photon
+            // groups' parts as they are.
+            self.glint(up, &mut glint);
+            let c = self.cell(up);
+            for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
+                let b = k % nb;
+                let mean = if k < nb {
+                    self.env[c * nb + b] + glint[b]
+                } else {
+                    0.0
+                };
+                *o += w[b] * (t - mean);
+            }
+            Ok(())
+        })
     }
 
-    /// The light leaving the surface elsewhere that the air scatters into
-    /// the view of the pixel whose ground point is `ground`, added to `out`.
-    fn scattered(
+    /// One adjoint path from the sensor down its view to the pixel whose
+    /// ground point is `ground`: where it meets the ground after scattering
+    /// in the air, `at_ground(point, direction of travel, band weights)`.
+    fn adjoint(
         &self,
-        light: &dyn Integrator,
         ground: DVec3,
         rng: &mut Pcg32,
-        out: &mut [f64],
+        mut at_ground: impl FnMut(&mut Pcg32, DVec3, DVec3, &[f64]) -> Result<()>,
     ) -> Result<()> {
         let nb = self.columns.len();
         let pilot = &self.pilot;
@@ -156,8 +340,6 @@ impl<'s> AirView<'s> {
         let mut pos = ground + self.toward * (z * 1e3 / mu_v);
         let mut dir = -self.toward;
         let mut layer = i;
-        let mut tmp = Vec::new();
-        let mut tmp_water = Vec::new();
         loop {
             // Scatter: a direction from the pilot's phase mixture.
             let s = self.pilot_share[layer];
@@ -215,19 +397,8 @@ impl<'s> AirView<'s> {
                     let excess = (c.total() - c.depth_at(z)) - (total - d_here);
                     *wb *= (-excess / mu).exp();
                 }
-                let meet = pos + dir * (z * 1e3 / mu);
-                let meet = self.wrap(meet);
-                let ray = CameraRay {
-                    origin: (meet - dir * (RAY_HEIGHT_M / mu)).as_vec3(),
-                    direction: dir.as_vec3(),
-                };
-                tmp.resize(out.len(), 0.0);
-                tmp_water.resize(nb, 0.0);
-                light.camera(ray, rng, &mut tmp, &mut tmp_water)?;
-                for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
-                    *o += w[k % nb] * t;
-                }
-                return Ok(());
+                let meet = self.wrap(pos + dir * (z * 1e3 / mu));
+                return at_ground(rng, meet, dir, &w);
             }
             let z_next = pilot.height_at(d_next);
             let next_layer = pilot.layer_index(z_next);

@@ -353,6 +353,7 @@ pub fn stderr_description(scene: &Scene) -> Option<String> {
 pub fn render_tile(
     scene: &Scene,
     light: &dyn Integrator,
+    air: Option<&air::AirView>,
     (i, j): (usize, usize),
     quicklook: &Quicklook,
 ) -> Result<TileResult> {
@@ -374,7 +375,7 @@ pub fn render_tile(
     let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
     // With the sensor above the surface: the radiance leaving the surface
     // at each ground point, before the air.
-    let air = air::AirView::new(scene);
+
     let (mut surface, mut surface_sum) = (vec![0f64; nb], vec![0f64; nb]);
     let mut se = vec![0f64; nb];
     for py in 0..th {
@@ -392,7 +393,7 @@ pub fn render_tile(
                     (rng.uniform_f32(), rng.uniform_f32())
                 };
                 let ray = camera::ray(&scene.sensor, gx, gy, u, v);
-                match &air {
+                match air {
                     Some(a) => {
                         a.camera(light, ray, &mut rng, &mut sample, &mut water, &mut surface)?
                     }
@@ -558,13 +559,15 @@ pub fn render_tiles(
 ) -> Result<()> {
     let pool = crate::parallel::pool(threads)?;
     let quicklook = Quicklook::new(&scene.bands);
+    // With the sensor above the surface, the air's tables first.
+    let air = pool.install(|| air::AirView::new(scene, light))?;
     progress.stage("render tiles", tiles.len() as u64);
     let dispatch = Dispatch::new(tiles.len(), dispatch_window(pool.current_num_threads()));
     // One loop per pool thread, each taking the next tile in order.
     let results = pool.broadcast(|_| -> Result<()> {
         while let Some(k) = dispatch.take() {
             let step = crate::progress::check(progress)
-                .and_then(|()| render_tile(scene, light, tiles[k], &quicklook))
+                .and_then(|()| render_tile(scene, light, air.as_ref(), tiles[k], &quicklook))
                 .and_then(|t| sink.write(&t));
             if let Err(e) = step {
                 dispatch.stop();
