@@ -33,8 +33,9 @@
 //! surface sends its way, sun glint included: at one sample per pixel that
 //! part alone was 30 % noise at the top of the atmosphere. So before the
 //! tiles, the render estimates the mean radiance leaving the surface per
-//! direction cell of the sky grid, sun glint taken out (`ENV_SAMPLES`
-//! integrator calls per cell at random points of the domain), and the
+//! direction cell of the sky grid, sun glint taken out (up to
+//! `ENV_SAMPLES` integrator calls per cell at random points of the domain,
+//! at most an eighth of the image's samples), and the
 //! scattered part of a table of that plus the exact glint from many
 //! adjoint paths (`POOLED_PATHS`, no integrator call). Each pixel's path
 //! then adds that mean plus its own difference W (L(P') - table - glint):
@@ -61,8 +62,13 @@ const RAY_HEIGHT_M: f64 = 10.0;
 const ROULETTE: f64 = 0.1;
 
 /// Integrator calls per direction cell for the mean radiance leaving the
-/// surface.
+/// surface, at most; fewer for a small image (`ENV_SHARE`).
 pub const ENV_SAMPLES: u64 = 16;
+
+/// The table's integrator calls are at most this share of the image's
+/// samples (at least one per cell): the built-in 256 x 256 image gets 16
+/// per cell (8 % more calls), a 4 x 4 one 1 per cell.
+const ENV_SHARE: f64 = 1.0 / 8.0;
 
 /// Adjoint paths for the scattered part of the mean radiance leaving the
 /// surface.
@@ -170,6 +176,9 @@ impl<'s> AirView<'s> {
         let channels = light.channels();
         let seed = crate::rng::mix64(self.scene.seed ^ ENV_KEY);
         let [sx, sy] = self.scene.domain.size_m;
+        let [w, h] = self.scene.sensor.pixels;
+        let samples = (w * h) as f64 * f64::from(self.scene.sensor.samples_per_pixel);
+        let per_cell = ((samples * ENV_SHARE / CELLS as f64) as u64).clamp(1, ENV_SAMPLES);
         let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
             .into_par_iter()
             .map(|c| {
@@ -179,7 +188,7 @@ impl<'s> AirView<'s> {
                     vec![0.0; nb],
                     vec![0.0; nb],
                 );
-                for k in 0..ENV_SAMPLES {
+                for k in 0..per_cell {
                     let mut rng = Pcg32::new(seed, c as u64 * ENV_SAMPLES + k);
                     let u = [rng.uniform_f64(), rng.uniform_f64()];
                     let (mu, phi) = point_in_cell(c / AZIMUTH_BINS, c % AZIMUTH_BINS, u);
@@ -195,7 +204,7 @@ impl<'s> AirView<'s> {
                     light.camera(ray, &mut rng, &mut out, &mut water)?;
                     self.glint(up, &mut glint);
                     for b in 0..nb {
-                        sum[b] += (out[b] - glint[b]) / ENV_SAMPLES as f64;
+                        sum[b] += (out[b] - glint[b]) / per_cell as f64;
                     }
                 }
                 Ok(sum)
@@ -311,7 +320,8 @@ impl<'s> AirView<'s> {
 
     /// One adjoint path from the sensor down its view to the pixel whose
     /// ground point is `ground`: where it meets the ground after scattering
-    /// in the air, `at_ground(point, direction of travel, band weights)`.
+    /// in the air, `at_ground(rng, point, direction of travel, band
+    /// weights)`.
     fn adjoint(
         &self,
         ground: DVec3,

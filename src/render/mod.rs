@@ -339,6 +339,11 @@ pub fn image_tiles(scene: &Scene) -> Vec<(usize, usize)> {
 pub fn stderr_description(scene: &Scene) -> Option<String> {
     let spp = scene.sensor.samples_per_pixel;
     match scene.render.integrator {
+        crate::scene::IntegratorMode::PhotonMap if spp == 1 && scene.sensor.altitude_m.is_some() => {
+            Some(format!(
+                "photon noise from {GROUPS} photon groups, 1 sample per pixel: the noise of the paths through the air is not in it (give samples_per_pixel 2 or more)"
+            ))
+        }
         crate::scene::IntegratorMode::PhotonMap => Some(format!(
             "photon noise from {GROUPS} photon groups, {spp} samples per pixel"
         )),

@@ -374,3 +374,52 @@ fn sensor_altitude_keys_are_checked() {
         assert!(e.contains(key), "{extra}: {e}");
     }
 }
+
+/// Deep water under an aerosol, seen from above the atmosphere 20 degrees
+/// off nadir: the photon map and the path integrator agree band for band
+/// on the radiance at the sensor within 3 sigma + 2 % (sigma from their
+/// standard-error cubes; the photon map's pixels share photons, so its
+/// error of the mean is taken as its pixels' mean error, as if they were
+/// fully correlated).
+#[test]
+fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
+    let dir = tempdir();
+    let text = |integrator: &str, spp: u32| {
+        format!(
+            "name = \"deep\"\n[spectral]\ncenters_nm = [443.0, 560.0, 670.0]\nfwhm_nm = [10.0, 10.0, 10.0]\n\
+             [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
+             [domain]\nsize_m = [20.0, 20.0]\n\
+             [water]\niop = {{ a = 0.05, b = 0.3 }}\nphase = {{ kind = \"fournier-forand\", bb_ratio = 0.0183 }}\n\
+             [photons]\ncount = 1000000\n\
+             [sensor]\npixels = [4, 4]\ngsd_m = 2.0\nsamples_per_pixel = {spp}\naltitude_m = 800000.0\n\
+             view_zenith_deg = 20.0\nview_azimuth_deg = 90.0\n\
+             [render]\nintegrator = \"{integrator}\"\n\
+             [atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.1\n\
+             angstrom = 0.5\nssa = 0.98\nphase = {{ kind = \"henyey-greenstein\", g = 0.75 }}\nscale_height_km = 1.0\n"
+        )
+    };
+    let parse = |t: &str| Scene::parse(t, Path::new("deep.toml"), &Overrides::default()).unwrap();
+    let pm = render_job(&parse(&text("photon-map", 4)), &dir.path().join("pm"), 0);
+    let path = render_job(&parse(&text("path", 256)), &dir.path().join("path"), 0);
+    let open = |p: &str| littoral::cube::EnviCube::open(Path::new(p)).unwrap();
+    let mean = |c: &littoral::cube::EnviCube, b: usize| {
+        let v = c.band(b).unwrap();
+        v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64
+    };
+    let (l_pm, l_path) = (open(&pm.outputs.hdr), open(&path.outputs.hdr));
+    let se_pm = open(pm.outputs.stderr_hdr.as_ref().unwrap());
+    let se_path = open(path.outputs.stderr_hdr.as_ref().unwrap());
+    for b in 0..l_pm.bands() {
+        let (a, p) = (mean(&l_pm, b), mean(&l_path, b));
+        let sa = mean(&se_pm, b);
+        let sp = {
+            let v = se_path.band(b).unwrap();
+            (v.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>()).sqrt() / v.len() as f64
+        };
+        let sigma = (sa * sa + sp * sp).sqrt();
+        assert!(
+            (a - p).abs() < 3.0 * sigma + 0.02 * p,
+            "band {b}: photon map {a} +- {sa}, path {p} +- {sp}"
+        );
+    }
+}
