@@ -3,11 +3,11 @@ use crate::optics::atmosphere::transport::band_light;
 use crate::scene::Overrides;
 use glam::Vec3;
 
-/// A surface that sends the same radiance `0` up in every direction from
-/// every point: a Lambertian ground lit from above.
-struct Flat(f64, usize);
+/// A surface whose radiance leaving it along a camera ray, per band, is
+/// `radiance(ray, band)` (field 0); field 1 is the number of bands.
+struct Surface<F>(F, usize);
 
-impl Integrator for Flat {
+impl<F: Fn(&CameraRay, usize) -> f64 + Sync> Integrator for Surface<F> {
     fn bands(&self) -> usize {
         self.1
     }
@@ -22,7 +22,9 @@ impl Integrator for Flat {
         water: &mut [f64],
     ) -> Result<()> {
         assert!(ray.direction.z < 0.0 && ray.origin.z > 0.0);
-        out.iter_mut().for_each(|o| *o = self.0);
+        for (b, o) in out.iter_mut().enumerate() {
+            *o = (self.0)(&ray, b);
+        }
         water.iter_mut().for_each(|w| *w = 0.0);
         Ok(())
     }
@@ -64,7 +66,8 @@ fn the_diffuse_transmittance_up_is_the_sky_s_down_by_reciprocity() {
         let air = AirView::air(&scene).unwrap();
         let nb = scene.bands.len();
         let l0 = 1.0;
-        let flat = Flat(l0, nb);
+        // A Lambertian ground lit from above: L0 in every direction.
+        let flat = Surface(|_: &CameraRay, _| l0, nb);
         let n = 400_000u64;
         let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
         let (mut out, mut water, mut surface) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
@@ -103,45 +106,6 @@ fn the_diffuse_transmittance_up_is_the_sky_s_down_by_reciprocity() {
     }
 }
 
-/// A surface whose radiance changes with place and direction.
-struct Varying(usize);
-
-impl Integrator for Varying {
-    fn bands(&self) -> usize {
-        self.0
-    }
-    fn channels(&self) -> usize {
-        1
-    }
-    fn camera(
-        &self,
-        ray: CameraRay,
-        _: &mut Pcg32,
-        out: &mut [f64],
-        water: &mut [f64],
-    ) -> Result<()> {
-        let t = ray.origin.z / -ray.direction.z;
-        let p = ray.origin + ray.direction * t;
-        let l = 1.0
-            + 0.5 * (std::f64::consts::TAU * f64::from(p.x) / 10.0).sin()
-            + 0.8 * f64::from(-ray.direction.z);
-        for (b, o) in out.iter_mut().enumerate() {
-            *o = l * (1.0 + 0.1 * b as f64);
-        }
-        water.iter_mut().for_each(|w| *w = 0.0);
-        Ok(())
-    }
-    fn in_water(&self, _: Vec3, _: Vec3, _: &mut Pcg32, _: &mut [f64]) -> Result<()> {
-        unreachable!("the air asks only for the radiance leaving the surface")
-    }
-    fn radiometer_samples(&self) -> u64 {
-        1
-    }
-    fn independent_samples(&self) -> bool {
-        true
-    }
-}
-
 /// The control variate changes the noise, not the mean: over a surface
 /// whose radiance varies with place and direction, under a rough sea's
 /// glint, the pixel's scattered part with the table and the pooled paths
@@ -160,7 +124,18 @@ fn the_control_variate_keeps_the_mean() {
                 tau_550 = 0.3\nscale_height_km = 1.0\n";
     let scene = Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
     let nb = scene.bands.len();
-    let light = Varying(nb);
+    // A surface whose radiance changes with place, direction and band.
+    let light = Surface(
+        |ray: &CameraRay, b| {
+            let t = ray.origin.z / -ray.direction.z;
+            let p = ray.origin + ray.direction * t;
+            let l = 1.0
+                + 0.5 * (std::f64::consts::TAU * f64::from(p.x) / 10.0).sin()
+                + 0.8 * f64::from(-ray.direction.z);
+            l * (1.0 + 0.1 * b as f64)
+        },
+        nb,
+    );
     let plain = AirView::air(&scene).unwrap();
     let with = AirView::new(&scene, &light).unwrap().unwrap();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
