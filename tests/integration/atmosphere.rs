@@ -157,6 +157,19 @@ fn the_sky_and_the_top_match_disort() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Each of `bad` (a TOML fragment added to `base`, and the key its error
+/// must name) is refused, naming the key.
+fn refused(base: &str, bad: &[(&str, &str)]) {
+    for (extra, key) in bad {
+        let text = format!("{base}\n{extra}\n");
+        let e = Scene::parse(&text, Path::new("bad.toml"), &Overrides::default())
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {extra}"))
+            .to_string();
+        assert!(e.contains(key), "{extra}: {e}");
+    }
+}
+
 /// The keys: a profile that does not exist, a sky given as well, a
 /// surface spectrum for the sun, a day without an atmosphere, a bad
 /// aerosol; each refused naming its key.
@@ -185,14 +198,7 @@ fn atmosphere_keys_are_checked() {
             "model",
         ),
     ];
-    for (extra, key) in bad {
-        let text = format!("{base}\n{extra}\n");
-        let e = Scene::parse(&text, Path::new("bad.toml"), &Overrides::default())
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {extra}"))
-            .to_string();
-        assert!(e.contains(key), "{extra}: {e}");
-    }
+    refused(&base, &bad);
     let direct = MINIMAL_SCENE.replace("irradiance = 1.0", "spectrum = \"astm-g173-direct\"");
     let e = Scene::parse(
         &format!("{direct}\n[atmosphere]\n"),
@@ -365,14 +371,7 @@ fn sensor_altitude_keys_are_checked() {
             "sensor.altitude_m",
         ),
     ];
-    for (extra, key) in bad {
-        let text = format!("{base}\n{extra}\n");
-        let e = Scene::parse(&text, Path::new("bad.toml"), &Overrides::default())
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {extra}"))
-            .to_string();
-        assert!(e.contains(key), "{extra}: {e}");
-    }
+    refused(&base, &bad);
 }
 
 /// Deep water under an aerosol, seen from above the atmosphere 20 degrees
