@@ -86,9 +86,16 @@ pub fn from_air_parts(
         vec![split.reflectance; nb]
     };
     let mut part = vec![0.0; out.len()];
-    let reflected_from_water =
+    let (reflected_from_water, reflected_sky) =
         leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
-    let refracted_from_water = leave_surface(
+    // Along an orthographic sensor's view over a rough sea, the sky this
+    // one facet reflects gives way to the facets' mean (a control variate:
+    // the estimate minus the sampled sky plus its expectation).
+    let mean_sky = scene.reflected_sky().filter(|m| m.direction == d);
+    if let (Some(_), true) = (mean_sky, reflected_sky) {
+        out[..nb].iter_mut().for_each(|o| *o = 0.0);
+    }
+    let (refracted_from_water, _) = leave_surface(
         scene,
         sky_l,
         p,
@@ -110,6 +117,11 @@ pub fn from_air_parts(
         let r = r[k % nb];
         *o = r * *o + (1.0 - r) * t;
     }
+    if let Some(m) = mean_sky {
+        for (o, s) in out.iter_mut().zip(&m.mean) {
+            *o += s;
+        }
+    }
     add_glint(scene, -d, out);
     Ok(())
 }
@@ -118,7 +130,8 @@ pub fn from_air_parts(
 /// it along `dir` into the water (`in_water`) or the air; a ray heading back
 /// into the surface, or shadowed by another facet, meets it again (its
 /// Fresnel choices reweighted to each band's index). Radiance leaving the water drops by each band's n^2.
-/// True when the ray went into the water.
+/// Whether the ray went into the water, and whether it went straight to
+/// the sky (unshadowed, into the air).
 #[allow(clippy::too_many_arguments)]
 fn leave_surface(
     scene: &Scene,
@@ -129,7 +142,7 @@ fn leave_surface(
     rng: &mut Pcg32,
     out: &mut [f64],
     in_water: &mut InWater,
-) -> Result<bool> {
+) -> Result<(bool, bool)> {
     let surface = &scene.surface;
     let away = (into_water && dir.z < 0.0) || (!into_water && dir.z > 0.0);
     let unshadowed = away
@@ -163,7 +176,7 @@ fn leave_surface(
             *o /= n * n;
         }
     }
-    Ok(into_water)
+    Ok((into_water, unshadowed && !into_water))
 }
 
 /// The sky radiance toward `s` (unit, up) into the first run of `out`,
@@ -209,5 +222,86 @@ pub fn add_glint(scene: &Scene, v: Vec3, out: &mut [f64]) {
             fresnel_reflectance(h.dot(v), 1.0, n)
         };
         *o += e * rho * g;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Overrides;
+
+    /// The facets' mean reflected sky replaces each sample's one facet
+    /// without moving the mean: over black water under a rough sea and a
+    /// CIE clear sky, camera rays along the sensor's view (with the mean)
+    /// and along a view 1e-6 rad away (without it) agree within 4 combined
+    /// standard errors, the first with a fraction of the spread.
+    #[test]
+    fn the_mean_reflected_sky_keeps_the_mean() {
+        let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
+                    [sun]\nzenith_deg = 30.0\nirradiance = 1.0\n\
+                    [sky]\nradiance = 0.1\ndistribution = \"cie-clear\"\n\
+                    [surface]\nkind = \"cox-munk\"\nwind_speed = 6.0\n\
+                    [domain]\nsize_m = [10.0, 10.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n\
+                    [photons]\ncount = 1000\n\
+                    [sensor]\npixels = [2, 2]\ngsd_m = 1.0\nview_zenith_deg = 20.0\n";
+        let scene =
+            Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
+        let view = scene.reflected_sky().unwrap().direction;
+        let nb = scene.bands.len();
+        let sky_l = sky_radiance(&scene);
+        let run = |d: Vec3, seed: u64| {
+            let n = 200_000u64;
+            let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+            let (mut out, mut water) = (vec![0.0; nb], vec![0.0; nb]);
+            let ray = CameraRay {
+                origin: Vec3::new(5.0, 5.0, 0.0) - d * (10.0 / d.z),
+                direction: d,
+            };
+            for i in 0..n {
+                let mut rng = Pcg32::new(seed, i);
+                from_air_parts(
+                    &scene,
+                    &sky_l,
+                    ray,
+                    &mut rng,
+                    &mut out,
+                    &mut water,
+                    &mut |_, _, _, o| {
+                        o.iter_mut().for_each(|v| *v = 0.0);
+                        Ok(())
+                    },
+                )
+                .unwrap();
+                for b in 0..nb {
+                    sum[b] += out[b];
+                    sum_sq[b] += out[b] * out[b];
+                }
+            }
+            (0..nb)
+                .map(|b| {
+                    let m = sum[b] / n as f64;
+                    let sd = (sum_sq[b] / n as f64 - m * m).max(0.0).sqrt();
+                    (m, sd / (n as f64).sqrt(), sd)
+                })
+                .collect::<Vec<_>>()
+        };
+        let nearby = (view + Vec3::new(1e-6, 0.0, 0.0)).normalize();
+        assert_ne!(nearby, view);
+        let (with, without) = (run(view, 1), run(nearby, 2));
+        for b in 0..nb {
+            let se = (with[b].1.powi(2) + without[b].1.powi(2)).sqrt();
+            assert!(
+                (with[b].0 - without[b].0).abs() < 4.0 * se,
+                "band {b}: {:?} against {:?}",
+                with[b],
+                without[b]
+            );
+            assert!(
+                with[b].2 < 0.5 * without[b].2,
+                "{:?} {:?}",
+                with[b],
+                without[b]
+            );
+        }
     }
 }

@@ -469,6 +469,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         sun,
         sky,
         atmosphere,
+        reflected_sky: std::sync::OnceLock::new(),
         surface,
         water_index,
         domain,

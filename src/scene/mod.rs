@@ -73,6 +73,25 @@ pub struct Sky {
     pub model: crate::optics::sky::SkyModel,
 }
 
+/// The sky a rough sea's facets reflect toward a sensor looking along
+/// `direction` (travel, down), averaged over the facets as one camera
+/// ray draws them (`SeaSurface::split_from_above`, Smith's masking of the
+/// reflected ray; each band's Fresnel reflectance): a control variate for
+/// the sky each sample's one facet reflects (`render::air_sea`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReflectedSky {
+    pub direction: Vec3,
+    /// Per band (W m^-2 sr^-1 nm^-1).
+    pub mean: Vec<f64>,
+}
+
+/// Facets drawn for [`ReflectedSky`]: its own noise, the same in every
+/// pixel and unbiased, is a fraction of a per cent of the reflected sky.
+pub const REFLECTED_SKY_FACETS: u64 = 1 << 18;
+
+/// Mixed into the scene's seed for [`ReflectedSky`]'s facets.
+const REFLECTED_SKY_KEY: u64 = 0x7265_666c_5f73_6b79;
+
 /// An `[atmosphere]` and the light it brings to the surface.
 #[derive(Clone, Debug)]
 pub struct AtmosphereLight {
@@ -323,6 +342,10 @@ pub struct Scene {
     /// The atmosphere and what it did to the light (`[atmosphere]`); the
     /// sun and sky above are then the light at the surface.
     pub atmosphere: Option<std::sync::Arc<AtmosphereLight>>,
+    /// The facets' mean reflected sky along an orthographic sensor's view
+    /// over a rough sea, per band, computed on first use
+    /// ([`Scene::reflected_sky`]).
+    pub reflected_sky: std::sync::OnceLock<Option<ReflectedSky>>,
     /// The sea surface, its index the reference the renderers trace
     /// geometry with (the mean of `water_index`).
     pub surface: SeaSurface,
@@ -622,6 +645,60 @@ impl Scene {
     /// True when the refractive index varies between bands.
     pub fn dispersive(&self) -> bool {
         self.water_index.iter().any(|&n| n != self.surface.n_water)
+    }
+
+    /// The facets' mean reflected sky along the orthographic sensor's
+    /// view, over a rough sea; none for a flat sea or a pinhole camera.
+    /// Computed once (deterministic, from the scene's seed), in parallel.
+    pub fn reflected_sky(&self) -> Option<&ReflectedSky> {
+        // Sequential: it may be first asked for from inside a parallel
+        // loop, whose other items would ask again on this thread.
+        self.reflected_sky
+            .get_or_init(|| {
+                if self.surface.slope_variance <= 0.0
+                    || !matches!(self.sensor.kind, SensorKind::Orthographic { .. })
+                {
+                    return None;
+                }
+                let d = -self.sensor.toward;
+                let nb = self.bands.len();
+                let dispersive = self.dispersive();
+                let sky_l: Vec<f64> = self
+                    .sky
+                    .irradiance
+                    .iter()
+                    .map(|e| e / std::f64::consts::PI)
+                    .collect();
+                let mut rng =
+                    crate::rng::Pcg32::new(crate::rng::mix64(self.seed ^ REFLECTED_SKY_KEY), 0);
+                let mut sum = vec![0.0; nb];
+                for _ in 0..REFLECTED_SKY_FACETS {
+                    let split = self.surface.split_from_above(d, &mut rng);
+                    let dir = split.reflected;
+                    if !(dir.z > 0.0 && rng.uniform_f64() < self.surface.masking(dir.as_dvec3())) {
+                        continue;
+                    }
+                    let g = self.sky.model.at(dir);
+                    for (b, s) in sum.iter_mut().enumerate() {
+                        let r = if dispersive {
+                            crate::optics::surface::fresnel_reflectance(
+                                split.cos_i,
+                                1.0,
+                                self.water_index[b],
+                            )
+                        } else {
+                            split.reflectance
+                        };
+                        *s += r * sky_l[b] * g.band(b);
+                    }
+                }
+                let n = REFLECTED_SKY_FACETS as f64;
+                Some(ReflectedSky {
+                    direction: d,
+                    mean: sum.iter().map(|s| s / n).collect(),
+                })
+            })
+            .as_ref()
     }
 
     pub fn incident_irradiance(&self, band: usize) -> f64 {
