@@ -244,7 +244,7 @@ pub const PRODUCTS: [Product; 3] = [
     Product {
         suffix: "surface",
         layer: "surface",
-        description: "surface-reflected radiance, sky and sun glint (L_t - L_w)",
+        description: "surface-reflected radiance at the surface, sky and sun glint (L_t - L_w from just above it)",
         units: RADIANCE_UNITS,
     },
     Product {
