@@ -250,14 +250,13 @@ mod tests {
         let nb = scene.bands.len();
         let sky_l = sky_radiance(&scene);
         let run = |d: Vec3, seed: u64| {
-            let n = 200_000u64;
-            let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+            let mut sums = crate::render::BandSums::new(nb);
             let (mut out, mut water) = (vec![0.0; nb], vec![0.0; nb]);
             let ray = CameraRay {
                 origin: Vec3::new(5.0, 5.0, 0.0) - d * (10.0 / d.z),
                 direction: d,
             };
-            for i in 0..n {
+            for i in 0..200_000u64 {
                 let mut rng = Pcg32::new(seed, i);
                 from_air_parts(
                     &scene,
@@ -272,18 +271,9 @@ mod tests {
                     },
                 )
                 .unwrap();
-                for b in 0..nb {
-                    sum[b] += out[b];
-                    sum_sq[b] += out[b] * out[b];
-                }
+                sums.add(out.iter().copied());
             }
-            (0..nb)
-                .map(|b| {
-                    let m = sum[b] / n as f64;
-                    let sd = (sum_sq[b] / n as f64 - m * m).max(0.0).sqrt();
-                    (m, sd / (n as f64).sqrt(), sd)
-                })
-                .collect::<Vec<_>>()
+            sums.stats()
         };
         let nearby = (view + Vec3::new(1e-6, 0.0, 0.0)).normalize();
         assert_ne!(nearby, view);

@@ -682,5 +682,48 @@ fn within_field_of_view(axis: Vec3, half_angle_deg: f64, rng: &mut Pcg32) -> Vec
     d.normalize().as_vec3()
 }
 
+/// Per-band sums of samples, for tests: each band's mean, its standard
+/// error and one sample's spread.
+#[cfg(test)]
+pub(crate) struct BandSums {
+    n: u64,
+    sum: Vec<f64>,
+    sum_sq: Vec<f64>,
+}
+
+#[cfg(test)]
+impl BandSums {
+    pub(crate) fn new(bands: usize) -> Self {
+        BandSums {
+            n: 0,
+            sum: vec![0.0; bands],
+            sum_sq: vec![0.0; bands],
+        }
+    }
+
+    /// One sample: a value per band.
+    pub(crate) fn add(&mut self, values: impl IntoIterator<Item = f64>) {
+        self.n += 1;
+        for ((s, s2), v) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(values) {
+            *s += v;
+            *s2 += v * v;
+        }
+    }
+
+    /// Per band: (mean, standard error of the mean, one sample's spread).
+    pub(crate) fn stats(&self) -> Vec<(f64, f64, f64)> {
+        let n = self.n as f64;
+        self.sum
+            .iter()
+            .zip(&self.sum_sq)
+            .map(|(s, s2)| {
+                let m = s / n;
+                let sd = (s2 / n - m * m).max(0.0).sqrt();
+                (m, sd / n.sqrt(), sd)
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests;

@@ -69,23 +69,20 @@ fn the_diffuse_transmittance_up_is_the_sky_s_down_by_reciprocity() {
         // A Lambertian ground lit from above: L0 in every direction.
         let flat = Surface(|_: &CameraRay, _| l0, nb);
         let n = 400_000u64;
-        let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+        let mut sums = crate::render::BandSums::new(nb);
         let (mut out, mut water, mut surface) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
         let ray = crate::render::camera::ray(&scene.sensor, 0, 0, 0.5, 0.5);
         for i in 0..n {
             let mut rng = Pcg32::new(5, i);
             air.camera(&flat, ray, &mut rng, &mut out, &mut water, &mut surface)
                 .unwrap();
-            for b in 0..nb {
-                let v = out[b] - air.view.path_radiance[b] - air.view.transmittance[b] * l0;
-                sum[b] += v;
-                sum_sq[b] += v * v;
-            }
+            sums.add(
+                (0..nb)
+                    .map(|b| out[b] - air.view.path_radiance[b] - air.view.transmittance[b] * l0),
+            );
         }
         let mu_v = view_deg.to_radians().cos();
-        for b in 0..nb {
-            let mean = sum[b] / n as f64;
-            let se = ((sum_sq[b] / n as f64 - mean * mean) / n as f64).sqrt();
+        for (b, (mean, se, _)) in sums.stats().into_iter().enumerate() {
             let sky = band_light(
                 &air.columns[b],
                 view_deg.to_radians(),
@@ -140,26 +137,17 @@ fn the_control_variate_keeps_the_mean() {
     let with = AirView::new(&scene, &light).unwrap().unwrap();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
     let run = |air: &AirView, seed: u64| {
-        let n = 200_000u64;
-        let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+        let mut sums = crate::render::BandSums::new(nb);
         let (mut out, mut water, mut surface) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
-        for i in 0..n {
+        for i in 0..200_000u64 {
             let mut rng = Pcg32::new(seed, i);
             air.camera(&light, ray, &mut rng, &mut out, &mut water, &mut surface)
                 .unwrap();
-            for b in 0..nb {
-                let v = out[b] - air.view.path_radiance[b] - air.view.transmittance[b] * surface[b];
-                sum[b] += v;
-                sum_sq[b] += v * v;
-            }
+            sums.add((0..nb).map(|b| {
+                out[b] - air.view.path_radiance[b] - air.view.transmittance[b] * surface[b]
+            }));
         }
-        (0..nb)
-            .map(|b| {
-                let m = sum[b] / n as f64;
-                let sd = (sum_sq[b] / n as f64 - m * m).max(0.0).sqrt();
-                (m, sd / (n as f64).sqrt(), sd)
-            })
-            .collect::<Vec<_>>()
+        sums.stats()
     };
     let (a, b) = (run(&plain, 1), run(&with, 2));
     let (_, pooled_se) = with.pooled_part();

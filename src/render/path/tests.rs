@@ -125,21 +125,15 @@ fn read_paths(tracer: &PathTracer, seed: u64, p0: Vec3, dir: Vec3, n: u64) -> Ve
     let nb = tracer.scene.bands.len();
     let mut scratch = PathScratch::new(nb);
     let mut out = vec![0.0; nb];
-    let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+    let mut sums = crate::render::BandSums::new(nb);
     for i in 0..n {
         let mut rng = Pcg32::new(seed, i);
         tracer.in_water(p0, dir, &mut rng, &mut scratch, &mut out);
-        for b in 0..nb {
-            sum[b] += out[b];
-            sum_sq[b] += out[b] * out[b];
-        }
+        sums.add(out.iter().copied());
     }
-    (0..nb)
-        .map(|b| {
-            let mean = sum[b] / n as f64;
-            let sd = (sum_sq[b] / n as f64 - mean * mean).max(0.0).sqrt();
-            (mean, sd / (n as f64).sqrt(), sd / mean)
-        })
+    sums.stats()
+        .into_iter()
+        .map(|(mean, se, sd)| (mean, se, sd / mean))
         .collect()
 }
 
