@@ -456,19 +456,18 @@ impl Scene {
     /// sky per cell; with `toa` also the radiance leaving the top (the sky's
     /// photons traced again, from the same streams).
     pub fn atmosphere_json(&self, toa: bool) -> Option<serde_json::Value> {
-        use crate::optics::atmosphere::{transport, Column, RayleighSetting};
+        use crate::optics::atmosphere::{transport, RayleighSetting};
         let a = self.atmosphere.as_ref()?;
         let spec = &a.spec;
-        let centers = self.bands.centers_nm();
         let bands: Vec<serde_json::Value> = a
             .bands
             .iter()
             .enumerate()
             .map(|(b, band)| {
-                let column = Column::new(spec, b, f64::from(centers[b]));
+                let column = &a.columns[b];
                 let toa_radiance = toa.then(|| {
                     let l = transport::band_light(
-                        &column,
+                        column,
                         self.sun.zenith_rad,
                         a.sky_photons,
                         a.sky_seed,
