@@ -124,7 +124,7 @@ impl MemoryBudget {
         let neighbours = k * (2 * 36 + 28);
         let sums = 3 * nb * 16;
         let workers = crate::parallel::workers(threads) as u64;
-        let layers = 2 + crate::render::PRODUCTS.len() as u64;
+        let layers = 2 + crate::render::products(scene).len() as u64;
         let side = crate::cube::exr::tile_px(scene.render.exr_compression) as u64;
         let per_exr_tile = (side / crate::render::TILE_PX as u64).pow(2);
         let window = crate::render::dispatch_window(workers as usize) as u64;

@@ -4,7 +4,9 @@
 //!
 //! It shows the quicklook; R_rs at five pixels (the centre and the four
 //! quarter points) and L / E_d(0+) at each radiometer, each with a band of
-//! plus and minus one standard error; E_d, E_u, E_ou and L_u against depth
+//! plus and minus one standard error; with the sensor above the surface,
+//! the reflectance at the sensor rho_t at the same pixels beside the path
+//! reflectance, and the air's transmittances; E_d, E_u, E_ou and L_u against depth
 //! and K_d per band (photon-map runs: the emission's tallies); the energy
 //! budget per band as fractions of the emitted power; the cache, timing and
 //! memory figures; and the run's settings.
@@ -100,6 +102,7 @@ pub fn page(scene: &Scene, report: &RunReport, files: &Path) -> Result<String> {
     );
 
     reflectance(&mut h, report, files, &nm)?;
+    at_sensor(&mut h, scene, report, files, &nm)?;
     match &report.emission {
         Some(e) => emission(&mut h, e, &nm)?,
         None => h.push_str(
@@ -157,6 +160,77 @@ fn reflectance(h: &mut String, report: &RunReport, files: &Path, nm: &[f64]) -> 
             &curves,
         )?);
     }
+    Ok(())
+}
+
+/// With the sensor above the surface: the reflectance at the sensor rho_t
+/// at the five pixels R_rs is shown at (± 1 standard error, from the L_t
+/// standard-error cube), with the path reflectance pi L_path / (E_0 mu_0)
+/// beside it; and the transmittances of the air per band.
+fn at_sensor(
+    h: &mut String,
+    scene: &Scene,
+    report: &RunReport,
+    files: &Path,
+    nm: &[f64],
+) -> Result<()> {
+    let Some(a) = report
+        .atmosphere
+        .as_ref()
+        .filter(|a| a.altitude_m.is_some())
+    else {
+        return Ok(());
+    };
+    let altitude = a.altitude_m.unwrap_or(0.0);
+    let _ = writeln!(h, "<h2>At the sensor, {altitude:.0} m up</h2>");
+    let mu0 = scene.sun.zenith_rad.cos();
+    let to_rho: Vec<f64> = a
+        .toa_irradiance
+        .iter()
+        .map(|&e| super::report::reflectance_factor(e, mu0))
+        .collect();
+    let mut curves = pixel_spectra(report, files, nm, "rhot", &to_rho)?;
+    curves.push(Curve {
+        label: "path reflectance (± 1 standard error)".into(),
+        x: nm.to_vec(),
+        y: a.L_path.iter().zip(&to_rho).map(|(l, f)| l * f).collect(),
+        err: Some(
+            a.L_path_stderr
+                .iter()
+                .zip(&to_rho)
+                .map(|(l, f)| l * f)
+                .collect(),
+        ),
+    });
+    h.push_str(&plot(
+        &Axes {
+            title: "Reflectance at the sensor rho_t = pi L_t / (E_0 cos theta_s) at five pixels",
+            x_label: "wavelength (nm)",
+            y_label: "rho_t",
+            depth: false,
+        },
+        &curves,
+    )?);
+    let series = |label: &str, y: &[f64]| Curve {
+        label: label.into(),
+        x: nm.to_vec(),
+        y: y.to_vec(),
+        err: None,
+    };
+    h.push_str(&plot(
+        &Axes {
+            title: "Transmittances of the air",
+            x_label: "wavelength (nm)",
+            y_label: "transmittance",
+            depth: false,
+        },
+        &[
+            series("t_direct, sun to surface", &a.t_direct),
+            series("t_down, sun to surface, direct and diffuse", &a.t_down),
+            series("t_view, surface to sensor, direct", &a.t_view),
+            series("t_up, surface to sensor, direct and diffuse", &a.t_up),
+        ],
+    )?);
     Ok(())
 }
 
@@ -326,18 +400,43 @@ padding:2px 8px;text-align:left;font-size:0.9em}caption{text-align:left;font-wei
 .legend span{margin-right:12px;white-space:nowrap}";
 
 /// R_rs at the centre and the quarter points, from the `rrs` product cube,
-/// with the L_t standard-error cube over E_d(0+) as the band.
+/// with the L_t standard-error cube over E_d(0+) as the band (none with the
+/// sensor above the surface, where that cube is the error at the sensor).
 fn pixel_rrs(report: &RunReport, files: &Path, nm: &[f64]) -> Result<Vec<Curve>> {
-    let rrs = report
+    let above = report
+        .atmosphere
+        .as_ref()
+        .is_some_and(|a| a.altitude_m.is_some());
+    let per_ed: Vec<f64> = if above {
+        Vec::new()
+    } else {
+        report.Ed_above_surface.iter().map(|e| 1.0 / e).collect()
+    };
+    pixel_spectra(report, files, nm, "rrs", &per_ed)
+}
+
+/// Product `product` at the centre and the quarter points, with the L_t
+/// standard-error cube times `error_scale` per band as the band (none when
+/// `error_scale` is empty or there is no such cube).
+fn pixel_spectra(
+    report: &RunReport,
+    files: &Path,
+    nm: &[f64],
+    product: &str,
+    error_scale: &[f64],
+) -> Result<Vec<Curve>> {
+    let listed = report
         .outputs
         .products
         .iter()
-        .find(|p| p.product == "rrs")
-        .ok_or_else(|| Error::invalid("report", "no rrs product cube"))?;
-    let cube = crate::cube::EnviCube::open(&listed_in(files, &rrs.hdr))?;
+        .find(|p| p.product == product)
+        .ok_or_else(|| Error::invalid("report", format!("no {product} product cube")))?;
+    let cube = crate::cube::EnviCube::open(&listed_in(files, &listed.hdr))?;
     let stderr = match &report.outputs.stderr_hdr {
-        Some(p) => Some(crate::cube::EnviCube::open(&listed_in(files, p))?),
-        None => None,
+        Some(p) if !error_scale.is_empty() => {
+            Some(crate::cube::EnviCube::open(&listed_in(files, p))?)
+        }
+        _ => None,
     };
     let (w, l) = (cube.samples(), cube.lines());
     let points = [
@@ -351,8 +450,13 @@ fn pixel_rrs(report: &RunReport, files: &Path, nm: &[f64]) -> Result<Vec<Curve>>
     for (x, y) in points {
         let err = match &stderr {
             Some(s) => {
-                let e: Vec<f64> = s.spectrum(x, y)?.iter().map(|&v| v as f64).collect();
-                Some(per_ed(&e, &report.Ed_above_surface))
+                let e = s.spectrum(x, y)?;
+                Some(
+                    e.iter()
+                        .zip(error_scale)
+                        .map(|(&v, f)| v as f64 * f)
+                        .collect(),
+                )
             }
             None => None,
         };

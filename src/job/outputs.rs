@@ -21,7 +21,8 @@ use crate::cube::quicklook::write_png;
 use crate::error::{Error, Result};
 use crate::output::set::Staging;
 use crate::render::{
-    stderr_description, Rendered, TileResult, TileSink, PRODUCTS, RADIANCE_UNITS, TILE_PX,
+    products as product_list, stderr_description, Rendered, TileResult, TileSink, RADIANCE_UNITS,
+    TILE_PX,
 };
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -44,7 +45,7 @@ pub struct CubeSet {
 /// tile resampled as it arrives.
 struct SensorCubes {
     resampler: Resampler,
-    /// Per cube (the radiance, then [`PRODUCTS`]): what it holds and its
+    /// Per cube (the radiance, then the products): what it holds and its
     /// writer.
     cubes: Vec<(&'static str, EnviWriter)>,
 }
@@ -65,7 +66,7 @@ pub struct CubeSetFiles {
     pub png: PathBuf,
     /// The standard-error cube, when the integrator writes one.
     pub stderr: Option<CubeFiles>,
-    /// The product cubes, in the order of [`PRODUCTS`].
+    /// The product cubes, in the order of `render::products`.
     pub products: Vec<CubeFiles>,
     /// The sensor-band cubes (radiance, then products), with `[sensor]
     /// response`.
@@ -97,7 +98,8 @@ impl CubeSet {
         )?;
         // The products: water-leaving radiance, surface-reflected radiance,
         // remote-sensing reflectance.
-        let products = PRODUCTS
+        let list = product_list(scene);
+        let products = list
             .iter()
             .map(|p| {
                 EnviWriter::create_with(
@@ -129,7 +131,7 @@ impl CubeSet {
         let named = in_layer_order(
             ("radiance", &writer),
             stderr.as_ref().map(|s| ("stderr", s)),
-            PRODUCTS.iter().map(|p| p.layer).zip(&products),
+            list.iter().map(|p| p.layer).zip(&products),
         );
         let wavelengths: Vec<Vec<f64>> = named
             .iter()
@@ -246,11 +248,12 @@ fn in_layer_order<T>(
 pub fn run_file_names(scene: &Scene) -> Vec<String> {
     let n = &scene.name;
     let mut stems = vec![n.clone(), format!("{n}.stderr")];
-    stems.extend(PRODUCTS.iter().map(|p| format!("{n}.{}", p.suffix)));
+    let list = product_list(scene);
+    stems.extend(list.iter().map(|p| format!("{n}.{}", p.suffix)));
     if let Some(sensor) = &scene.sensor.response {
         let tag = sensor_tag(&sensor.name);
         stems.push(format!("{n}.{tag}"));
-        stems.extend(PRODUCTS.iter().map(|p| format!("{n}.{}.{tag}", p.suffix)));
+        stems.extend(list.iter().map(|p| format!("{n}.{}.{tag}", p.suffix)));
     }
     let mut names = Vec::new();
     for s in &stems {
@@ -260,7 +263,15 @@ pub fn run_file_names(scene: &Scene) -> Vec<String> {
             format!("{s}.bsq.aux.xml"),
         ]);
     }
-    for ext in ["exr", "png", "profiles.csv", "kd.csv", "html", "json"] {
+    for ext in [
+        "exr",
+        "png",
+        "profiles.csv",
+        "kd.csv",
+        "atmosphere.csv",
+        "html",
+        "json",
+    ] {
         names.push(format!("{n}.{ext}"));
     }
     names
@@ -289,8 +300,8 @@ impl SensorCubes {
         let tag = sensor_tag(&sensor.name);
         let mut sources = vec![("radiance", scene.name.clone(), radiance)];
         sources.extend(
-            PRODUCTS
-                .iter()
+            product_list(scene)
+                .into_iter()
                 .zip(products)
                 .map(|(p, w)| (p.suffix, format!("{}.{}", scene.name, p.suffix), w)),
         );
@@ -391,6 +402,15 @@ pub(super) fn publish_run(
             staging.final_path(&k).display().to_string(),
         ));
     }
+    // The atmosphere per band, as CSV.
+    let atmosphere = report::AtmosphereReport::of(scene);
+    let mut atmosphere_csv = None;
+    if let Some(a) = &atmosphere {
+        let name = format!("{}.atmosphere.csv", scene.name);
+        let text = a.csv(scene.bands.centers_nm());
+        crate::output::write_atomic(&staging.dir().join(&name), text.as_bytes())?;
+        atmosphere_csv = Some(staging.final_path(&name).display().to_string());
+    }
     let sensor_cubes = files
         .sensor
         .iter()
@@ -409,7 +429,7 @@ pub(super) fn publish_run(
     let report = RunReport {
         integrator,
         Ed_above_surface: ed_above,
-        atmosphere: report::AtmosphereReport::of(scene),
+        atmosphere,
         emission,
         bands,
         map,
@@ -443,7 +463,8 @@ pub(super) fn publish_run(
             stderr_bsq: files.stderr.as_ref().map(|c| published(&staging, &c.bsq)),
             profiles_csv: profiles.as_ref().map(|p| p.0.clone()),
             kd_csv: profiles.map(|p| p.1),
-            products: PRODUCTS
+            atmosphere_csv,
+            products: product_list(scene)
                 .iter()
                 .zip(&files.products)
                 .map(|(p, f)| report::ProductFiles {

@@ -194,8 +194,14 @@ pub struct Outputs {
     pub profiles_csv: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kd_csv: Option<String>,
-    /// The product cubes (`render::PRODUCTS`: water-leaving radiance,
-    /// surface-reflected radiance, remote-sensing reflectance), by suffix.
+    /// The atmosphere per band (`NAME.atmosphere.csv`,
+    /// [`AtmosphereReport::csv`]), with `[atmosphere]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atmosphere_csv: Option<String>,
+    /// The product cubes (`render::products`: water-leaving radiance,
+    /// surface-reflected radiance, remote-sensing reflectance; with the
+    /// sensor above the surface the reflectance at the sensor and the path
+    /// radiance), by suffix.
     #[serde(default)]
     pub products: Vec<ProductFiles>,
     /// With `[sensor] response`: the radiance (`product` "radiance") and
@@ -279,9 +285,69 @@ pub struct AtmosphereReport {
     pub L_path: Vec<f64>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub L_path_stderr: Vec<f64>,
+    /// The total transmittance from a Lambertian ground to the sensor
+    /// along its view (direct and scattered) and its standard error.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub t_up: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub t_up_stderr: Vec<f64>,
 }
 
 impl AtmosphereReport {
+    /// The report as a table, one row per band at `bands_nm`: optical
+    /// depths, the sun at the top, E_d(0+) and the transmittances, and with
+    /// the sensor above the surface its direct and total transmittance,
+    /// the path radiance and the path reflectance pi L_path / (E_0 mu_0),
+    /// each with its standard error where it has one.
+    pub fn csv(&self, bands_nm: &[f32]) -> String {
+        let view = self.altitude_m.is_some();
+        let mut t = String::from(
+            "wavelength_nm,tau_rayleigh,tau_aerosol,aerosol_ssa,tau_ozone,tau_gas,E0,\
+             Ed_direct,Ed_diffuse,Ed_diffuse_flux,Ed_diffuse_flux_stderr,t_direct,t_down,\
+             up_at_top,absorbed",
+        );
+        if view {
+            t.push_str(",t_view,t_up,t_up_stderr,L_path,L_path_stderr,rho_path,rho_path_stderr");
+        }
+        t.push('\n');
+        let mu0 = self.sun_zenith_deg.to_radians().cos();
+        for (b, nm) in bands_nm.iter().enumerate() {
+            let mut row = vec![
+                f64::from(*nm),
+                self.tau_rayleigh[b],
+                self.tau_aerosol[b],
+                self.aerosol_ssa[b],
+                self.tau_ozone[b],
+                self.tau_gas[b],
+                self.toa_irradiance[b],
+                self.Ed_direct[b],
+                self.Ed_diffuse[b],
+                self.Ed_diffuse_flux[b],
+                self.Ed_diffuse_flux_stderr[b],
+                self.t_direct[b],
+                self.t_down[b],
+                self.up_at_top[b],
+                self.absorbed[b],
+            ];
+            if view {
+                let to_rho = reflectance_factor(self.toa_irradiance[b], mu0);
+                row.extend([
+                    self.t_view[b],
+                    self.t_up[b],
+                    self.t_up_stderr[b],
+                    self.L_path[b],
+                    self.L_path_stderr[b],
+                    self.L_path[b] * to_rho,
+                    self.L_path_stderr[b] * to_rho,
+                ]);
+            }
+            let cells: Vec<String> = row.iter().map(|v| v.to_string()).collect();
+            t.push_str(&cells.join(","));
+            t.push('\n');
+        }
+        t
+    }
+
     /// The report of `scene`'s atmosphere, none without one.
     pub fn of(scene: &crate::scene::Scene) -> Option<AtmosphereReport> {
         let a = scene.atmosphere.as_ref()?;
@@ -337,7 +403,27 @@ impl AtmosphereReport {
                 .view
                 .as_ref()
                 .map_or(Vec::new(), |v| v.path_radiance_se.clone()),
+            t_up: a
+                .view
+                .as_ref()
+                .map_or(Vec::new(), |v| v.transmittance_up.clone()),
+            t_up_stderr: a
+                .view
+                .as_ref()
+                .map_or(Vec::new(), |v| v.transmittance_up_se.clone()),
         })
+    }
+}
+
+/// pi / (E_0 mu_0): radiance to reflectance for the sun's beam-normal
+/// irradiance `e0` at the top of the atmosphere and the cosine `mu0` of its
+/// zenith (0 where no sunlight arrives).
+pub fn reflectance_factor(e0: f64, mu0: f64) -> f64 {
+    let top = e0 * mu0;
+    if top > 0.0 {
+        std::f64::consts::PI / top
+    } else {
+        0.0
     }
 }
 

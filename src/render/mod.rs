@@ -255,6 +255,38 @@ pub const PRODUCTS: [Product; 3] = [
     },
 ];
 
+/// The products of a sensor above the surface, after [`PRODUCTS`]: the
+/// reflectance at the sensor rho_t = pi L_t / (E_0 mu_0), with E_0 the
+/// sun's beam-normal irradiance at the top of the atmosphere on the day
+/// (the Earth–Sun distance in it) and mu_0 the cosine of the sun's zenith,
+/// and the path radiance L_path (light scattered into the view that never
+/// reached the surface), the same for every pixel of an orthographic view.
+pub const AIR_PRODUCTS: [Product; 2] = [
+    Product {
+        suffix: "rhot",
+        layer: "rhot",
+        description: "reflectance at the sensor (rho_t = pi L_t / (E_0 cos theta_s), E_0 at the top of the atmosphere on the day)",
+        units: "1",
+    },
+    Product {
+        suffix: "lpath",
+        layer: "lpath",
+        description: "atmospheric path radiance at the sensor (L_path: scattered into the view, never reached the surface)",
+        units: RADIANCE_UNITS,
+    },
+];
+
+/// The product cubes a render of `scene` writes: [`PRODUCTS`], then
+/// [`AIR_PRODUCTS`] with the sensor above the surface.
+pub fn products(scene: &Scene) -> Vec<Product> {
+    let air = scene.atmosphere.as_ref().and_then(|a| a.view.as_ref());
+    PRODUCTS
+        .iter()
+        .chain(air.map(|_| AIR_PRODUCTS.iter()).into_iter().flatten())
+        .copied()
+        .collect()
+}
+
 /// What a render measured besides its tiles (which went to its sink).
 #[derive(Clone, Debug, Default)]
 pub struct Rendered {
@@ -374,7 +406,19 @@ pub fn render_tile(
     let mut values = vec![0f32; tw * th * nb];
     let mut errors = vec![0f32; if with_errors { tw * th * nb } else { 0 }];
     let mut rgb = vec![0f32; tw * th * 3];
-    let mut products = vec![vec![0f32; tw * th * nb]; PRODUCTS.len()];
+    let mut products = vec![vec![0f32; tw * th * nb]; products(scene).len()];
+    // With the sensor above the surface: pi / (E_0 mu_0) per band, for
+    // rho_t, and the path radiance.
+    let toa = scene.atmosphere.as_ref().and_then(|a| {
+        let view = a.view.as_ref()?;
+        let mu0 = scene.sun.zenith_rad.cos();
+        let to_rho: Vec<f64> = a
+            .bands
+            .iter()
+            .map(|band| crate::job::report::reflectance_factor(band.toa_irradiance, mu0))
+            .collect();
+        Some((to_rho, &view.path_radiance))
+    });
     let mut acc = Moments::new(nb, channels);
     let mut sample = vec![0f64; nb * channels];
     let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
@@ -426,6 +470,10 @@ pub fn render_tile(
                 } else {
                     0.0
                 };
+                if let Some((to_rho, path)) = &toa {
+                    products[3][base + b] = (m * to_rho[b]) as f32;
+                    products[4][base + b] = path[b] as f32;
+                }
             }
             if !errors.is_empty() {
                 acc.standard_error(&mut se);

@@ -126,6 +126,10 @@ pub struct ViewLight {
     /// error.
     pub path_radiance: Vec<f64>,
     pub path_radiance_se: Vec<f64>,
+    /// Total transmittance from a Lambertian ground to the sensor along
+    /// its view, direct and scattered (t_up), and its standard error.
+    pub transmittance_up: Vec<f64>,
+    pub transmittance_up_se: Vec<f64>,
 }
 
 /// One band of an atmosphere: its optical depths and the light at the
@@ -550,6 +554,8 @@ impl Scene {
                     "transmittance": v.transmittance,
                     "path_radiance": v.path_radiance,
                     "path_radiance_se": v.path_radiance_se,
+                    "transmittance_up": v.transmittance_up,
+                    "transmittance_up_se": v.transmittance_up_se,
                 })
             }),
         }))

@@ -14,7 +14,13 @@ the sun's beam at its top and a black surface. Prints JSON, per band:
   same for the light leaving the top;
 * ``path_radiance``: with a sensor above the surface (``view``), the
   radiance going up toward it at its level (over a black surface: the path
-  radiance), in its exact direction.
+  radiance), in its exact direction;
+* ``t_up``: the total transmittance from a Lambertian ground to that
+  sensor along its view. DISORT solves the column again over a ground of
+  albedo A = 1: the sensor's radiance grows by A E_d(A) t_up / pi, with
+  E_d(A) DISORT's direct plus diffuse irradiance at the ground over that
+  albedo (which holds the light the air sends back down), so
+  t_up = pi (L(A) - L(0)) / (A E_d(A)).
 
 DISORT's azimuth is measured from the beam's direction of travel (phi =
 phi0 is forward scattering for light going down). littoral's sky cells
@@ -54,7 +60,7 @@ def cell_directions(zenith_bins, azimuth_bins):
     return mus, phis
 
 
-def solve(band, sun_zenith_deg, mus, phis, levels=None):
+def solve(band, sun_zenith_deg, mus, phis, levels=None, albedo=0.0):
     layers = [l for l in band["layers"] if sum(v for k, v in l.items() if not k.endswith("_km")) > 0]
     # littoral lists the layers from the top down, as DISORT numbers them.
     q = band["rayleigh_q"]
@@ -106,7 +112,7 @@ def solve(band, sun_zenith_deg, mus, phis, levels=None):
     ds.fbeam = band["band"]["toa_irradiance"]
     ds.umu0 = math.cos(math.radians(sun_zenith_deg))
     ds.phi0 = 0.0
-    ds.albedo = 0.0
+    ds.albedo = albedo
     ds.fisot = 0.0
     ds.solve()
     return ds, down, up
@@ -148,9 +154,17 @@ def main():
             phi = (view["view_azimuth_from_sun_deg"] + 180.0) % 360.0
             vs, _, _ = solve(band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b]])
             path = float(np.asarray(vs.uu)[0, 0, 0])
+            # Over a white ground: the sensor's level, then the ground.
+            ws, _, _ = solve(
+                band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b], None], albedo=1.0
+            )
+            lit = float(np.asarray(ws.uu)[1, 0, 0])
+            ed = float(ws.rfldir[1] + ws.rfldn[1])
+            t_up = math.pi * (lit - path) / ed
         out.append(
             {
                 "path_radiance": path,
+                "t_up": t_up if view else None,
                 "nm": band["band"]["nm"],
                 "direct": float(ds.rfldir[1]),
                 "diffuse": float(ds.rfldn[1]),

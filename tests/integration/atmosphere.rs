@@ -261,8 +261,10 @@ fn the_atmosphere_sets_the_sun_and_sky_at_the_surface() {
 
 /// The path radiance a sensor above the surface sees, against DISORT's
 /// upward radiance at the sensor's level in its exact direction over a
-/// black surface, within 3 sigma plus 1 % (Rayleigh) or 2 % (aerosol):
-/// at 3 km and above the atmosphere, at nadir and off nadir.
+/// black surface, and the total transmittance from a Lambertian ground to
+/// it (t_up, from DISORT over a white ground), each within 3 sigma plus
+/// 1 % (Rayleigh) or 2 % (aerosol): at 3 km and above the atmosphere, at
+/// nadir and off nadir.
 #[test]
 fn the_path_radiance_matches_disort() {
     if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
@@ -292,6 +294,14 @@ fn the_path_radiance_matches_disort() {
             if (got - want).abs() > 3.0 * se + tol * want {
                 failures.push(format!(
                     "sun {sun}, {view:?}, band {b}: {got} +- {se} against {want}"
+                ));
+            }
+            let want = band["t_up"].as_f64().unwrap();
+            let got = v["transmittance_up"][b].as_f64().unwrap();
+            let se = v["transmittance_up_se"][b].as_f64().unwrap();
+            if (got - want).abs() > 3.0 * se + tol * want {
+                failures.push(format!(
+                    "t_up, sun {sun}, {view:?}, band {b}: {got} +- {se} against {want}"
                 ));
             }
         }
@@ -346,9 +356,76 @@ fn a_sensor_above_absorbing_air_sees_the_surface_attenuated() {
     for b in 0..l0.bands() {
         assert_eq!(l0.band(b).unwrap(), l1.band(b).unwrap(), "L_w, band {b}");
     }
-    let a = r1.atmosphere.unwrap();
+    let a = r1.atmosphere.clone().unwrap();
     assert_eq!(a.altitude_m, Some(800000.0));
     assert!(a.L_path.iter().all(|&l| l == 0.0), "{:?}", a.L_path);
+    // From the surface: the three surface products; from above: rho_t and
+    // L_path too, rho_t = pi L_t / (E_0 mu_0) in every pixel and band.
+    let suffixes = |r: &littoral::job::report::RunReport| -> Vec<String> {
+        r.outputs
+            .products
+            .iter()
+            .map(|p| p.product.clone())
+            .collect()
+    };
+    assert_eq!(suffixes(&r0), ["lw", "surface", "rrs"]);
+    assert_eq!(suffixes(&r1), ["lw", "surface", "rrs", "rhot", "lpath"]);
+    let product = |r: &littoral::job::report::RunReport, name: &str| {
+        open(
+            &r.outputs
+                .products
+                .iter()
+                .find(|p| p.product == name)
+                .unwrap()
+                .hdr,
+        )
+    };
+    let (rho, path) = (product(&r1, "rhot"), product(&r1, "lpath"));
+    let mu0 = 30f64.to_radians().cos();
+    for b in 0..c1.bands() {
+        let scale = std::f64::consts::PI / (a.toa_irradiance[b] * mu0);
+        for (l, r) in c1.band(b).unwrap().iter().zip(rho.band(b).unwrap()) {
+            let want = f64::from(*l) * scale;
+            assert!(
+                (f64::from(r) - want).abs() <= 1e-6 * want,
+                "band {b}: {r} against {want}"
+            );
+        }
+        assert!(path.band(b).unwrap().iter().all(|&v| v == 0.0));
+    }
+    // Air that only absorbs scatters nothing toward the sensor: t_up is
+    // the direct transmittance along the view.
+    assert_eq!(a.t_up, a.t_view);
+    // The per-band table, with the view's columns only from above, and the
+    // page's section at the sensor.
+    let table = |r: &littoral::job::report::RunReport| {
+        let text = std::fs::read_to_string(r.outputs.atmosphere_csv.as_ref().unwrap()).unwrap();
+        let lines: Vec<Vec<String>> = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect();
+        lines
+    };
+    let (t0, t1) = (table(&r0), table(&r1));
+    assert_eq!((t0.len(), t1.len()), (c1.bands() + 1, c1.bands() + 1));
+    assert!(!t0[0].contains(&"t_up".to_string()));
+    let col = |name: &str| t1[0].iter().position(|h| h == name).unwrap();
+    for b in 0..c1.bands() {
+        let v = |name: &str| t1[b + 1][col(name)].parse::<f64>().unwrap();
+        assert_eq!(v("t_up"), a.t_up[b]);
+        assert_eq!(v("E0"), a.toa_irradiance[b]);
+        assert_eq!(v("rho_path"), 0.0);
+    }
+    let page =
+        |r: &littoral::job::report::RunReport| std::fs::read_to_string(&r.outputs.html).unwrap();
+    assert!(!page(&r0).contains("At the sensor"));
+    for section in [
+        "At the sensor, 800000 m up",
+        "Reflectance at the sensor",
+        "Transmittances of the air",
+    ] {
+        assert!(page(&r1).contains(section), "{section}");
+    }
 }
 
 /// The sensor above the surface is refused without an atmosphere and for
@@ -405,6 +482,14 @@ fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
         let v = c.band(b).unwrap();
         v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64
     };
+    // The path-radiance cube holds the report's L_path in every pixel.
+    let lpath = pm.outputs.products.iter().find(|p| p.product == "lpath");
+    let lpath = open(&lpath.unwrap().hdr);
+    let reported = &pm.atmosphere.as_ref().unwrap().L_path;
+    for (b, want) in reported.iter().enumerate() {
+        assert!(*want > 0.0);
+        assert!(lpath.band(b).unwrap().iter().all(|&v| v == *want as f32));
+    }
     let (l_pm, l_path) = (open(&pm.outputs.hdr), open(&path.outputs.hdr));
     let se_pm = open(pm.outputs.stderr_hdr.as_ref().unwrap());
     let se_path = open(path.outputs.stderr_hdr.as_ref().unwrap());

@@ -382,6 +382,75 @@ fn assembled_parts_are_the_whole_render_byte_for_byte() {
     );
 }
 
+/// A sensor above the atmosphere, rendered in parts and assembled: the
+/// cubes with the reflectance at the sensor and the path radiance, and the
+/// atmosphere's table, byte for byte those of the whole render.
+#[test]
+fn assembled_parts_above_the_atmosphere_are_the_whole_render() {
+    let dir = tempdir();
+    let scene = dir.path().join("s.toml");
+    let text = littoral::scene::text::SceneText::parse(&render_scene())
+        .unwrap()
+        .remove("sky")
+        .remove("sun.irradiance")
+        .merge(
+            r#"
+sun = { spectrum = "extraterrestrial" }
+atmosphere = { sky_photons = 2000 }
+sensor = { altitude_m = 700000.0, view_zenith_deg = 20.0 }
+"#,
+        )
+        .unwrap()
+        .text();
+    std::fs::write(&scene, text).unwrap();
+    let map = dir.path().join("s.map");
+    ok(littoral(&["emit", p(&scene), "--map", p(&map), "--quiet"]));
+    let whole = dir.path().join("whole");
+    ok(littoral(&[
+        "render",
+        p(&scene),
+        "--map",
+        p(&map),
+        "--out",
+        p(&whole),
+        "--quiet",
+    ]));
+    let parts: Vec<PathBuf> = (0..2)
+        .map(|i| {
+            let part = dir.path().join(format!("part{i}"));
+            let tiles = format!("{i}/2");
+            ok(littoral(&[
+                "render",
+                p(&scene),
+                "--map",
+                p(&map),
+                "--tiles",
+                &tiles,
+                "--out",
+                p(&part),
+                "--quiet",
+            ]));
+            part
+        })
+        .collect();
+    let out = dir.path().join("assembled");
+    ok(littoral(&[
+        "assemble",
+        p(&parts[1]),
+        p(&parts[0]),
+        "--out",
+        p(&out),
+    ]));
+    for name in [
+        "shards.rhot.hdr",
+        "shards.lpath.bsq",
+        "shards.atmosphere.csv",
+    ] {
+        assert!(whole.join(name).exists(), "{name}");
+    }
+    same_outputs(&whole, &out);
+}
+
 /// `render --resume` after an interruption: the tiles a killed run left
 /// in OUT/.NAME.parts are kept, the rest rendered, and the outputs are the
 /// uninterrupted render's; the parts directory is gone afterwards.

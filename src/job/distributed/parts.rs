@@ -128,6 +128,7 @@ impl RenderPartJob<'_> {
         let mine = part_tiles(scene, part, parts);
         let bands = scene.bands.len();
         let errors = crate::render::stderr_description(scene).is_some();
+        let products = crate::render::products(scene).len();
         // Tiles a previous run finished (and that read back whole) are kept.
         let todo: Vec<(usize, usize)> = mine
             .iter()
@@ -135,7 +136,8 @@ impl RenderPartJob<'_> {
             .filter(|&t| {
                 let p = tile_path(&self.part_dir, t);
                 !(p.exists()
-                    && read_tile(&p, &digest, t, tile_size(scene, t), bands, errors).is_ok())
+                    && read_tile(&p, &digest, t, tile_size(scene, t), bands, errors, products)
+                        .is_ok())
             })
             .collect();
         let (stage, t_emit, cache, radiometers) = match scene.render.integrator {
@@ -343,6 +345,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
     let outputs = crate::job::outputs::CubeSet::create(&scene, staging.dir())?;
     let bands = scene.bands.len();
     let errors = crate::render::stderr_description(&scene).is_some();
+    let products = crate::render::products(&scene).len();
     let pool = crate::parallel::pool(threads)?;
     let jobs: Vec<(PathBuf, (usize, usize))> = parts
         .iter()
@@ -370,6 +373,7 @@ pub fn assemble(part_dirs: &[PathBuf], out_dir: &Path, threads: usize) -> Result
                 tile_size(&scene, *tile),
                 bands,
                 errors,
+                products,
             )?;
             crate::render::TileSink::write(&outputs, &t)
         })

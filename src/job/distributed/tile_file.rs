@@ -2,7 +2,7 @@
 //! image tile, written whole under a temporary name. Layout: the magic
 //! `LTTILE01`, the scene digest (64 hex bytes), i, j, w, h, bands and the
 //! error flag (u32 LE each), then the f32 LE arrays (the radiance, its
-//! standard error when flagged, each product of `render::PRODUCTS` in
+//! standard error when flagged, each product of `render::products` in
 //! order, the quicklook's RGB), and the CRC-32 of all before it. Sizes
 //! follow from the header and the product list, so a file of another
 //! layout is an error naming it, never a panic.
@@ -45,7 +45,8 @@ pub(super) fn tile_bytes(t: &TileResult, digest: &str, bands: usize) -> Vec<u8> 
 }
 
 /// Read the tile file at `path`, which must be tile `(i, j)` of the scene
-/// with `digest`, `bands` bands and the error flag `errors`.
+/// with `digest`, `bands` bands, the error flag `errors` and `products`
+/// product arrays.
 pub(super) fn read_tile(
     path: &Path,
     digest: &str,
@@ -53,6 +54,7 @@ pub(super) fn read_tile(
     (w, h): (usize, usize),
     bands: usize,
     errors: bool,
+    products: usize,
 ) -> Result<TileResult> {
     let bad = |what: &str| Error::data(path, None, "tile", what.to_string());
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
@@ -78,7 +80,6 @@ pub(super) fn read_tile(
     // quicklook's RGB: sized from the product list, so a tile of another
     // product count is refused by its length.
     let n = w * h * bands;
-    let products = crate::render::PRODUCTS.len();
     let sizes: Vec<usize> = [n, if errors { n } else { 0 }]
         .into_iter()
         .chain(std::iter::repeat_n(n, products))

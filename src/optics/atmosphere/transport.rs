@@ -128,27 +128,31 @@ struct Fates {
     absorbed: f64,
 }
 
-/// Trace `photons` photons of the sun at zenith `sun_zenith` (radians)
-/// through `column` over a black surface, drawing from `rng`; at each
-/// collision `collide(tau, dir, w, share)` sees the optical depth from the
-/// top, the direction of travel before it, the weight after it and the
-/// layer's Rayleigh share of scattering.
+/// The direction of travel of the sun's beam at zenith `sun_zenith`
+/// (radians): the sun's azimuth is 0, so sunlight travels toward azimuth
+/// pi.
+fn beam(sun_zenith: f64) -> DVec3 {
+    DVec3::new(-sun_zenith.sin(), 0.0, -sun_zenith.cos())
+}
+
+/// Trace `photons` photons entering `column` at optical depth `tau0` from
+/// the top, travelling along `start` (unit, down), over a black surface,
+/// drawing from `rng`; at each collision `collide(tau, dir, w, share)`
+/// sees the optical depth from the top, the direction of travel before
+/// it, the weight after it and the layer's Rayleigh share of scattering.
 fn trace(
     column: &Column,
-    sun_zenith: f64,
+    start: DVec3,
+    tau0: f64,
     photons: u64,
     rng: &mut Pcg32,
     mut collide: impl FnMut(&mut Pcg32, f64, DVec3, f64, f64),
 ) -> Fates {
-    let mu0 = sun_zenith.cos();
     let total = column.total();
     let mut f = Fates::default();
-    // Directions of travel; the sun's azimuth is 0, so sunlight travels
-    // toward azimuth pi.
-    let sun = DVec3::new(-sun_zenith.sin(), 0.0, -mu0);
     for _ in 0..photons {
-        let mut dir = sun;
-        let mut tau = 0.0f64;
+        let mut dir = start;
+        let mut tau = tau0;
         let mut w = 1.0f64;
         let mut scattered = false;
         let mut arrived = 0.0;
@@ -217,7 +221,8 @@ pub fn band_light(
     let mut cells = Cells::default();
     let f = trace(
         column,
-        sun_zenith,
+        beam(sun_zenith),
+        0.0,
         photons,
         &mut rng,
         |rng, tau, dir, w, share| {
@@ -280,12 +285,19 @@ pub fn path_radiance(
     let (mut sum, mut sum_sq) = (0.0, 0.0);
     for _ in 0..photons {
         let mut one = 0.0;
-        trace(column, sun_zenith, 1, &mut rng, |_, tau, dir, w, share| {
-            if tau > depth {
-                let p = mixture(column, share, dir.dot(view));
-                one += w * p * (-(tau - depth) / view.z).exp() / view.z;
-            }
-        });
+        trace(
+            column,
+            beam(sun_zenith),
+            0.0,
+            1,
+            &mut rng,
+            |_, tau, dir, w, share| {
+                if tau > depth {
+                    let p = mixture(column, share, dir.dot(view));
+                    one += w * p * (-(tau - depth) / view.z).exp() / view.z;
+                }
+            },
+        );
         sum += one;
         sum_sq += one * one;
     }
@@ -293,6 +305,41 @@ pub fn path_radiance(
     let mean = sum / n;
     let var = (sum_sq / n - mean * mean).max(0.0) / n;
     (mu0 * mean, mu0 * var.sqrt())
+}
+
+/// The total transmittance from a Lambertian ground to a sensor at
+/// `depth` (optical depth from the top) looking down at zenith angle
+/// `view_zenith` (radians): the radiance it sees from a ground of unit
+/// radiance that nothing lights back, direct and scattered, with the
+/// scattered part's standard error.
+///
+/// By reciprocity this is the share of a beam entering at the sensor's
+/// level and travelling down along the view that reaches the ground
+/// (per unit of its horizontal irradiance): exp(-tau_below / mu_v)
+/// exactly, plus the photons that arrive after scattering, which may
+/// wander above the sensor's level on their way.
+pub fn transmittance_up(
+    column: &Column,
+    view_zenith: f64,
+    depth: f64,
+    photons: u64,
+    seed: u64,
+    stream: u64,
+) -> (f64, f64) {
+    let mut rng = Pcg32::new(seed, stream);
+    let f = trace(
+        column,
+        beam(view_zenith),
+        depth,
+        photons,
+        &mut rng,
+        |_, _, _, _, _| {},
+    );
+    let n = photons.max(1) as f64;
+    let mean = f.arrived / n;
+    let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
+    let direct = (-(column.total() - depth) / view_zenith.cos()).exp();
+    (direct + mean, var.sqrt())
 }
 
 /// The cells' directions for one collision: the same offset in every cell.

@@ -243,6 +243,9 @@ const PATH_PHOTONS_PER_SKY_PHOTON: u64 = 4;
 /// Mixed into the scene's seed for the path radiance's photons.
 const PATH_KEY: u64 = 0x7061_7468_5f72_6164;
 
+/// Mixed into the scene's seed for the upward transmittance's photons.
+const UP_KEY: u64 = 0x7570_5f74_7261_6e73;
+
 /// The air between the ground and `sensor` (at `altitude_m`) along its
 /// view, for the sun `sun` (at the surface; its zenith and azimuth are the
 /// top's).
@@ -255,8 +258,9 @@ pub(super) fn view(light: &AtmosphereLight, sun: &Sun, sensor: &Sensor, seed: u6
     let s = (1.0 - toward.z * toward.z).max(0.0).sqrt();
     let view = glam::DVec3::new(s * phi.cos(), s * phi.sin(), toward.z);
     let photons = light.sky_photons * PATH_PHOTONS_PER_SKY_PHOTON;
+    let up_seed = crate::rng::mix64(seed ^ UP_KEY);
     let seed = crate::rng::mix64(seed ^ PATH_KEY);
-    let per_band: Vec<(f64, f64, f64)> = light
+    let per_band: Vec<[f64; 5]> = light
         .columns
         .par_iter()
         .enumerate()
@@ -273,13 +277,23 @@ pub(super) fn view(light: &AtmosphereLight, sun: &Sun, sensor: &Sensor, seed: u6
                 b as u64,
             );
             let f0 = light.bands[b].toa_irradiance;
-            (t, l * f0, se * f0)
+            let (t_up, t_up_se) = crate::optics::atmosphere::transport::transmittance_up(
+                column,
+                toward.z.clamp(-1.0, 1.0).acos(),
+                depth,
+                light.sky_photons,
+                up_seed,
+                b as u64,
+            );
+            [t, l * f0, se * f0, t_up, t_up_se]
         })
         .collect();
     ViewLight {
         altitude_m,
-        transmittance: per_band.iter().map(|v| v.0).collect(),
-        path_radiance: per_band.iter().map(|v| v.1).collect(),
-        path_radiance_se: per_band.iter().map(|v| v.2).collect(),
+        transmittance: per_band.iter().map(|v| v[0]).collect(),
+        path_radiance: per_band.iter().map(|v| v[1]).collect(),
+        path_radiance_se: per_band.iter().map(|v| v[2]).collect(),
+        transmittance_up: per_band.iter().map(|v| v[3]).collect(),
+        transmittance_up_se: per_band.iter().map(|v| v[4]).collect(),
     }
 }
