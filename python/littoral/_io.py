@@ -23,6 +23,9 @@ CUBES = {
     "L_surface": (".surface", "radiance reflected by the sea surface (L_t - L_w)", "surface_upwelling_radiance_per_unit_wavelength_in_air_reflected_by_sea_water", "W m-2 sr-1 nm-1"),
     "R_rs": (".rrs", "remote-sensing reflectance L_w / E_d(0+)", "surface_ratio_of_upwelling_radiance_emerging_from_sea_water_to_downwelling_radiative_flux_in_air", "sr-1"),
     "stderr": (".stderr", "standard error of L_t", None, "W m-2 sr-1 nm-1"),
+    # With the sensor above the surface.
+    "rho_t": (".rhot", "reflectance at the sensor pi L_t / (E_0 cos theta_s)", None, "1"),
+    "L_path": (".lpath", "atmospheric path radiance at the sensor", None, "W m-2 sr-1 nm-1"),
 }
 
 
@@ -30,7 +33,8 @@ class Result:
     """What a render gives: the image cube and the point readings.
 
     - ``cube``: dims ``wavelength``, ``y``, ``x``; ``L_t``, ``L_w``,
-      ``L_surface``, ``R_rs`` and ``stderr``.
+      ``L_surface``, ``R_rs`` and ``stderr``; with the sensor above the
+      surface (``sensor.altitude_m``) also ``rho_t`` and ``L_path``.
     - ``radiometers``: dims ``radiometer``, ``wavelength`` (``None``
       without radiometers).
     - ``profiles``: E_d, E_u, E_od, E_ou, L_u, L_d against ``depth`` and

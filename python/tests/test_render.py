@@ -244,3 +244,24 @@ def test_inelastic_light_switches_on_and_off(tmp_path, small):
         shifted[on] = sum(report["energy"]["inelastic_out"])
     assert shifted[True] > 0.0
     assert shifted[False] == 0.0
+
+
+def test_a_sensor_above_the_atmosphere_adds_rho_t_and_the_path_radiance(small):
+    scene = small.with_(
+        {
+            "sun.irradiance": None,
+            "sun.spectrum": "extraterrestrial",
+            "atmosphere.sky_photons": 2000,
+            "sensor.altitude_m": 700000.0,
+        }
+    )
+    r = littoral.render(scene, progress=False)
+    a = r.report["atmosphere"]
+    e0 = np.asarray(a["toa_irradiance"])[:, None, None]
+    mu0 = np.cos(np.radians(30.0))
+    rho = np.pi * r.cube.L_t.values.astype(np.float64) / (e0 * mu0)
+    assert np.allclose(r.cube.rho_t.values, rho, rtol=1e-6)
+    assert r.cube.rho_t.attrs["units"] == "1"
+    want = np.asarray(a["L_path"], dtype=np.float32)[:, None, None]
+    assert np.all(r.cube.L_path.values == want) and np.all(want > 0)
+    assert "rho_t" not in littoral.render(small, progress=False).cube
