@@ -53,6 +53,15 @@ pub struct Emitter<'s> {
 
 impl<'s> Emitter<'s> {
     pub fn new(scene: &'s Scene) -> Result<Self> {
+        if scene.ground.is_some() {
+            return Err(crate::Error::invalid(
+                "emit",
+                format!(
+                    "scene '{}' is a Lambertian ground ([surface] kind = \"lambertian\"): no water, no photons to emit; render it",
+                    scene.name
+                ),
+            ));
+        }
         let nb = scene.bands.len();
         let w: Vec<f64> = scene.bands.fwhm_nm().iter().map(|&f| f as f64).collect();
         let mut weights = Vec::with_capacity(2 * nb);

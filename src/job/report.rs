@@ -273,6 +273,13 @@ pub struct AtmosphereReport {
     /// Irradiance leaving the top and absorbed in the air.
     pub up_at_top: Vec<f64>,
     pub absorbed: Vec<f64>,
+    /// Over a Lambertian ground: the air's spherical albedo and its
+    /// standard error (the irradiances above then hold every order of
+    /// reflection between the ground and the air).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spherical_albedo: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spherical_albedo_stderr: Vec<f64>,
     /// With the sensor above the surface: its height, the direct
     /// transmittance from the ground to it along its view, and the path
     /// radiance it sees (light scattered into the view that never reached
@@ -306,6 +313,10 @@ impl AtmosphereReport {
              Ed_direct,Ed_diffuse,Ed_diffuse_flux,Ed_diffuse_flux_stderr,t_direct,t_down,\
              up_at_top,absorbed",
         );
+        let ground = !self.spherical_albedo.is_empty();
+        if ground {
+            t.push_str(",spherical_albedo,spherical_albedo_stderr");
+        }
         if view {
             t.push_str(",t_view,t_up,t_up_stderr,L_path,L_path_stderr,rho_path,rho_path_stderr");
         }
@@ -329,6 +340,9 @@ impl AtmosphereReport {
                 self.up_at_top[b],
                 self.absorbed[b],
             ];
+            if ground {
+                row.extend([self.spherical_albedo[b], self.spherical_albedo_stderr[b]]);
+            }
             if view {
                 let to_rho = reflectance_factor(self.toa_irradiance[b], mu0);
                 row.extend([
@@ -390,6 +404,16 @@ impl AtmosphereReport {
             }),
             up_at_top: col(&|b| b.up_at_top),
             absorbed: col(&|b| b.absorbed),
+            spherical_albedo: if scene.ground.is_some() {
+                col(&|b| b.spherical_albedo)
+            } else {
+                Vec::new()
+            },
+            spherical_albedo_stderr: if scene.ground.is_some() {
+                col(&|b| b.spherical_albedo_se)
+            } else {
+                Vec::new()
+            },
             altitude_m: a.view.as_ref().map(|v| v.altitude_m),
             t_view: a
                 .view

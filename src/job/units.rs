@@ -42,6 +42,8 @@ const UNITS: &[(&str, &str)] = &[
     ("atmosphere.L_path", SPECTRAL_RADIANCE),
     ("atmosphere.L_path_stderr", SPECTRAL_RADIANCE),
     ("atmosphere.t_up", "1"),
+    ("atmosphere.spherical_albedo", "1"),
+    ("atmosphere.spherical_albedo_stderr", "1"),
     ("atmosphere.t_up_stderr", "1"),
     ("above_surface.Ed", SPECTRAL_IRRADIANCE),
     ("above_surface.Ed_stderr", SPECTRAL_IRRADIANCE),

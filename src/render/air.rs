@@ -42,8 +42,10 @@
 //! unbiased whatever the table holds, with the glint's and the sky's
 //! sampling noise and the water's mean taken out of the pixel's variance.
 //!
-//! Not in it: light the surface sends up that the air returns down to the
-//! surface (the sky at the surface is over a black surface).
+//! Not in it over the sea: light the surface sends up that the air
+//! returns down to the surface (the sky at the surface is over a black
+//! surface). Over a Lambertian ground the sky holds it
+//! (`optics::atmosphere::transport::ground_response`).
 
 use super::camera::CameraRay;
 use super::Integrator;
@@ -156,7 +158,8 @@ impl<'s> AirView<'s> {
     /// The sun glint per band leaving the surface toward `up` (unit).
     fn glint(&self, up: DVec3, out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
-        if up.z > 0.0 {
+        // A Lambertian ground has none.
+        if up.z > 0.0 && self.scene.ground.is_none() {
             super::air_sea::add_glint(self.scene, up.as_vec3(), out);
         }
     }

@@ -27,6 +27,7 @@
 pub mod air;
 pub mod air_sea;
 pub mod camera;
+pub mod ground;
 pub mod march;
 mod moments;
 pub mod path;
@@ -321,15 +322,20 @@ pub fn render(
 }
 
 /// Render `scene` with the path integrator (no photon map) into `sink`,
-/// then read its radiometers.
+/// then read its radiometers; a Lambertian ground with its exact radiance
+/// ([`ground::Ground`]).
 pub fn render_path(
     scene: &Scene,
     sink: &dyn TileSink,
     threads: usize,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
+    let radiometers = match ground::Ground::new(scene) {
+        Some(g) => render_with(scene, &g, sink, threads, progress)?,
+        None => render_with(scene, &PathTracer::new(scene), sink, threads, progress)?,
+    };
     Ok(Rendered {
-        radiometers: render_with(scene, &PathTracer::new(scene), sink, threads, progress)?,
+        radiometers,
         ..Default::default()
     })
 }

@@ -168,6 +168,45 @@ fn range_error(v: f64, lo: f64, hi: f64, low: &str, unit: &str) -> Option<String
     }
 }
 
+/// `[water]` and `[photons]`: required for a sea, refused for a
+/// Lambertian ground (`[surface] kind = "lambertian"`: no water, nothing to
+/// emit), where they are filled with defaults nothing reads.
+fn ground_tables(src: &Source, f: &mut SceneFile) -> Result<()> {
+    let ground = f.lambertian_ground();
+    for (table, given) in [
+        ("water", f.water.is_some()),
+        ("photons", f.photons.is_some()),
+    ] {
+        match (ground, given) {
+            (false, false) => {
+                return Err(src.error(
+                    &[K(table)],
+                    format!(
+                        "[{table}] is missing (a scene without water has [surface] kind = \"lambertian\")"
+                    ),
+                ))
+            }
+            (true, true) => {
+                return Err(src.error(
+                    &[K(table)],
+                    format!("a Lambertian ground ([surface] kind = \"lambertian\") has no water: remove [{table}]"),
+                ))
+            }
+            _ => {}
+        }
+    }
+    if ground {
+        f.water = Some(Default::default());
+        f.photons = Some(crate::scene::file::PhotonsFile {
+            count: 1,
+            store_direct: false,
+            upward_split: 1,
+            target_split: 1,
+        });
+    }
+    Ok(())
+}
+
 /// The most photons a scene may trace: 10^12. The stored map holds about
 /// 16 bytes per stored photon (several per traced photon), so 10^12 is a map
 /// of tens of terabytes and, at a few million photons per second per core,
@@ -195,6 +234,7 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
             what: e.message().replace('\n', " ").trim().to_string(),
         }
     })?;
+    ground_tables(src, &mut f)?;
     if let Some(p) = ov.photons {
         // The command line's count is at fault, not the file's line.
         if p == 0 || p > MAX_PHOTONS {
@@ -203,18 +243,21 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
                 format!("{p} photons: must be from 1 to {MAX_PHOTONS} (10^12); split the work over more runs"),
             ));
         }
-        f.photons.count = p;
+        if let Some(ph) = f.photons.as_mut() {
+            ph.count = p;
+        }
     }
     if let Some(s) = ov.seed {
         f.seed = s;
     }
-    if let Some(on) = ov.inelastic {
+    if let Some(on) = ov.inelastic.filter(|_| !f.lambertian_ground()) {
         // On: every process the water supports (fluorescence needs
         // constituents), at the scene's quantum yield where it gives one.
-        f.water.raman = Some(on);
-        let constituents = f.water.iop.is_none() && f.water.iop_file.is_none();
-        f.water.fluorescence = (on && constituents).then(|| {
-            let given = f.water.fluorescence.take().unwrap_or_default();
+        let water = f.water.as_mut().expect("ground_tables fills [water]");
+        water.raman = Some(on);
+        let constituents = water.iop.is_none() && water.iop_file.is_none();
+        water.fluorescence = (on && constituents).then(|| {
+            let given = water.fluorescence.take().unwrap_or_default();
             crate::scene::file::FluorescenceFile {
                 chl_quantum_yield: given.chl_quantum_yield,
                 cdom: Some(true),
@@ -329,26 +372,27 @@ fn georef(ctx: &Ctx, f: &SceneFile) -> Result<Georef> {
 /// `[photons]` (count, upward and target splitting) and `[tally]`: the tally
 /// depths, sorted, each above the floor's deepest point.
 fn photons_and_tallies(ctx: &Ctx, f: &SceneFile, deepest_floor_m: Option<f64>) -> Result<Vec<f64>> {
-    if f.photons.count == 0 {
+    let photons = f.photons();
+    if photons.count == 0 {
         return Err(ctx.err(&[K("photons"), K("count")], "must be at least 1"));
     }
-    if f.photons.count > MAX_PHOTONS {
+    if photons.count > MAX_PHOTONS {
         return Err(ctx.err(
             &[K("photons"), K("count")],
             format!(
                 "{} photons would never finish: at most {MAX_PHOTONS} (10^12); split the work over more runs",
-                f.photons.count
+                photons.count
             ),
         ));
     }
-    let split = f.photons.upward_split;
+    let split = photons.upward_split;
     if !(split.is_power_of_two() && split <= 64) {
         return Err(ctx.err(
             &[K("photons"), K("upward_split")],
             format!("{split} is not a power of two from 1 to 64"),
         ));
     }
-    let target_split = f.photons.target_split;
+    let target_split = photons.target_split;
     if !(target_split.is_power_of_two() && target_split <= 64) {
         return Err(ctx.err(
             &[K("photons"), K("target_split")],
@@ -396,14 +440,22 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
     };
 
     let has_air = f.atmosphere.is_some();
+    let ground = light::ground(&ctx, &f, ov)?;
     let sun = light::sun(&ctx, &f.sun, has_air)?;
     let sky = light::sky(&ctx, &f.sky, &sun, has_air)?;
     let (sun, sky, atmosphere) = match &f.atmosphere {
         None => (sun, sky, None),
         Some(a) => {
             let spec = atmosphere::spec(&ctx, a)?;
-            let (sun, sky, light) =
-                atmosphere::light(&ctx, a, spec, &sun, f.sun.day_of_year, f.seed)?;
+            let (sun, sky, light) = atmosphere::light(
+                &ctx,
+                a,
+                spec,
+                &sun,
+                f.sun.day_of_year,
+                f.seed,
+                ground.as_deref(),
+            )?;
             (sun, sky, Some(light))
         }
     };
@@ -415,8 +467,8 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     let water_phase = PhaseFunction::rayleigh(crate::optics::phase::RAYLEIGH_Q_WATER)
         .expect("the pure-water q is valid");
-    let (water, particle_phase) = water::water(&ctx, &f.water, &domain, &water_phase)?;
-    let inelastic = water::inelastic(&ctx, &f.water, &water)?;
+    let (water, particle_phase) = water::water(&ctx, f.water(), &domain, &water_phase)?;
+    let inelastic = water::inelastic(&ctx, f.water(), &water)?;
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
@@ -434,7 +486,12 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         }
         std::sync::Arc::new(a)
     });
-    let (estimate, render) = estimate::estimate_and_render(&ctx, &f, ov)?;
+    let (estimate, mut render) = estimate::estimate_and_render(&ctx, &f, ov)?;
+    if ground.is_some() {
+        // Nothing for a photon map to hold: the ground's radiance is
+        // exact (`render::ground`), rendered the path integrator's way.
+        render.integrator = IntegratorMode::Path;
+    }
     let georef = georef(&ctx, &f)?;
     let mut inputs = ctx.inputs.take();
     inputs.sort();
@@ -462,6 +519,9 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         ));
     }
 
+    let photons = f.photons();
+    let (count, store_direct) = (photons.count, photons.store_direct);
+    let (upward_split, target_split) = (photons.upward_split, photons.target_split);
     Ok(Scene {
         name: f.name,
         seed: f.seed,
@@ -471,6 +531,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         atmosphere,
         reflected_sky: std::sync::OnceLock::new(),
         surface,
+        ground,
         water_index,
         domain,
         water,
@@ -479,17 +540,17 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         inelastic,
         bottom,
         target_reflectance,
-        split_footprints: if f.photons.target_split > 1 {
+        split_footprints: if target_split > 1 {
             extents.iter().map(split_footprint).collect()
         } else {
             Vec::new()
         },
         target_extents: extents,
-        target_split: f.photons.target_split as usize,
+        target_split: target_split as usize,
         geometry,
-        photons: f.photons.count,
-        store_direct: f.photons.store_direct,
-        upward_split: f.photons.upward_split as usize,
+        photons: count,
+        store_direct,
+        upward_split: upward_split as usize,
         tally_depths,
         sensor,
         radiometers,

@@ -23,11 +23,15 @@ pub struct SceneFile {
     #[serde(default)]
     pub surface: SurfaceFile,
     pub domain: DomainFile,
-    pub water: WaterFile,
+    /// Required but for a Lambertian ground (`[surface] kind =
+    /// "lambertian"`), which refuses it: the scene's parse fills it then
+    /// (see [`SceneFile::water`]).
+    pub water: Option<WaterFile>,
     pub bottom: Option<BottomFile>,
     #[serde(default)]
     pub target: Vec<TargetFile>,
-    pub photons: PhotonsFile,
+    /// As `water`.
+    pub photons: Option<PhotonsFile>,
     #[serde(default)]
     pub tally: TallyFile,
     pub sensor: Option<SensorFile>,
@@ -40,6 +44,24 @@ pub struct SceneFile {
     #[serde(default)]
     pub georef: GeorefFile,
     pub atmosphere: Option<AtmosphereFile>,
+}
+
+impl SceneFile {
+    /// `[water]`, present after the scene's parse (which fills it for a
+    /// Lambertian ground, where nothing reads it).
+    pub fn water(&self) -> &WaterFile {
+        self.water.as_ref().expect("the parse fills [water]")
+    }
+
+    /// `[photons]`, present after the scene's parse, as `water`.
+    pub fn photons(&self) -> &PhotonsFile {
+        self.photons.as_ref().expect("the parse fills [photons]")
+    }
+
+    /// True for `[surface] kind = "lambertian"`: a ground and no water.
+    pub fn lambertian_ground(&self) -> bool {
+        self.surface.kind == Some(SurfaceKind::Lambertian)
+    }
 }
 
 /// `[atmosphere]`: plane-parallel layers over the sea
@@ -213,6 +235,9 @@ pub enum SurfaceKind {
     #[default]
     Flat,
     CoxMunk,
+    /// No water: a Lambertian ground of `[surface] reflectance` at z = 0
+    /// (for comparisons with codes over land).
+    Lambertian,
 }
 
 /// `[domain] edges`.
@@ -317,6 +342,8 @@ pub struct SurfaceFile {
     pub temperature_c: Option<f64>,
     /// Salinity (PSU) for `refractive_index = "quan-fry"`.
     pub salinity_psu: Option<f64>,
+    /// The ground's reflectance for `kind = "lambertian"`.
+    pub reflectance: Option<Reflectance>,
 }
 
 /// `[surface] refractive_index`: a number, the same in every band, or a
@@ -336,7 +363,7 @@ pub struct DomainFile {
     pub edges: Option<Edges>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WaterFile {
     pub iop: Option<IopFile>,

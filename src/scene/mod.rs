@@ -153,6 +153,16 @@ pub struct BandAtmosphere {
     /// Leaving the top of the atmosphere, and absorbed in the air.
     pub up_at_top: f64,
     pub absorbed: f64,
+    /// Over a Lambertian ground (`Scene::ground`): the air's spherical
+    /// albedo s, the share of the ground's upward irradiance it sends back
+    /// down (from the photons that return), with its standard error. The
+    /// irradiances above then hold every order of reflection between the
+    /// ground and the air; 0 over the sea, whose light the air's sky does
+    /// not return.
+    #[serde(default)]
+    pub spherical_albedo: f64,
+    #[serde(default)]
+    pub spherical_albedo_se: f64,
 }
 
 /// A horizontal rectangle (m) over the domain: where paths entering the
@@ -353,6 +363,9 @@ pub struct Scene {
     /// The sea surface, its index the reference the renderers trace
     /// geometry with (the mean of `water_index`).
     pub surface: SeaSurface,
+    /// `[surface] kind = "lambertian"`: no water, a Lambertian ground at
+    /// z = 0 of this reflectance per band (`render::ground`).
+    pub ground: Option<Vec<f64>>,
     /// Refractive index of the water per band (`[surface]
     /// refractive_index`: constant, or Quan & Fry 1995).
     pub water_index: Vec<f64>,
@@ -457,8 +470,10 @@ pub struct Overrides {
 impl Scene {
     /// The scene's atmosphere as JSON (`littoral scene atmosphere`), none
     /// without one: per band the layers, the light at the surface and the
-    /// sky per cell; with `toa` also the radiance leaving the top (the sky's
-    /// photons traced again, from the same streams).
+    /// sky per cell (over a Lambertian ground its reflectance, and the sky
+    /// with the light it returns); with `toa` also the radiance leaving
+    /// the top over a black surface (the sky's photons traced again, from
+    /// the same streams).
     pub fn atmosphere_json(&self, toa: bool) -> Option<serde_json::Value> {
         use crate::optics::atmosphere::{transport, RayleighSetting};
         let a = self.atmosphere.as_ref()?;
@@ -508,6 +523,7 @@ impl Scene {
                     "layers": layers,
                     "sky_radiance": a.sky_radiance[b],
                     "toa_radiance": toa_radiance,
+                    "ground_reflectance": self.ground.as_ref().map(|g| g[b]),
                 })
             })
             .collect();
@@ -599,6 +615,15 @@ impl Scene {
     /// One line for `littoral scene check`: bands, photons, triangles, tallies.
     pub fn summary(&self) -> String {
         let c = self.bands.centers_nm();
+        if self.ground.is_some() {
+            return format!(
+                "scene '{}' is valid: {} bands {:.1}-{:.1} nm, a Lambertian ground (no water)",
+                self.name,
+                c.len(),
+                c[0],
+                c[c.len() - 1],
+            );
+        }
         format!(
             "scene '{}' is valid: {} bands {:.1}-{:.1} nm, {} photons, {} triangles, {} tally depths",
             self.name,

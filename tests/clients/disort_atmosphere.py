@@ -5,7 +5,8 @@ Reads that JSON (argument 1) and solves each band's column with DISORT
 (nanodisort, libRadtran's C DISORT), layer by layer with littoral's own
 optical depths, single-scattering albedos and phase functions (depolarised
 Rayleigh and Henyey-Greenstein, mixed by their scattering optical depths),
-the sun's beam at its top and a black surface. Prints JSON, per band:
+the sun's beam at its top and a black surface, or the scene's Lambertian
+ground (``ground_reflectance`` per band). Prints JSON, per band:
 
 * ``direct``, ``diffuse``: the beam's and the sky's irradiance at the surface;
 * ``up_at_top``: the irradiance leaving the top;
@@ -15,6 +16,8 @@ the sun's beam at its top and a black surface. Prints JSON, per band:
 * ``path_radiance``: with a sensor above the surface (``view``), the
   radiance going up toward it at its level (over a black surface: the path
   radiance), in its exact direction;
+* ``at_sensor``: the radiance at that sensor over the scene's Lambertian
+  ground (``ground_reflectance``, 0 for none);
 * ``t_up``: the total transmittance from a Lambertian ground to that
   sensor along its view. DISORT solves the column again over a ground of
   albedo A = 1: the sensor's radiance grows by A E_d(A) t_up / pi, with
@@ -127,7 +130,8 @@ def main():
     out = []
     for band in d["bands"]:
         band["aerosol_g"] = g
-        ds, down, up = solve(band, d["sun_zenith_deg"], mus, phis)
+        ground = band.get("ground_reflectance") or 0.0
+        ds, down, up = solve(band, d["sun_zenith_deg"], mus, phis, albedo=ground)
         uu = np.asarray(ds.uu)  # (numu, ntau, nphi)
         nd_ = len(down)
         sky, toa = [], []
@@ -154,6 +158,11 @@ def main():
             phi = (view["view_azimuth_from_sun_deg"] + 180.0) % 360.0
             vs, _, _ = solve(band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b]])
             path = float(np.asarray(vs.uu)[0, 0, 0])
+            # Over the scene's own ground: the whole radiance at the sensor.
+            gs, _, _ = solve(
+                band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b]], albedo=ground
+            )
+            at_sensor = float(np.asarray(gs.uu)[0, 0, 0])
             # Over a white ground: the sensor's level, then the ground.
             ws, _, _ = solve(
                 band, d["sun_zenith_deg"], [mu], [phi], levels=[view["depth"][b], None], albedo=1.0
@@ -165,6 +174,7 @@ def main():
             {
                 "path_radiance": path,
                 "t_up": t_up if view else None,
+                "at_sensor": at_sensor if view else None,
                 "nm": band["band"]["nm"],
                 "direct": float(ds.rfldir[1]),
                 "diffuse": float(ds.rfldn[1]),

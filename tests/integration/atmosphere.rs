@@ -71,11 +71,142 @@ fn the_sky_and_the_top_match_disort() {
         (aerosol, 30.0, 0.02),
         (aerosol, 60.0, 0.02),
     ];
+    let cases: Vec<SkyCase> = cases
+        .into_iter()
+        .map(|(a, sun, tol)| {
+            let f: Box<dyn Fn(u64) -> Scene> = Box::new(move |seed| scene(a, sun, seed));
+            (f, sun, tol)
+        })
+        .collect();
+    sky_against_disort(&cases, true);
+}
+
+/// A Lambertian ground under the air: the sky at the surface (with the
+/// light the ground reflects and the air returns, to every order), the
+/// irradiances and the irradiance leaving the top against DISORT over the
+/// same ground, as `the_sky_and_the_top_match_disort` does over a black
+/// surface, within 3 sigma plus 1 % (Rayleigh) or 2 % (aerosol). Grounds
+/// of reflectance 0.3 and 0.8.
+#[test]
+fn the_sky_over_a_lambertian_ground_matches_disort() {
+    if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
+        return;
+    }
+    let rayleigh = "atmosphere = { sky_photons = 20000 }";
+    let aerosol = "atmosphere = { sky_photons = 20000, aerosol = { model = \"custom\", tau_550 = 0.3, angstrom = 1.0, ssa = 0.9, phase = { kind = \"henyey-greenstein\", g = 0.7 }, scale_height_km = 1.5 } }";
+    let cases: Vec<SkyCase> = [
+        (rayleigh, 0.3, 30.0, 0.01),
+        (rayleigh, 0.8, 60.0, 0.01),
+        (aerosol, 0.3, 30.0, 0.02),
+    ]
+    .into_iter()
+    .map(|(a, r, sun, tol)| {
+        let f: Box<dyn Fn(u64) -> Scene> = Box::new(move |seed| ground_scene(a, r, sun, seed, ""));
+        (f, sun, tol)
+    })
+    .collect();
+    sky_against_disort(&cases, false);
+}
+
+/// A four-band Lambertian ground of reflectance `r` (no water) under the
+/// atmosphere `air` (a TOML line), the sun at `sun_deg`, with the TOML
+/// lines `extra`.
+fn ground_scene(air: &str, r: f64, sun_deg: f64, seed: u64, extra: &str) -> Scene {
+    let text = minimal()
+        .remove("water")
+        .remove("photons")
+        .remove("sun.irradiance")
+        .merge(&format!(
+            "seed = {seed}\nsun = {{ zenith_deg = {sun_deg:?}, spectrum = \"extraterrestrial\" }}\n\
+             surface = {{ kind = \"lambertian\", reflectance = {r:?} }}\n{air}\n{extra}\n"
+        ))
+        .unwrap()
+        .text();
+    Scene::parse(&text, Path::new("ground.toml"), &Overrides::default()).unwrap()
+}
+
+/// A Lambertian ground seen through the air from 3 km and from above the
+/// atmosphere, off nadir: every pixel's radiance at the sensor (the path
+/// radiance, the ground's radiance through the air directly and scattered)
+/// against DISORT's upward radiance at the sensor's level over the same
+/// ground, within 3 sigma (the path radiance's) plus 1 % (Rayleigh) or 2 %
+/// (aerosol); the ground's own radiance is R E_d(0+) / pi and there is no
+/// water-leaving radiance.
+#[test]
+fn a_lambertian_ground_seen_from_above_matches_disort() {
+    if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
+        return;
+    }
+    let dir = tempdir();
+    let rayleigh = "atmosphere = { sky_photons = 20000 }";
+    let aerosol = "atmosphere = { sky_photons = 20000, aerosol = { model = \"custom\", tau_550 = 0.3, angstrom = 1.0, ssa = 0.9, phase = { kind = \"henyey-greenstein\", g = 0.7 }, scale_height_km = 1.5 } }";
+    let sensor = |alt: f64, vz: f64| {
+        format!("sensor = {{ pixels = [4, 4], gsd_m = 1.0, altitude_m = {alt:?}, view_zenith_deg = {vz:?}, view_azimuth_deg = 120.0 }}")
+    };
+    let cases = [
+        (rayleigh, 0.3, 700e3, 40.0, 0.01),
+        (aerosol, 0.5, 3e3, 30.0, 0.02),
+        (aerosol, 0.2, 700e3, 0.0, 0.02),
+    ];
+    let mut failures = Vec::new();
+    for (k, (air, r, alt, vz, tol)) in cases.into_iter().enumerate() {
+        let s = ground_scene(air, r, 30.0, 1, &sensor(alt, vz));
+        let report = render_job(&s, &dir.path().join(format!("g{k}")), 0);
+        let d = disort(&s.atmosphere_json(false).unwrap());
+        let a = report.atmosphere.as_ref().unwrap();
+        let open = |p: &str| littoral::cube::EnviCube::open(Path::new(p)).unwrap();
+        let cube = open(&report.outputs.hdr);
+        let product = |name: &str| {
+            open(
+                &report
+                    .outputs
+                    .products
+                    .iter()
+                    .find(|p| p.product == name)
+                    .unwrap()
+                    .hdr,
+            )
+        };
+        let (lw, leaving) = (product("lw"), product("surface"));
+        for (b, band) in d.iter().enumerate() {
+            let want = band["at_sensor"].as_f64().unwrap();
+            let se = a.L_path_stderr[b];
+            for &got in &cube.band(b).unwrap() {
+                let got = f64::from(got);
+                if (got - want).abs() > 3.0 * se + tol * want {
+                    failures.push(format!(
+                        "case {k}, band {b}: {got} (L_path +- {se}) against {want}"
+                    ));
+                }
+            }
+            let ground = r * (a.Ed_direct[b] + a.Ed_diffuse[b]) / std::f64::consts::PI;
+            assert!(lw.band(b).unwrap().iter().all(|&v| v == 0.0));
+            for &v in &leaving.band(b).unwrap() {
+                assert!(
+                    (f64::from(v) / ground - 1.0).abs() < 1e-6,
+                    "{v} against {ground}"
+                );
+            }
+        }
+        assert_eq!(a.spherical_albedo.len(), cube.bands());
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A case of [`sky_against_disort`]: its scene for a seed, the sun's
+/// zenith angle (degrees) and the relative tolerance.
+type SkyCase = (Box<dyn Fn(u64) -> Scene>, f64, f64);
+
+/// Each case's sky at the surface, irradiances and irradiance leaving the
+/// top (and with `toa`, the radiance leaving the top) over [`SEEDS`]
+/// seeds, against DISORT within 3 sigma plus the case's tolerance.
+fn sky_against_disort(cases: &[SkyCase], toa: bool) {
     let mut failures = Vec::new();
     let mut worst = (0.0, String::new());
-    for (atmosphere, sun, tol) in cases {
+    for (make, sun, tol) in cases {
+        let (sun, tol) = (*sun, *tol);
         let runs: Vec<serde_json::Value> = (1..=SEEDS)
-            .map(|seed| scene(atmosphere, sun, seed).atmosphere_json(true).unwrap())
+            .map(|seed| make(seed).atmosphere_json(toa).unwrap())
             .collect();
         let reference = disort(&runs[0]);
         let nb = reference.len();
@@ -118,7 +249,12 @@ fn the_sky_and_the_top_match_disort() {
                 &field("up_at_top"),
                 d["up_at_top"].as_f64().unwrap(),
             );
-            for (key, ours) in [("sky", "sky_radiance"), ("toa", "toa_radiance")] {
+            let surfaces: &[(&str, &str)] = if toa {
+                &[("sky", "sky_radiance"), ("toa", "toa_radiance")]
+            } else {
+                &[("sky", "sky_radiance")]
+            };
+            for &(key, ours) in surfaces {
                 let cells = |r: &serde_json::Value| -> Vec<f64> {
                     r["bands"][b][ours]
                         .as_array()
@@ -168,6 +304,56 @@ fn refused(base: &str, bad: &[(&str, &str)]) {
             .to_string();
         assert!(e.contains(key), "{extra}: {e}");
     }
+}
+
+/// A Lambertian ground refuses what belongs to water (the sea's surface
+/// keys, a floor, targets, tallies, radiometers, `[water]`, `[photons]`,
+/// a photon map) and needs its reflectance; a sea needs `[water]` and
+/// `[photons]` and takes no ground reflectance; `emit` refuses a ground.
+/// Each error names its key.
+#[test]
+fn lambertian_ground_keys_are_checked() {
+    let dry = minimal().remove("water").remove("photons").text();
+    let ground = "[surface]\nkind = \"lambertian\"\nreflectance = 0.3";
+    let with = |extra: &str| format!("{ground}\n{extra}");
+    refused(
+        &dry,
+        &[
+            ("[surface]\nkind = \"lambertian\"", "surface.reflectance"),
+            (&with("wind_speed = 3.0"), "surface.wind_speed"),
+            (&with("[bottom]\ndepth_m = 3.0"), "bottom"),
+            (
+                &with("[[target]]\nkind = \"panel\"\ncenter_m = [5.0, 5.0, -1.0]\nsize_m = [1.0, 1.0]\nreflectance = 0.5"),
+                "target",
+            ),
+            (&with("[tally]\ndepths_m = [1.0]"), "tally.depths_m"),
+            (
+                &with("[[radiometer]]\ndepth_m = 1.0\nview = \"nadir\"\nposition_m = [5.0, 5.0]"),
+                "radiometer",
+            ),
+            (&with("[render]\nintegrator = \"photon-map\""), "render.integrator"),
+            (&with("[photons]\ncount = 100"), "photons"),
+            (&with("[water]\nchl = 1.0"), "water"),
+            ("", "water"),
+        ],
+    );
+    refused(
+        MINIMAL_SCENE,
+        &[("[surface]\nreflectance = 0.3", "surface.reflectance")],
+    );
+    let s = Scene::parse(
+        &format!("{dry}\n{ground}\n"),
+        Path::new("g.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
+    assert_eq!(s.render.integrator, littoral::scene::IntegratorMode::Path);
+    assert!(s.summary().contains("Lambertian ground"), "{}", s.summary());
+    let e = littoral::emit::Emitter::new(&s)
+        .err()
+        .expect("nothing to emit")
+        .to_string();
+    assert!(e.contains("Lambertian ground"), "{e}");
 }
 
 /// The keys: a profile that does not exist, a sky given as well, a

@@ -146,12 +146,24 @@ fn trace(
     tau0: f64,
     photons: u64,
     rng: &mut Pcg32,
+    collide: impl FnMut(&mut Pcg32, f64, DVec3, f64, f64),
+) -> Fates {
+    trace_from(column, |_| start, tau0, photons, rng, collide)
+}
+
+/// [`trace`] with each photon's direction of travel drawn by `start`.
+fn trace_from(
+    column: &Column,
+    mut start: impl FnMut(&mut Pcg32) -> DVec3,
+    tau0: f64,
+    photons: u64,
+    rng: &mut Pcg32,
     mut collide: impl FnMut(&mut Pcg32, f64, DVec3, f64, f64),
 ) -> Fates {
     let total = column.total();
     let mut f = Fates::default();
     for _ in 0..photons {
-        let mut dir = start;
+        let mut dir = start(rng);
         let mut tau = tau0;
         let mut w = 1.0f64;
         let mut scattered = false;
@@ -340,6 +352,83 @@ pub fn transmittance_up(
     let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
     let direct = (-(column.total() - depth) / view_zenith.cos()).exp();
     (direct + mean, var.sqrt())
+}
+
+/// What the air does with light a Lambertian ground sends up, per unit
+/// of the ground's radiance (an upward irradiance of pi).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroundResponse {
+    /// The mean radiance of each sky cell at the surface that this light
+    /// comes back as (sr^-1 per unit ground radiance, so the sky's
+    /// radiance per W m^-2 sr^-1 nm^-1 leaving the ground), zenith-major.
+    pub sky: Vec<f64>,
+    /// The share of the upward irradiance the air sends back down: the
+    /// spherical albedo s, from the cells (sum of `sky` times each cell's
+    /// projected solid angle, over pi) and from the photons that return,
+    /// with that estimate's standard error.
+    pub spherical_albedo: f64,
+    pub spherical_albedo_flux: f64,
+    pub spherical_albedo_se: f64,
+    /// The shares leaving the top and absorbed in the air (with the
+    /// returned share, 1 in expectation).
+    pub to_top: f64,
+    pub absorbed: f64,
+}
+
+/// Trace `photons` photons leaving a Lambertian ground up into `column`
+/// (cosine-weighted directions), from stream `stream` of `seed`: the sky
+/// their collisions send back to the ground, by the same local estimates
+/// as [`band_light`]'s, and their fates. A ground of reflectance R lit by
+/// E over a black surface then receives E / (1 - R s) in all (every order
+/// of reflection between the ground and the air, each returned in the
+/// same angular shape), and its sky gains R E / (1 - R s) / pi times
+/// `sky`.
+pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) -> GroundResponse {
+    let total = column.total();
+    let mut rng = Pcg32::new(seed, stream);
+    let mut sky = vec![0.0; CELLS];
+    let mut cells = Cells::default();
+    let f = trace_from(
+        column,
+        |rng| {
+            let mu = rng.uniform_f64().sqrt();
+            let phi = 2.0 * PI * rng.uniform_f64();
+            let s = (1.0 - mu * mu).max(0.0).sqrt();
+            DVec3::new(s * phi.cos(), s * phi.sin(), mu)
+        },
+        total,
+        photons,
+        &mut rng,
+        |rng, tau, dir, w, share| {
+            cells.draw(rng);
+            let below = total - tau;
+            cells.add(
+                &mut sky,
+                column,
+                share,
+                dir,
+                w,
+                |mu| (-below / mu).exp() / mu,
+                true,
+            );
+        },
+    );
+    let n = photons.max(1) as f64;
+    // Each photon carries pi / N of the upward irradiance.
+    sky.iter_mut().for_each(|v| *v *= PI / n);
+    let returned: f64 = (0..CELLS)
+        .map(|c| sky[c] * projected_solid_angle(c / AZIMUTH_BINS))
+        .sum();
+    let mean = f.arrived / n;
+    let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
+    GroundResponse {
+        sky,
+        spherical_albedo: returned / PI,
+        spherical_albedo_flux: mean,
+        spherical_albedo_se: var.sqrt(),
+        to_top: f.up / n,
+        absorbed: f.absorbed / n,
+    }
 }
 
 /// The cells' directions for one collision: the same offset in every cell.

@@ -2,7 +2,7 @@
 //! the sun's beam through the air and the sky, per band.
 
 use super::*;
-use crate::optics::atmosphere::transport::{band_light, CELLS};
+use crate::optics::atmosphere::transport::{band_light, ground_response, CELLS};
 use crate::optics::atmosphere::{
     profile, Aerosol, AerosolHeight, AtmosphereSpec, Column, RayleighSetting,
 };
@@ -163,7 +163,10 @@ fn aerosol(ctx: &Ctx, a: &AerosolFile) -> Result<Aerosol> {
 /// The sun's beam and the sky at the surface under `spec`, for the sun
 /// `sun` whose irradiance is the beam-normal irradiance at the top of the
 /// atmosphere: the sun of the surface (its beam through the air), the sky
-/// and what the atmosphere did, per band.
+/// and what the atmosphere did, per band. Over a Lambertian ground of
+/// reflectance `ground` per band the sky also holds the light the ground
+/// reflects and the air returns, to every order
+/// (`transport::ground_response`).
 pub(super) fn light(
     ctx: &Ctx,
     a: &AtmosphereFile,
@@ -171,6 +174,7 @@ pub(super) fn light(
     sun: &Sun,
     day_of_year: Option<f64>,
     seed: u64,
+    ground: Option<&[f64]>,
 ) -> Result<(Sun, Sky, AtmosphereLight)> {
     let photons = a.sky_photons.unwrap_or(DEFAULT_SKY_PHOTONS);
     if !(100..=100_000_000).contains(&photons) {
@@ -180,6 +184,7 @@ pub(super) fn light(
         ));
     }
     let centers = ctx.bands.centers_nm();
+    let ground_seed = crate::rng::mix64(seed ^ GROUND_KEY);
     let seed = crate::rng::mix64(seed ^ SKY_KEY);
     let columns: Vec<Column> = (0..centers.len())
         .map(|b| Column::new(&spec, b, f64::from(centers[b])))
@@ -189,27 +194,54 @@ pub(super) fn light(
         .enumerate()
         .map(|(b, column)| {
             let l = band_light(column, sun.zenith_rad, photons, seed, b as u64, false);
-            (column.totals(), l)
+            let g = ground.map(|_| ground_response(column, photons, ground_seed, b as u64));
+            (column.totals(), l, g)
         })
         .collect();
     let toa = &sun.irradiance;
+    let mu0 = sun.zenith_rad.cos();
     let mut bands = Vec::with_capacity(lights.len());
     let mut radiance = Vec::with_capacity(lights.len());
-    for (b, (totals, l)) in lights.into_iter().enumerate() {
+    for (b, (totals, l, g)) in lights.into_iter().enumerate() {
         let f0 = toa[b];
-        radiance.push(l.sky.iter().map(|v| v * f0).collect::<Vec<_>>());
-        bands.push(BandAtmosphere {
+        let direct = f0 * mu0 * l.direct_transmittance;
+        let mut sky: Vec<f64> = l.sky.iter().map(|v| v * f0).collect();
+        let mut band = BandAtmosphere {
             nm: f64::from(centers[b]),
             tau: totals,
             direct_transmittance: l.direct_transmittance,
             toa_irradiance: f0,
-            direct: f0 * sun.zenith_rad.cos() * l.direct_transmittance,
+            direct,
             diffuse: f0 * l.diffuse,
             diffuse_flux: f0 * l.diffuse_flux,
             diffuse_flux_se: f0 * l.diffuse_flux_se,
             up_at_top: f0 * l.up_at_top,
             absorbed: f0 * l.absorbed,
-        });
+            spherical_albedo: 0.0,
+            spherical_albedo_se: 0.0,
+        };
+        if let (Some(g), Some(r)) = (g, ground) {
+            // E = E_black / (1 - R s): the ground's radiance R E / pi
+            // comes back as the sky `g.sky` per unit radiance, and leaves
+            // at the top or is absorbed in its shares.
+            let r = r[b];
+            let black = direct + band.diffuse;
+            let total = black / (1.0 - r * g.spherical_albedo);
+            let leaving = r * total / std::f64::consts::PI;
+            for (v, k) in sky.iter_mut().zip(&g.sky) {
+                *v += leaving * k;
+            }
+            let up = r * total;
+            band.diffuse += up * g.spherical_albedo;
+            band.diffuse_flux += up * g.spherical_albedo_flux;
+            band.diffuse_flux_se = band.diffuse_flux_se.hypot(up * g.spherical_albedo_se);
+            band.up_at_top += up * g.to_top;
+            band.absorbed += up * g.absorbed;
+            band.spherical_albedo = g.spherical_albedo_flux;
+            band.spherical_albedo_se = g.spherical_albedo_se;
+        }
+        radiance.push(sky);
+        bands.push(band);
     }
     debug_assert!(radiance.iter().all(|r| r.len() == CELLS));
     let surface_sun = Sun {
@@ -242,6 +274,10 @@ const PATH_PHOTONS_PER_SKY_PHOTON: u64 = 4;
 
 /// Mixed into the scene's seed for the path radiance's photons.
 const PATH_KEY: u64 = 0x7061_7468_5f72_6164;
+
+/// Mixed into the scene's seed for the photons a Lambertian ground sends
+/// up into the air.
+const GROUND_KEY: u64 = 0x6772_6f75_6e64_5f75;
 
 /// Mixed into the scene's seed for the upward transmittance's photons.
 const UP_KEY: u64 = 0x7570_5f74_7261_6e73;

@@ -16,7 +16,7 @@ pub(super) fn estimate_and_render(
 ) -> Result<(EstimateSettings, RenderSettings)> {
     let e = &f.estimate;
     let ek = |k| [K("estimate"), K(k)];
-    let k = e.k.unwrap_or_else(|| policy_k(f.photons.count));
+    let k = e.k.unwrap_or_else(|| policy_k(f.photons().count));
     if k == 0 || k > 100_000 {
         return Err(ctx.err(&ek("k"), "must be between 1 and 100000"));
     }

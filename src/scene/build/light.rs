@@ -250,8 +250,62 @@ pub(super) fn surface(ctx: &Ctx, s: &SurfaceFile) -> Result<(SeaSurface, Vec<f64
         ));
     }
     let surface = match s.kind.unwrap_or_default() {
-        SurfaceKind::Flat => SeaSurface::flat(n_water),
+        // A Lambertian ground has no sea surface: the flat one is never
+        // met (`Scene::ground`).
+        SurfaceKind::Flat | SurfaceKind::Lambertian => SeaSurface::flat(n_water),
         SurfaceKind::CoxMunk => SeaSurface::cox_munk(n_water, wind),
     };
     Ok((surface, index))
+}
+
+/// `[surface] kind = "lambertian"`: the ground's reflectance per band,
+/// none for a sea. A ground has no water, so the sea's keys, the floor,
+/// targets, tallies, radiometers and a photon map are refused, each
+/// naming its key.
+pub(super) fn ground(ctx: &Ctx, f: &SceneFile, ov: &Overrides) -> Result<Option<Vec<f64>>> {
+    let s = &f.surface;
+    let key = |k| [K("surface"), K(k)];
+    if !f.lambertian_ground() {
+        if s.reflectance.is_some() {
+            return Err(ctx.err(
+                &key("reflectance"),
+                "only for a Lambertian ground (kind = \"lambertian\"); a sea's floor takes [bottom] reflectance",
+            ));
+        }
+        return Ok(None);
+    }
+    let sea = "is the sea's: a Lambertian ground ([surface] kind = \"lambertian\") has no water";
+    let given: [(&[Step], bool); 8] = [
+        (&key("wind_speed"), s.wind_speed.is_some()),
+        (&key("refractive_index"), s.refractive_index.is_some()),
+        (&key("temperature_c"), s.temperature_c.is_some()),
+        (&key("salinity_psu"), s.salinity_psu.is_some()),
+        (&[K("bottom")], f.bottom.is_some()),
+        (&[K("target")], !f.target.is_empty()),
+        (&[K("tally"), K("depths_m")], !f.tally.depths_m.is_empty()),
+        (&[K("radiometer")], !f.radiometer.is_empty()),
+    ];
+    if let Some((steps, _)) = given.iter().find(|(_, g)| *g) {
+        return Err(ctx.err(steps, sea));
+    }
+    let photon_map = Some(IntegratorMode::PhotonMap);
+    if ov.integrator == photon_map {
+        return Err(Error::invalid(
+            "--integrator",
+            "photon-map: a Lambertian ground has no water for a photon map; its radiance is exact with the path integrator's renderer",
+        ));
+    }
+    if f.render.integrator == photon_map {
+        return Err(ctx.err(
+            &[K("render"), K("integrator")],
+            "a Lambertian ground has no water for a photon map; its radiance is exact with \"path\"",
+        ));
+    }
+    let Some(r) = &s.reflectance else {
+        return Err(ctx.err(
+            &key("reflectance"),
+            "a Lambertian ground needs its reflectance: a number, a bottom type or a CSV file",
+        ));
+    };
+    Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
 }
