@@ -273,7 +273,8 @@ pub struct AtmosphereReport {
     /// Irradiance leaving the top and absorbed in the air.
     pub up_at_top: Vec<f64>,
     pub absorbed: Vec<f64>,
-    /// Over a Lambertian ground: the air's spherical albedo and its
+    /// Over a Lambertian ground or surroundings: the air's spherical
+    /// albedo and its
     /// standard error (the irradiances above then hold every order of
     /// reflection between the ground and the air).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -404,12 +405,12 @@ impl AtmosphereReport {
             }),
             up_at_top: col(&|b| b.up_at_top),
             absorbed: col(&|b| b.absorbed),
-            spherical_albedo: if scene.ground.is_some() {
+            spherical_albedo: if scene.ground.is_some() || scene.surroundings.is_some() {
                 col(&|b| b.spherical_albedo)
             } else {
                 Vec::new()
             },
-            spherical_albedo_stderr: if scene.ground.is_some() {
+            spherical_albedo_stderr: if scene.ground.is_some() || scene.surroundings.is_some() {
                 col(&|b| b.spherical_albedo_se)
             } else {
                 Vec::new()

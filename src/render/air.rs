@@ -76,6 +76,11 @@ const ENV_SHARE: f64 = 1.0 / 8.0;
 /// surface.
 pub const POOLED_PATHS: u64 = 400_000;
 
+/// Adjoint paths per camera sample with Lambertian surroundings: those
+/// that meet the ground beyond the domain cost a lookup, and at most one of
+/// those within it an integrator call.
+pub const SURROUND_PATHS: usize = 16;
+
 /// Streams of the table's and the pooled paths' randoms.
 const ENV_KEY: u64 = 0x656e_765f_7461_626c;
 const POOLED_KEY: u64 = 0x706f_6f6c_6564_5f70;
@@ -102,6 +107,9 @@ pub struct AirView<'s> {
     /// standard error (from the chunks' spread).
     pooled: Vec<f64>,
     pooled_se: Vec<f64>,
+    /// With Lambertian surroundings: the radiance per band of the ground
+    /// beyond the domain (R E / pi); none for a periodic domain.
+    surround: Option<Vec<f64>>,
 }
 
 impl<'s> AirView<'s> {
@@ -114,7 +122,9 @@ impl<'s> AirView<'s> {
             return Ok(None);
         };
         air.env = air.environment(light)?;
-        (air.pooled, air.pooled_se) = air.pooled();
+        if air.surround.is_none() {
+            (air.pooled, air.pooled_se) = air.pooled();
+        }
         Ok(Some(air))
     }
 
@@ -152,6 +162,12 @@ impl<'s> AirView<'s> {
             env: vec![0.0; CELLS * nb],
             pooled: vec![0.0; nb],
             pooled_se: vec![0.0; nb],
+            surround: scene.surroundings.as_ref().map(|r| {
+                r.iter()
+                    .enumerate()
+                    .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
+                    .collect()
+            }),
         })
     }
 
@@ -294,6 +310,9 @@ impl<'s> AirView<'s> {
         }
         let ground = ray.origin.as_dvec3()
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
+        if let Some(surround) = &self.surround {
+            return self.surrounded(light, ground, surround, rng, out);
+        }
         let (mut tmp, mut tmp_water, mut glint) = (Vec::new(), Vec::new(), vec![0.0; nb]);
         self.adjoint(ground, rng, |rng, meet, dir, w| {
             let up = -dir;
@@ -319,6 +338,71 @@ impl<'s> AirView<'s> {
             }
             Ok(())
         })
+    }
+
+    /// The scattered part with Lambertian surroundings, added to `out`:
+    /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
+    /// `ground`, each counting 1 / N. One that meets the ground beyond the
+    /// domain sees the surroundings' radiance `surround`. One that meets it
+    /// within sees the table's mean plus the glint there, and one of those
+    /// (drawn uniformly, counting as many as there are) adds its own
+    /// difference from that, by an integrator call: unbiased, at most one
+    /// call per sample.
+    fn surrounded(
+        &self,
+        light: &dyn Integrator,
+        ground: DVec3,
+        surround: &[f64],
+        rng: &mut Pcg32,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let nb = self.columns.len();
+        let share = 1.0 / SURROUND_PATHS as f64;
+        let [sx, sy] = self.scene.domain.size_m;
+        let mut glint = vec![0.0; nb];
+        let mut within: Vec<(DVec3, DVec3, Vec<f64>)> = Vec::new();
+        for _ in 0..SURROUND_PATHS {
+            self.adjoint(ground, rng, |_, meet, dir, w| {
+                if meet.x < 0.0 || meet.x >= sx || meet.y < 0.0 || meet.y >= sy {
+                    for b in 0..nb {
+                        out[b] += share * w[b] * surround[b];
+                    }
+                } else {
+                    let up = -dir;
+                    self.glint(up, &mut glint);
+                    let c = self.cell(up);
+                    for b in 0..nb {
+                        out[b] += share * w[b] * (self.env[c * nb + b] + glint[b]);
+                    }
+                    within.push((meet, dir, w.to_vec()));
+                }
+                Ok(())
+            })?;
+        }
+        if within.is_empty() {
+            return Ok(());
+        }
+        let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
+        let scale = share * within.len() as f64;
+        let up = -*dir;
+        let ray = CameraRay {
+            origin: (*meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
+            direction: dir.as_vec3(),
+        };
+        let (mut tmp, mut tmp_water) = (vec![0.0; out.len()], vec![0.0; nb]);
+        light.camera(ray, rng, &mut tmp, &mut tmp_water)?;
+        self.glint(up, &mut glint);
+        let c = self.cell(up);
+        for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
+            let b = k % nb;
+            let mean = if k < nb {
+                self.env[c * nb + b] + glint[b]
+            } else {
+                0.0
+            };
+            *o += scale * w[b] * (t - mean);
+        }
+        Ok(())
     }
 
     /// One adjoint path from the sensor down its view to the pixel whose
@@ -410,7 +494,12 @@ impl<'s> AirView<'s> {
                     let excess = (c.total() - c.depth_at(z)) - (total - d_here);
                     *wb *= (-excess / mu).exp();
                 }
-                let meet = self.wrap(pos + dir * (z * 1e3 / mu));
+                let meet = pos + dir * (z * 1e3 / mu);
+                let meet = if self.surround.is_some() {
+                    DVec3::new(meet.x, meet.y, 0.0)
+                } else {
+                    self.wrap(meet)
+                };
                 return at_ground(rng, meet, dir, &w);
             }
             let z_next = pilot.height_at(d_next);

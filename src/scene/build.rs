@@ -441,6 +441,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     let has_air = f.atmosphere.is_some();
     let ground = light::ground(&ctx, &f, ov)?;
+    let surroundings = light::surroundings(&ctx, &f)?;
     let sun = light::sun(&ctx, &f.sun, has_air)?;
     let sky = light::sky(&ctx, &f.sky, &sun, has_air)?;
     let (sun, sky, atmosphere) = match &f.atmosphere {
@@ -454,7 +455,9 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
                 &sun,
                 f.sun.day_of_year,
                 f.seed,
-                ground.as_deref(),
+                // The air's reach is kilometres: around a small domain it
+                // exchanges light with the surroundings.
+                surroundings.as_deref().or(ground.as_deref()),
             )?;
             (sun, sky, Some(light))
         }
@@ -532,6 +535,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         reflected_sky: std::sync::OnceLock::new(),
         surface,
         ground,
+        surroundings,
         water_index,
         domain,
         water,

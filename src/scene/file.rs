@@ -44,6 +44,26 @@ pub struct SceneFile {
     #[serde(default)]
     pub georef: GeorefFile,
     pub atmosphere: Option<AtmosphereFile>,
+    pub surroundings: Option<SurroundingsFile>,
+}
+
+/// `[surroundings]`: the surface beyond the domain, as the air sees it.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurroundingsFile {
+    pub kind: SurroundingsKind,
+    /// For `kind = "lambertian"`.
+    pub reflectance: Option<Reflectance>,
+}
+
+/// `[surroundings] kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SurroundingsKind {
+    /// The domain repeats (the default without the table).
+    Periodic,
+    /// Land of one reflectance all around the domain.
+    Lambertian,
 }
 
 impl SceneFile {

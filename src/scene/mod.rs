@@ -366,6 +366,11 @@ pub struct Scene {
     /// `[surface] kind = "lambertian"`: no water, a Lambertian ground at
     /// z = 0 of this reflectance per band (`render::ground`).
     pub ground: Option<Vec<f64>>,
+    /// `[surroundings] kind = "lambertian"`: land of this reflectance per
+    /// band all around the domain, as the air sees it (adjoint paths that
+    /// meet the ground beyond the domain, and the sky's exchange with the
+    /// ground); none: the domain repeats.
+    pub surroundings: Option<Vec<f64>>,
     /// Refractive index of the water per band (`[surface]
     /// refractive_index`: constant, or Quan & Fry 1995).
     pub water_index: Vec<f64>,

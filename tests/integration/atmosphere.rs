@@ -306,6 +306,64 @@ fn refused(base: &str, bad: &[(&str, &str)]) {
     }
 }
 
+/// A dark ground 1 m across (R 0.05) in bright Lambertian surroundings
+/// (R 0.4), seen from 3 km at nadir through an aerosol: its pixels read the
+/// path radiance, the dark ground through the direct transmittance and
+/// the surroundings through the rest of t_up (a path scattered in the air
+/// lands within a metre of the pixel too rarely to count),
+/// L_path + T R_d E / pi + (t_up - T) R_s E / pi, with E the irradiance
+/// the surroundings' exchange with the air sets; within 3 sigma (the
+/// pixels' spread over 16 pixels of 256 samples, L_path's and t_up's) plus 1
+/// %. The same scene with periodic edges reads the dark ground alone.
+#[test]
+fn surroundings_light_the_view_through_the_air() {
+    let dir = tempdir();
+    let air = "atmosphere = { sky_photons = 20000, aerosol = { model = \"custom\", tau_550 = 0.3, angstrom = 1.0, ssa = 0.9, phase = { kind = \"henyey-greenstein\", g = 0.7 }, scale_height_km = 1.5 } }";
+    let view = "domain = { size_m = [1.0, 1.0] }\n\
+                sensor = { pixels = [4, 4], gsd_m = 0.25, samples_per_pixel = 256, altitude_m = 3000.0 }";
+    let around = format!("{view}\nsurroundings = {{ kind = \"lambertian\", reflectance = 0.4 }}");
+    let (r_d, r_s) = (0.05, 0.4);
+    let open = |p: &str| littoral::cube::EnviCube::open(Path::new(p)).unwrap();
+    let mut means = Vec::new();
+    for (k, extra) in [around.as_str(), view].into_iter().enumerate() {
+        let s = ground_scene(air, r_d, 30.0, 5, extra);
+        let report = render_job(&s, &dir.path().join(format!("s{k}")), 0);
+        let a = report.atmosphere.as_ref().unwrap();
+        let cube = open(&report.outputs.hdr);
+        let mut per_band = Vec::new();
+        for b in 0..cube.bands() {
+            let v: Vec<f64> = cube
+                .band(b)
+                .unwrap()
+                .iter()
+                .map(|&x| f64::from(x))
+                .collect();
+            let (m, se) = mean_se(&v);
+            let e = a.Ed_direct[b] + a.Ed_diffuse[b];
+            let (t, t_up) = (a.t_view[b], a.t_up[b]);
+            let r_around = if k == 0 { r_s } else { r_d };
+            let want = a.L_path[b]
+                + t * r_d * e / std::f64::consts::PI
+                + (t_up - t) * r_around * e / std::f64::consts::PI;
+            let sigma = (se * se
+                + a.L_path_stderr[b].powi(2)
+                + (a.t_up_stderr[b] * r_around * e / std::f64::consts::PI).powi(2))
+            .sqrt();
+            assert!(
+                (m - want).abs() <= 3.0 * sigma + 0.01 * want,
+                "case {k}, band {b}: {m} +- {sigma} against {want}"
+            );
+            per_band.push(m);
+        }
+        means.push(per_band);
+        if k == 0 {
+            assert!(!a.spherical_albedo.is_empty());
+        }
+    }
+    // The bright surroundings brighten the dark ground's pixels.
+    assert!(means[0].iter().zip(&means[1]).all(|(a, b)| a > b));
+}
+
 /// A Lambertian ground refuses what belongs to water (the sea's surface
 /// keys, a floor, targets, tallies, radiometers, `[water]`, `[photons]`,
 /// a photon map) and needs its reflectance; a sea needs `[water]` and
@@ -340,6 +398,31 @@ fn lambertian_ground_keys_are_checked() {
     refused(
         MINIMAL_SCENE,
         &[("[surface]\nreflectance = 0.3", "surface.reflectance")],
+    );
+    // Surroundings: only under air, and Lambertian ones with a reflectance.
+    let air = MINIMAL_SCENE.replace("irradiance = 1.0", "spectrum = \"extraterrestrial\"")
+        + "[atmosphere]\nsky_photons = 1000\n";
+    let lambertian = "[surroundings]\nkind = \"lambertian\"";
+    refused(
+        MINIMAL_SCENE,
+        &[(
+            &format!("{lambertian}\nreflectance = 0.3"),
+            "surroundings.kind",
+        )],
+    );
+    refused(
+        &air,
+        &[
+            (lambertian, "surroundings.reflectance"),
+            (
+                "[surroundings]\nkind = \"periodic\"\nreflectance = 0.3",
+                "surroundings.reflectance",
+            ),
+            (
+                &format!("{lambertian}\nreflectance = 1.5"),
+                "surroundings.reflectance",
+            ),
+        ],
     );
     let s = Scene::parse(
         &format!("{dry}\n{ground}\n"),

@@ -309,3 +309,33 @@ pub(super) fn ground(ctx: &Ctx, f: &SceneFile, ov: &Overrides) -> Result<Option<
     };
     Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
 }
+
+/// `[surroundings]`: the reflectance per band of a Lambertian surface all
+/// around the domain, none for a periodic domain. Only with an atmosphere
+/// (without air no light crosses from beyond the domain to the sensor).
+pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Vec<f64>>> {
+    let Some(s) = &f.surroundings else {
+        return Ok(None);
+    };
+    let key = |k| [K("surroundings"), K(k)];
+    if f.atmosphere.is_none() {
+        return Err(ctx.err(
+            &key("kind"),
+            "only with [atmosphere]: without air no light from beyond the domain reaches the sensor",
+        ));
+    }
+    match (s.kind, &s.reflectance) {
+        (SurroundingsKind::Periodic, None) => Ok(None),
+        (SurroundingsKind::Periodic, Some(_)) => Err(ctx.err(
+            &key("reflectance"),
+            "only for kind = \"lambertian\" (a periodic domain is surrounded by itself)",
+        )),
+        (SurroundingsKind::Lambertian, None) => Err(ctx.err(
+            &key("reflectance"),
+            "Lambertian surroundings need their reflectance: a number, a bottom type or a CSV file",
+        )),
+        (SurroundingsKind::Lambertian, Some(r)) => {
+            Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
+        }
+    }
+}
