@@ -179,10 +179,12 @@ pub(super) enum ShapeView {
 /// ray looking up a little toward it weighs the light already otherwise.
 const FIXED_UP_COS: f32 = 0.9986;
 
-/// Most voxels of a band-shape grid, and most bytes (the budget charges
-/// [`Estimator::shape_grid_bytes`]).
+/// Most voxels of a band-shape grid, and most bytes, its target columns
+/// and the layers of IOP jumps included (the budget charges
+/// [`Estimator::shape_grid_bytes`]; the built-in scene's grid, with its
+/// two targets' columns, holds 39 MiB).
 const MAX_SHAPE_VOXELS: usize = 32_768;
-const MAX_SHAPE_BYTES: u64 = 32 << 20;
+pub const MAX_SHAPE_BYTES: u64 = 48 << 20;
 
 /// Distances the boundary grid stores (m): far enough that the field stays
 /// linear next to a gently sloping floor (see `BoundaryGrid::build`).
@@ -352,14 +354,35 @@ impl<'a> Estimator<'a> {
         volume_photons: [u64; 2],
         boundaries: &'s [f64],
     ) -> GridPlan<'s> {
-        GridPlan {
+        let mut plan = GridPlan {
             size_m: scene.domain.size_m,
             voxels: Self::shape_voxels(scene, volume_photons),
             layers_only: scene.horizontally_uniform(),
             boundaries_m: boundaries,
             columns: &scene.target_extents,
             views: Self::shape_views(scene),
+        };
+        // The cap holds with the columns and the jumps' layers: fewer even
+        // voxels first, then (a scene of very many targets) the columns of
+        // the last targets go, whose light then shares the even cells.
+        let nb = scene.bands.len();
+        while plan.voxels > 1 && BandShapeGrid::bytes(&plan, nb) > MAX_SHAPE_BYTES {
+            plan.voxels = (plan.voxels * 7 / 8).max(1);
         }
+        while !plan.columns.is_empty() && BandShapeGrid::bytes(&plan, nb) > MAX_SHAPE_BYTES {
+            plan.columns = &plan.columns[..plan.columns.len() - 1];
+        }
+        plan
+    }
+
+    /// Target columns the band-shape grid of `scene` holds over a map of
+    /// `volume_photons` volume photons (fewer than its targets when the
+    /// byte cap leaves no room for all).
+    pub fn shape_grid_columns(scene: &Scene, volume_photons: [u64; 2]) -> usize {
+        let boundaries = scene.water.depth_boundaries();
+        Self::shape_plan(scene, volume_photons, &boundaries)
+            .columns
+            .len()
     }
 
     /// Bytes of the band-shape grid `Estimator::new` builds for `scene` over

@@ -136,3 +136,39 @@ fn oblique_rays_take_the_band_shape_of_their_own_view() {
         "grid - compensated {mean} (se {se}) of {comp_mean}"
     );
 }
+
+/// The band-shape grid keeps to its byte cap with its target columns: the
+/// built-in scene's grid, with a column over each of its two targets, and
+/// a scene of 400 small boxes over 128 bands, whose columns alone would
+/// pass the cap, both stay within `MAX_SHAPE_BYTES`; the second keeps as
+/// many columns as fit.
+#[test]
+fn the_band_shape_grid_keeps_to_its_byte_cap_with_target_columns() {
+    let photons = [20_000_000, 20_000_000];
+    let coastal = Scene::coastal(&Overrides::default()).unwrap();
+    let bytes = Estimator::shape_grid_bytes(&coastal, photons);
+    assert!(bytes > 0 && bytes <= littoral::estimate::estimator::MAX_SHAPE_BYTES);
+    assert_eq!(
+        Estimator::shape_grid_columns(&coastal, photons),
+        coastal.target_extents.len()
+    );
+    let mut text = String::from(
+        "[spectral]\nstart_nm = 400.0\nend_nm = 800.0\nbands = 128\n[sun]\nzenith_deg = 30.0\nirradiance = 1.0\n\
+         [domain]\nsize_m = [200.0, 200.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n[photons]\ncount = 4000000\n\
+         [bottom]\ndepth_m = 10.0\n",
+    );
+    for i in 0..400 {
+        let (x, y) = (5.0 + 10.0 * (i % 20) as f64, 5.0 + 10.0 * (i / 20) as f64);
+        text.push_str(&format!(
+            "[[target]]\nkind = \"box\"\ncenter_m = [{x:?}, {y:?}, -5.0]\nsize_m = [1.0, 1.0, 1.0]\nreflectance = 0.5\n"
+        ));
+    }
+    let many = Scene::parse(&text, Path::new("many.toml"), &Overrides::default()).unwrap();
+    let bytes = Estimator::shape_grid_bytes(&many, photons);
+    assert!(
+        bytes <= littoral::estimate::estimator::MAX_SHAPE_BYTES,
+        "{bytes} bytes"
+    );
+    let columns = Estimator::shape_grid_columns(&many, photons);
+    assert!(columns > 0 && columns < 400, "{columns} columns");
+}
