@@ -98,6 +98,9 @@ pub struct AirView<'s> {
     share: Vec<f64>,
     /// Per layer: the pilot's Rayleigh share of scattering.
     pilot_share: Vec<f64>,
+    /// The aerosol's phase function differs between bands (a named
+    /// model's Mie tables), so each band evaluates its own.
+    aerosol_varies: bool,
     toward: DVec3,
     altitude_km: f64,
     /// Per direction cell and band (cell-major): the mean radiance leaving
@@ -157,6 +160,7 @@ impl<'s> AirView<'s> {
             scatter_ratio,
             share,
             pilot_share,
+            aerosol_varies: a.spec.aerosol.is_some_and(|x| x.named.is_some()),
             toward: scene.sensor.toward.as_dvec3().normalize(),
             altitude_km: view.altitude_m * 1e-3,
             env: vec![0.0; CELLS * nb],
@@ -459,6 +463,11 @@ impl<'s> AirView<'s> {
                 let sb = self.share[layer * nb + b];
                 // Each band's own Rayleigh phase (its q) and share.
                 let c = &self.columns[b];
+                let pa = if self.aerosol_varies {
+                    c.aerosol_phase.eval(cos)
+                } else {
+                    pa
+                };
                 let pb = sb * c.rayleigh_phase.eval(cos) + (1.0 - sb) * pa;
                 *wb *= pb / p_pilot;
             }

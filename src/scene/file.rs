@@ -133,6 +133,10 @@ pub struct AerosolFile {
 #[serde(rename_all = "kebab-case")]
 pub enum AerosolModel {
     Custom,
+    /// 6S's models (`optics::atmosphere::aerosol`).
+    Continental,
+    Maritime,
+    Urban,
 }
 
 /// `[atmosphere.aerosol] phase`.

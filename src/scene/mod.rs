@@ -529,6 +529,12 @@ impl Scene {
                     "sky_radiance": a.sky_radiance[b],
                     "toa_radiance": toa_radiance,
                     "ground_reflectance": self.ground.as_ref().map(|g| g[b]),
+                    "aerosol_phase": spec.aerosol.and_then(|x| {
+                        let m = x.named?;
+                        let (lo, hi) = m.range_nm();
+                        let at = m.at(column.nm.clamp(lo, hi))?;
+                        Some(serde_json::json!({ "angles_deg": m.angles_deg, "values": at.phase }))
+                    }),
                 })
             })
             .collect();
@@ -543,6 +549,7 @@ impl Scene {
                 crate::optics::atmosphere::AerosolHeight::Top(t) => (None, Some(t)),
             };
             serde_json::json!({
+                "model": x.named.map_or("custom", |m| m.name),
                 "tau_550": x.tau_550, "angstrom": x.angstrom, "ssa": x.ssa, "g": x.g,
                 "scale_height_km": scale_height_km, "top_km": top_km,
             })

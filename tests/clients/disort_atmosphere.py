@@ -4,7 +4,8 @@
 Reads that JSON (argument 1) and solves each band's column with DISORT
 (nanodisort, libRadtran's C DISORT), layer by layer with littoral's own
 optical depths, single-scattering albedos and phase functions (depolarised
-Rayleigh and Henyey-Greenstein, mixed by their scattering optical depths),
+Rayleigh and Henyey-Greenstein or a named model's Mie table, mixed by their
+scattering optical depths),
 the sun's beam at its top and a black surface, or the scene's Lambertian
 ground (``ground_reflectance`` per band). Prints JSON, per band:
 
@@ -63,11 +64,48 @@ def cell_directions(zenith_bins, azimuth_bins):
     return mus, phis
 
 
+# A named aerosol's Legendre moments and phase grid, per band's table.
+_MOMENTS = {}
+
+
 def solve(band, sun_zenith_deg, mus, phis, levels=None, albedo=0.0):
     layers = [l for l in band["layers"] if sum(v for k, v in l.items() if not k.endswith("_km")) > 0]
     # littoral lists the layers from the top down, as DISORT numbers them.
     q = band["rayleigh_q"]
     g = band.get("aerosol_g", 0.0)
+    ell = np.arange(NMOM + 1)
+    table = band.get("aerosol_phase")
+    if table and id(table) in _MOMENTS:
+        aer, mu_p, p_aer = _MOMENTS[id(table)]
+    elif table:
+        # A named model's Mie table (mean 1 over the sphere), linear in
+        # angle as littoral reads it: moments by quadrature on a fine angle
+        # grid, and the phase on a grid fine in the forward peak.
+        ang = np.asarray(table["angles_deg"], dtype=float)
+        val = np.asarray(table["values"], dtype=float)
+        th = np.radians(np.linspace(0.0, 180.0, 360001))
+        p_th = np.interp(np.degrees(th), ang, val)
+        w = np.sin(th)
+        w[0] *= 0.5
+        w[-1] *= 0.5
+        w *= th[1] - th[0]
+        norm = 0.5 * np.sum(p_th * w)
+        mu = np.cos(th)
+        aer = np.empty(NMOM + 1)
+        p_prev, p_cur = np.ones_like(mu), mu.copy()
+        aer[0] = 1.0
+        for l in range(1, NMOM + 1):
+            if l > 1:
+                p_prev, p_cur = p_cur, ((2 * l - 1) * mu * p_cur - (l - 1) * p_prev) / l
+            aer[l] = 0.5 * np.sum(p_th * p_cur * w) / norm
+        th_p = np.radians(np.concatenate([np.linspace(180.0, 10.0, 341, endpoint=False), np.linspace(10.0, 0.0, 401)]))
+        mu_p = np.cos(th_p)
+        p_aer = np.interp(np.degrees(th_p)[::-1], ang, val)[::-1] / norm
+        _MOMENTS[id(table)] = (aer, mu_p, p_aer)
+    else:
+        aer = g ** ell
+        mu_p = np.linspace(-1.0, 1.0, NPHASE)
+        p_aer = (1 - g * g) / (1 + g * g - 2 * g * mu_p) ** 1.5
     ds = nd.DisortState()
     ds.nstr = NSTR
     ds.nlyr = len(layers)
@@ -79,7 +117,7 @@ def solve(band, sun_zenith_deg, mus, phis, levels=None, albedo=0.0):
     up = sorted(mus)
     ds.numu = len(down) + len(up) if levels[-1] is None else len(up)
     ds.nphi = len(phis)
-    ds.nphase = NPHASE
+    ds.nphase = len(mu_p)
     ds.usrtau = True
     ds.usrang = True
     ds.lamber = True
@@ -102,11 +140,9 @@ def solve(band, sun_zenith_deg, mus, phis, levels=None, albedo=0.0):
     ray = np.zeros(NMOM + 1)
     ray[0] = 1.0
     ray[2] = 2.0 * q / (5.0 * (3.0 + q))
-    hg = g ** ell
-    ds.pmom = (share[None, :] * ray[:, None] + (1 - share[None, :]) * hg[:, None])
-    mu_p = np.linspace(-1.0, 1.0, NPHASE)
+    ds.pmom = (share[None, :] * ray[:, None] + (1 - share[None, :]) * aer[:, None])
     p_ray = 3.0 / (3.0 + q) * (1.0 + q * mu_p ** 2)
-    p_hg = (1 - g * g) / (1 + g * g - 2 * g * mu_p) ** 1.5
+    p_hg = p_aer
     ds.mu_phase = mu_p
     ds.phase = share[:, None] * p_ray[None, :] + (1 - share[:, None]) * p_hg[None, :]
     ds.utau = np.array([tau.sum() if l is None else min(l, tau.sum()) for l in levels])

@@ -56,7 +56,8 @@ fn disort(json: &serde_json::Value) -> Vec<serde_json::Value> {
 /// zenith by 30 of azimuth, against DISORT within 3 sigma plus 1 % for air
 /// alone and 2 % with an aerosol (sigma from 16 seeds' spread); the direct
 /// beam to 1e-9. Cases: Rayleigh at sun 0, 30 and 60 degrees; Rayleigh and
-/// a maritime-like aerosol (tau 0.3, g 0.7, albedo 0.9) at 30 and 60.
+/// a maritime-like aerosol (tau 0.3, g 0.7, albedo 0.9) at 30 and 60; 6S's
+/// maritime model (its Mie phase function, tau 0.3) at 30.
 #[test]
 fn the_sky_and_the_top_match_disort() {
     if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
@@ -64,12 +65,14 @@ fn the_sky_and_the_top_match_disort() {
     }
     let rayleigh = "[atmosphere]\nsky_photons = 20000";
     let aerosol = "[atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.3\nangstrom = 1.0\nssa = 0.9\nphase = { kind = \"henyey-greenstein\", g = 0.7 }\nscale_height_km = 1.5";
+    let maritime = "[atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"maritime\"\ntau_550 = 0.3\nscale_height_km = 1.0";
     let cases = [
         (rayleigh, 0.0, 0.01),
         (rayleigh, 30.0, 0.01),
         (rayleigh, 60.0, 0.01),
         (aerosol, 30.0, 0.02),
         (aerosol, 60.0, 0.02),
+        (maritime, 30.0, 0.02),
     ];
     let cases: Vec<SkyCase> = cases
         .into_iter()
@@ -130,7 +133,7 @@ fn ground_scene(air: &str, r: f64, sun_deg: f64, seed: u64, extra: &str) -> Scen
 /// radiance, the ground's radiance through the air directly and scattered)
 /// against DISORT's upward radiance at the sensor's level over the same
 /// ground, within 3 sigma (the path radiance's) plus 1 % (Rayleigh) or 2 %
-/// (aerosol); the ground's own radiance is R E_d(0+) / pi and there is no
+/// (aerosol: Henyey–Greenstein, and 6S's maritime model); the ground's own radiance is R E_d(0+) / pi and there is no
 /// water-leaving radiance.
 #[test]
 fn a_lambertian_ground_seen_from_above_matches_disort() {
@@ -143,10 +146,12 @@ fn a_lambertian_ground_seen_from_above_matches_disort() {
     let sensor = |alt: f64, vz: f64| {
         format!("sensor = {{ pixels = [4, 4], gsd_m = 1.0, altitude_m = {alt:?}, view_zenith_deg = {vz:?}, view_azimuth_deg = 120.0 }}")
     };
+    let maritime = "atmosphere = { sky_photons = 20000, aerosol = { model = \"maritime\", tau_550 = 0.3, scale_height_km = 1.0 } }";
     let cases = [
         (rayleigh, 0.3, 700e3, 40.0, 0.01),
         (aerosol, 0.5, 3e3, 30.0, 0.02),
         (aerosol, 0.2, 700e3, 0.0, 0.02),
+        (maritime, 0.3, 700e3, 20.0, 0.02),
     ];
     let mut failures = Vec::new();
     for (k, (air, r, alt, vz, tol)) in cases.into_iter().enumerate() {
@@ -529,11 +534,31 @@ fn atmosphere_keys_are_checked() {
             "atmosphere.aerosol.top_km",
         ),
         (
-            "[atmosphere]\n[atmosphere.aerosol]\nmodel = \"maritime\"\ntau_550 = 0.1",
+            "[atmosphere]\n[atmosphere.aerosol]\nmodel = \"maritime\"\ntau_550 = 0.1\nangstrom = 1.0",
+            "atmosphere.aerosol.angstrom",
+        ),
+        (
+            "[atmosphere]\n[atmosphere.aerosol]\nmodel = \"urban\"\ntau_550 = 0.1\nphase = { kind = \"henyey-greenstein\", g = 0.7 }",
+            "atmosphere.aerosol.phase",
+        ),
+        (
+            "[atmosphere]\n[atmosphere.aerosol]\nmodel = \"smoke\"\ntau_550 = 0.1",
             "model",
         ),
     ];
     refused(&base, &bad);
+    // A named model is tabulated from 350 to 860 nm: a band at 900 nm is
+    // refused unless the scene clamps.
+    let named = "[atmosphere]\n[atmosphere.aerosol]\nmodel = \"continental\"\ntau_550 = 0.1";
+    let wide = base.replace("end_nm = 700.0", "end_nm = 900.0");
+    refused(&wide, &[(named, "atmosphere.aerosol.model")]);
+    let clamped = wide.replace("bands = 4", "bands = 4\nout_of_range = \"clamp\"");
+    Scene::parse(
+        &format!("{clamped}\n{named}\n"),
+        Path::new("c.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
     let direct = MINIMAL_SCENE.replace("irradiance = 1.0", "spectrum = \"astm-g173-direct\"");
     let e = Scene::parse(
         &format!("{direct}\n[atmosphere]\n"),

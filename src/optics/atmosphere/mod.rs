@@ -31,6 +31,7 @@
 //! the surface (path radiance), light the surface sends back up and the
 //! air scatters down again, polarisation, the sphericity of the Earth.
 
+pub mod aerosol;
 pub mod profile;
 pub mod rayleigh;
 pub mod transport;
@@ -71,7 +72,10 @@ pub enum AerosolHeight {
     Top(f64),
 }
 
-/// An aerosol with a Henyey–Greenstein phase function.
+/// An aerosol: a user's (Ångström law, one albedo, Henyey–Greenstein) or
+/// a named 6S model's (`named`: its tabulated spectrum, albedo and Mie
+/// phase function per wavelength; `angstrom`, `ssa` and `g` then hold the
+/// model's values at 550 nm and between 443 and 860 nm, for reports).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aerosol {
     pub tau_550: f64,
@@ -79,12 +83,47 @@ pub struct Aerosol {
     pub ssa: f64,
     pub g: f64,
     pub height: AerosolHeight,
+    pub named: Option<&'static aerosol::NamedAerosol>,
+}
+
+impl PartialEq for aerosol::NamedAerosol {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
 }
 
 impl Aerosol {
+    /// A named model's properties at `nm`, clamped into its tables (the
+    /// scene refuses bands outside them unless told to clamp).
+    fn named_at(&self, nm: f64) -> Option<aerosol::AerosolAt> {
+        let m = self.named?;
+        let (lo, hi) = m.range_nm();
+        m.at(nm.clamp(lo, hi))
+    }
+
     /// Extinction optical depth at `nm`.
     pub fn tau(&self, nm: f64) -> f64 {
-        self.tau_550 * (nm / 550.0).powf(-self.angstrom)
+        match self.named_at(nm) {
+            Some(a) => self.tau_550 * a.ext_rel,
+            None => self.tau_550 * (nm / 550.0).powf(-self.angstrom),
+        }
+    }
+
+    /// Single-scattering albedo at `nm`.
+    pub fn ssa_at(&self, nm: f64) -> f64 {
+        self.named_at(nm).map_or(self.ssa, |a| a.ssa)
+    }
+
+    /// Phase function at `nm`: the model's Mie table, or Henyey–Greenstein.
+    pub fn phase_at(&self, nm: f64) -> PhaseFunction {
+        match (self.named, self.named_at(nm)) {
+            (Some(m), Some(a)) => {
+                crate::optics::phase::TabulatedPhase::new(&m.angles_deg, &a.phase, m.name)
+                    .map(PhaseFunction::Tabulated)
+                    .unwrap_or_else(|e| panic!("embedded aerosol phase table is invalid: {e}"))
+            }
+            _ => PhaseFunction::HenyeyGreenstein { g: self.g },
+        }
     }
 }
 
@@ -196,7 +235,9 @@ impl Column {
         };
         let gas = spec.gas_tau.as_ref().map_or(0.0, |g| g[band]);
         let ozone_scale = spec.ozone_du / p.ozone_du() * spec.ozone_per_atm_cm[band] * 1e-3;
-        let (tau_a, ssa) = spec.aerosol.map_or((0.0, 1.0), |a| (a.tau(nm), a.ssa));
+        let (tau_a, ssa) = spec
+            .aerosol
+            .map_or((0.0, 1.0), |a| (a.tau(nm), a.ssa_at(nm)));
         let ztop = *z.last().unwrap_or(&0.0);
         let mut layers = Vec::with_capacity(z.len() - 1);
         for w in z.windows(2) {
@@ -229,7 +270,11 @@ impl Column {
             d += l.tau();
             depth.push(d);
         }
-        let g = spec.aerosol.map_or(0.0, |a| a.g);
+        let aerosol_phase = spec
+            .aerosol
+            .map_or(PhaseFunction::HenyeyGreenstein { g: 0.0 }, |a| {
+                a.phase_at(nm)
+            });
         Column {
             nm,
             layers,
@@ -237,7 +282,7 @@ impl Column {
             rayleigh_phase: PhaseFunction::Rayleigh {
                 q: rayleigh::phase_q(nm),
             },
-            aerosol_phase: PhaseFunction::HenyeyGreenstein { g },
+            aerosol_phase,
         }
     }
 

@@ -100,8 +100,16 @@ pub(super) fn spec(ctx: &Ctx, a: &AtmosphereFile) -> Result<AtmosphereSpec> {
 
 fn aerosol(ctx: &Ctx, a: &AerosolFile) -> Result<Aerosol> {
     let key = |k| [K("atmosphere"), K("aerosol"), K(k)];
-    let AerosolModel::Custom = a.model;
     ctx.within(&key("tau_550"), a.tau_550, 0.0, 10.0, "must be >= 0", "")?;
+    let name = match a.model {
+        AerosolModel::Custom => None,
+        AerosolModel::Continental => Some("continental"),
+        AerosolModel::Maritime => Some("maritime"),
+        AerosolModel::Urban => Some("urban"),
+    };
+    if let Some(name) = name {
+        return named_aerosol(ctx, a, name);
+    }
     let angstrom = a.angstrom.unwrap_or(1.0);
     ctx.within(
         &key("angstrom"),
@@ -123,7 +131,68 @@ fn aerosol(ctx: &Ctx, a: &AerosolFile) -> Result<Aerosol> {
             p.g
         }
     };
-    let height = match (a.scale_height_km, a.top_km) {
+    Ok(Aerosol {
+        tau_550: a.tau_550,
+        angstrom,
+        ssa,
+        g,
+        height: aerosol_height(ctx, a)?,
+        named: None,
+    })
+}
+
+/// A named 6S model: its spectrum, albedo and phase function come from its
+/// tables, so the user's are refused; every band must lie within them
+/// unless `[spectral] out_of_range = "clamp"`.
+fn named_aerosol(ctx: &Ctx, a: &AerosolFile, name: &str) -> Result<Aerosol> {
+    let key = |k| [K("atmosphere"), K("aerosol"), K(k)];
+    let m = crate::optics::atmosphere::aerosol::named(name).expect("a shipped model");
+    for (k, given) in [
+        ("angstrom", a.angstrom.is_some()),
+        ("ssa", a.ssa.is_some()),
+        ("phase", a.phase.is_some()),
+    ] {
+        if given {
+            return Err(ctx.err(
+                &key(k),
+                format!("the {name} model sets it (its Mie tables); give model = \"custom\" to set your own"),
+            ));
+        }
+    }
+    let (lo, hi) = m.range_nm();
+    if ctx.policy != OutOfRange::Clamp {
+        if let Some(c) = ctx
+            .bands
+            .centers_nm()
+            .iter()
+            .map(|&c| f64::from(c))
+            .find(|c| !(lo..=hi).contains(c))
+        {
+            return Err(ctx.err(
+                &key("model"),
+                format!(
+                    "the {name} model is tabulated from {lo} to {hi} nm, not at {c} nm (set spectral.out_of_range = \"clamp\" to use its nearest wavelength)"
+                ),
+            ));
+        }
+    }
+    let at = |nm: f64| m.at(nm).expect("within the tables");
+    let i550 = m.nm.iter().position(|&v| v == 550.0).unwrap_or(0);
+    Ok(Aerosol {
+        tau_550: a.tau_550,
+        angstrom: -(at(860.0_f64.min(hi)).ext_rel / at(443.0_f64.max(lo)).ext_rel).ln()
+            / (860.0_f64.min(hi) / 443.0_f64.max(lo)).ln(),
+        ssa: m.ssa[i550],
+        g: m.g[i550],
+        height: aerosol_height(ctx, a)?,
+        named: Some(m),
+    })
+}
+
+/// `scale_height_km` or `top_km` (2 km scale height when neither).
+fn aerosol_height(ctx: &Ctx, a: &AerosolFile) -> Result<AerosolHeight> {
+    let key = |k| [K("atmosphere"), K("aerosol"), K(k)];
+    Ok(match (a.scale_height_km, a.top_km) {
         (Some(h), None) => {
             ctx.within(
                 &key("scale_height_km"),
@@ -150,13 +219,6 @@ fn aerosol(ctx: &Ctx, a: &AerosolFile) -> Result<Aerosol> {
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key("top_km"), "give scale_height_km or top_km, not both"))
         }
-    };
-    Ok(Aerosol {
-        tau_550: a.tau_550,
-        angstrom,
-        ssa,
-        g,
-        height,
     })
 }
 
