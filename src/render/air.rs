@@ -317,31 +317,47 @@ impl<'s> AirView<'s> {
         if let Some(surround) = &self.surround {
             return self.surrounded(light, ground, surround, rng, out);
         }
-        let (mut tmp, mut tmp_water, mut glint) = (Vec::new(), Vec::new(), vec![0.0; nb]);
         self.adjoint(ground, rng, |rng, meet, dir, w| {
-            let up = -dir;
-            let ray = CameraRay {
-                origin: (meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
-                direction: dir.as_vec3(),
-            };
-            tmp.resize(out.len(), 0.0);
-            tmp_water.resize(nb, 0.0);
-            light.camera(ray, rng, &mut tmp, &mut tmp_water)?;
-            // The difference from the pooled mean (channel 0); the photon
-            // groups' parts as they are.
-            self.glint(up, &mut glint);
-            let c = self.cell(up);
-            for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
-                let b = k % nb;
-                let mean = if k < nb {
-                    self.env[c * nb + b] + glint[b]
-                } else {
-                    0.0
-                };
-                *o += w[b] * (t - mean);
-            }
-            Ok(())
+            self.add_difference(light, meet, dir, w, 1.0, rng, out)
         })
+    }
+
+    /// Add to `out`, times `scale`, the band weights `w` times the
+    /// difference between the integrator's radiance leaving the ground at
+    /// `meet` along the direction of travel `dir` reversed and the table's
+    /// mean plus the glint there (channel 0; the photon groups' parts as
+    /// they are).
+    #[allow(clippy::too_many_arguments)]
+    fn add_difference(
+        &self,
+        light: &dyn Integrator,
+        meet: DVec3,
+        dir: DVec3,
+        w: &[f64],
+        scale: f64,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let nb = self.columns.len();
+        let up = -dir;
+        let ray = CameraRay {
+            origin: (meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
+            direction: dir.as_vec3(),
+        };
+        let (mut tmp, mut water, mut glint) = (vec![0.0; out.len()], vec![0.0; nb], vec![0.0; nb]);
+        light.camera(ray, rng, &mut tmp, &mut water)?;
+        self.glint(up, &mut glint);
+        let c = self.cell(up);
+        for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
+            let b = k % nb;
+            let mean = if k < nb {
+                self.env[c * nb + b] + glint[b]
+            } else {
+                0.0
+            };
+            *o += scale * w[b] * (t - mean);
+        }
+        Ok(())
     }
 
     /// The scattered part with Lambertian surroundings, added to `out`:
@@ -388,25 +404,7 @@ impl<'s> AirView<'s> {
         }
         let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
         let scale = share * within.len() as f64;
-        let up = -*dir;
-        let ray = CameraRay {
-            origin: (*meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
-            direction: dir.as_vec3(),
-        };
-        let (mut tmp, mut tmp_water) = (vec![0.0; out.len()], vec![0.0; nb]);
-        light.camera(ray, rng, &mut tmp, &mut tmp_water)?;
-        self.glint(up, &mut glint);
-        let c = self.cell(up);
-        for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
-            let b = k % nb;
-            let mean = if k < nb {
-                self.env[c * nb + b] + glint[b]
-            } else {
-                0.0
-            };
-            *o += scale * w[b] * (t - mean);
-        }
-        Ok(())
+        self.add_difference(light, *meet, *dir, w, scale, rng, out)
     }
 
     /// One adjoint path from the sensor down its view to the pixel whose

@@ -239,16 +239,7 @@ pub fn band_light(
         &mut rng,
         |rng, tau, dir, w, share| {
             cells.draw(rng);
-            let below = total - tau;
-            cells.add(
-                &mut sky,
-                column,
-                share,
-                dir,
-                w,
-                |mu| (-below / mu).exp() / mu,
-                true,
-            );
+            cells.add_down(&mut sky, column, share, dir, w, total - tau);
             if let Some(t) = top.as_mut() {
                 cells.add(t, column, share, dir, w, |mu| (-tau / mu).exp() / mu, false);
             }
@@ -260,9 +251,7 @@ pub fn band_light(
     if let Some(t) = top.as_mut() {
         t.iter_mut().for_each(|v| *v *= scale);
     }
-    let diffuse = (0..CELLS)
-        .map(|c| sky[c] * projected_solid_angle(c / AZIMUTH_BINS))
-        .sum();
+    let diffuse = irradiance(&sky);
     let mean = f.arrived / n;
     let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
     BandLight {
@@ -401,24 +390,13 @@ pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) ->
         &mut rng,
         |rng, tau, dir, w, share| {
             cells.draw(rng);
-            let below = total - tau;
-            cells.add(
-                &mut sky,
-                column,
-                share,
-                dir,
-                w,
-                |mu| (-below / mu).exp() / mu,
-                true,
-            );
+            cells.add_down(&mut sky, column, share, dir, w, total - tau);
         },
     );
     let n = photons.max(1) as f64;
     // Each photon carries pi / N of the upward irradiance.
     sky.iter_mut().for_each(|v| *v *= PI / n);
-    let returned: f64 = (0..CELLS)
-        .map(|c| sky[c] * projected_solid_angle(c / AZIMUTH_BINS))
-        .sum();
+    let returned = irradiance(&sky);
     let mean = f.arrived / n;
     let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
     GroundResponse {
@@ -429,6 +407,14 @@ pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) ->
         to_top: f.up / n,
         absorbed: f.absorbed / n,
     }
+}
+
+/// The irradiance on a horizontal plane of the cells' mean radiances
+/// `cells` (zenith-major): each times its projected solid angle.
+fn irradiance(cells: &[f64]) -> f64 {
+    (0..CELLS)
+        .map(|c| cells[c] * projected_solid_angle(c / AZIMUTH_BINS))
+        .sum()
 }
 
 /// The cells' directions for one collision: the same offset in every cell.
@@ -451,6 +437,28 @@ impl Cells {
             let (_, phi) = point_in_cell(0, ia, u);
             self.cols[ia] = (phi.cos(), phi.sin());
         }
+    }
+
+    /// [`Cells::add`] toward the surface from a collision at optical depth
+    /// `below` above it.
+    fn add_down(
+        &self,
+        out: &mut [f64],
+        column: &Column,
+        share: f64,
+        dir: DVec3,
+        w: f64,
+        below: f64,
+    ) {
+        self.add(
+            out,
+            column,
+            share,
+            dir,
+            w,
+            |mu| (-below / mu).exp() / mu,
+            true,
+        );
     }
 
     /// Add to `out` the local estimate of weight `w` for a photon travelling
