@@ -370,6 +370,12 @@ impl AtmosphereReport {
             a.bands.iter().map(f).collect()
         };
         let mu0 = scene.sun.zenith_rad.cos();
+        // The sky exchanges light with a Lambertian ground or surroundings.
+        let coupled = scene.ground.is_some()
+            || scene
+                .surroundings
+                .as_ref()
+                .is_some_and(|s| s.reflectance().is_some());
         Some(AtmosphereReport {
             profile: a.spec.profile.name.to_string(),
             surface_pressure_hpa: a.spec.surface_pressure_hpa,
@@ -405,12 +411,12 @@ impl AtmosphereReport {
             }),
             up_at_top: col(&|b| b.up_at_top),
             absorbed: col(&|b| b.absorbed),
-            spherical_albedo: if scene.ground.is_some() || scene.surroundings.is_some() {
+            spherical_albedo: if coupled {
                 col(&|b| b.spherical_albedo)
             } else {
                 Vec::new()
             },
-            spherical_albedo_stderr: if scene.ground.is_some() || scene.surroundings.is_some() {
+            spherical_albedo_stderr: if coupled {
                 col(&|b| b.spherical_albedo_se)
             } else {
                 Vec::new()

@@ -76,9 +76,9 @@ const ENV_SHARE: f64 = 1.0 / 8.0;
 /// surface.
 pub const POOLED_PATHS: u64 = 400_000;
 
-/// Adjoint paths per camera sample with Lambertian surroundings: those
-/// that meet the ground beyond the domain cost a lookup, and at most one of
-/// those within it an integrator call.
+/// Adjoint paths per camera sample with surroundings: those that meet the
+/// ground beyond the domain cost a lookup, and at most one of those within
+/// it an integrator call.
 pub const SURROUND_PATHS: usize = 16;
 
 /// Streams of the table's and the pooled paths' randoms.
@@ -110,9 +110,16 @@ pub struct AirView<'s> {
     /// standard error (from the chunks' spread).
     pooled: Vec<f64>,
     pooled_se: Vec<f64>,
-    /// With Lambertian surroundings: the radiance per band of the ground
-    /// beyond the domain (R E / pi); none for a periodic domain.
-    surround: Option<Vec<f64>>,
+    /// The ground beyond the domain; none for a periodic domain.
+    surround: Option<Surround>,
+}
+
+/// What an adjoint path that meets the ground beyond the domain sees.
+enum Surround {
+    /// Land: its radiance per band (R E / pi).
+    Land(Vec<f64>),
+    /// The table's mean radiance per direction plus the glint.
+    Mean,
 }
 
 impl<'s> AirView<'s> {
@@ -125,7 +132,7 @@ impl<'s> AirView<'s> {
             return Ok(None);
         };
         air.env = air.environment(light)?;
-        if air.surround.is_none() {
+        if !matches!(air.surround, Some(Surround::Land(_))) {
             (air.pooled, air.pooled_se) = air.pooled();
         }
         Ok(Some(air))
@@ -166,11 +173,14 @@ impl<'s> AirView<'s> {
             env: vec![0.0; CELLS * nb],
             pooled: vec![0.0; nb],
             pooled_se: vec![0.0; nb],
-            surround: scene.surroundings.as_ref().map(|r| {
-                r.iter()
-                    .enumerate()
-                    .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
-                    .collect()
+            surround: scene.surroundings.as_ref().map(|s| match s.reflectance() {
+                Some(r) => Surround::Land(
+                    r.iter()
+                        .enumerate()
+                        .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
+                        .collect(),
+                ),
+                None => Surround::Mean,
             }),
         })
     }
@@ -314,8 +324,10 @@ impl<'s> AirView<'s> {
         }
         let ground = ray.origin.as_dvec3()
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
-        if let Some(surround) = &self.surround {
-            return self.surrounded(light, ground, surround, rng, out);
+        match &self.surround {
+            Some(Surround::Land(land)) => return self.surrounded(light, ground, land, rng, out),
+            Some(Surround::Mean) => return self.in_the_mean(light, ground, rng, out),
+            None => {}
         }
         self.adjoint(ground, rng, |rng, meet, dir, w| {
             self.add_difference(light, meet, dir, w, 1.0, rng, out)
@@ -404,6 +416,40 @@ impl<'s> AirView<'s> {
         }
         let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
         let scale = share * within.len() as f64;
+        self.add_difference(light, *meet, *dir, w, scale, rng, out)
+    }
+
+    /// The scattered part with the domain in its own mean (`out` already
+    /// holds the pooled part, the table and glint over every path):
+    /// [`SURROUND_PATHS`] adjoint paths, of which those that meet the ground
+    /// beyond the domain add nothing more (they see the table and the
+    /// glint), and one of those within, drawn uniformly and counting for
+    /// all of them, adds its difference from the table by an integrator
+    /// call. Unbiased for these surroundings, at most one call per sample,
+    /// and only the paths that land within the domain carry its spatial
+    /// variance.
+    fn in_the_mean(
+        &self,
+        light: &dyn Integrator,
+        ground: DVec3,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let [sx, sy] = self.scene.domain.size_m;
+        let mut within: Vec<(DVec3, DVec3, Vec<f64>)> = Vec::new();
+        for _ in 0..SURROUND_PATHS {
+            self.adjoint(ground, rng, |_, meet, dir, w| {
+                if (0.0..sx).contains(&meet.x) && (0.0..sy).contains(&meet.y) {
+                    within.push((meet, dir, w.to_vec()));
+                }
+                Ok(())
+            })?;
+        }
+        if within.is_empty() {
+            return Ok(());
+        }
+        let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
+        let scale = within.len() as f64 / SURROUND_PATHS as f64;
         self.add_difference(light, *meet, *dir, w, scale, rng, out)
     }
 

@@ -457,7 +457,10 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
                 f.seed,
                 // The air's reach is kilometres: around a small domain it
                 // exchanges light with the surroundings.
-                surroundings.as_deref().or(ground.as_deref()),
+                surroundings
+                    .as_ref()
+                    .and_then(Surroundings::reflectance)
+                    .or(ground.as_deref()),
             )?;
             (sun, sky, Some(light))
         }

@@ -64,6 +64,8 @@ pub enum SurroundingsKind {
     Periodic,
     /// Land of one reflectance all around the domain.
     Lambertian,
+    /// The domain's own mean radiance per direction all around it.
+    Mean,
 }
 
 impl SceneFile {

@@ -132,6 +132,27 @@ pub struct ViewLight {
     pub transmittance_up_se: Vec<f64>,
 }
 
+/// The surface beyond the domain (`[surroundings]`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Surroundings {
+    /// Land of this reflectance per band (`kind = "lambertian"`), with
+    /// which the sky also exchanges light.
+    Lambertian(Vec<f64>),
+    /// The domain's own mean radiance per direction (`kind = "mean"`): the
+    /// domain sits in a surface that looks like its average.
+    Mean,
+}
+
+impl Surroundings {
+    /// The land's reflectance per band, for Lambertian surroundings.
+    pub fn reflectance(&self) -> Option<&[f64]> {
+        match self {
+            Surroundings::Lambertian(r) => Some(r),
+            Surroundings::Mean => None,
+        }
+    }
+}
+
 /// One band of an atmosphere: its optical depths and the light at the
 /// surface and the top (irradiances in W m^-2 nm^-1, on a horizontal
 /// plane, over a black surface).
@@ -366,11 +387,10 @@ pub struct Scene {
     /// `[surface] kind = "lambertian"`: no water, a Lambertian ground at
     /// z = 0 of this reflectance per band (`render::ground`).
     pub ground: Option<Vec<f64>>,
-    /// `[surroundings] kind = "lambertian"`: land of this reflectance per
-    /// band all around the domain, as the air sees it (adjoint paths that
-    /// meet the ground beyond the domain, and the sky's exchange with the
-    /// ground); none: the domain repeats.
-    pub surroundings: Option<Vec<f64>>,
+    /// `[surroundings]`: the surface all around the domain, as the air
+    /// sees it (adjoint paths that meet the ground beyond the domain);
+    /// none: the domain repeats.
+    pub surroundings: Option<Surroundings>,
     /// Refractive index of the water per band (`[surface]
     /// refractive_index`: constant, or Quan & Fry 1995).
     pub water_index: Vec<f64>,

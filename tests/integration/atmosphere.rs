@@ -133,7 +133,9 @@ fn ground_scene(air: &str, r: f64, sun_deg: f64, seed: u64, extra: &str) -> Scen
 /// radiance, the ground's radiance through the air directly and scattered)
 /// against DISORT's upward radiance at the sensor's level over the same
 /// ground, within 3 sigma (the path radiance's) plus 1 % (Rayleigh) or 2 %
-/// (aerosol: Henyey–Greenstein, and 6S's maritime model); the ground's own radiance is R E_d(0+) / pi and there is no
+/// (aerosol: Henyey–Greenstein, and 6S's maritime model), with the domain
+/// repeating and with the domain in its own mean (`[surroundings] kind =
+/// "mean"`); the ground's own radiance is R E_d(0+) / pi and there is no
 /// water-leaving radiance.
 #[test]
 fn a_lambertian_ground_seen_from_above_matches_disort() {
@@ -147,15 +149,17 @@ fn a_lambertian_ground_seen_from_above_matches_disort() {
         format!("sensor = {{ pixels = [4, 4], gsd_m = 1.0, altitude_m = {alt:?}, view_zenith_deg = {vz:?}, view_azimuth_deg = 120.0 }}")
     };
     let maritime = "atmosphere = { sky_photons = 20000, aerosol = { model = \"maritime\", tau_550 = 0.3, scale_height_km = 1.0 } }";
+    let mean = "surroundings = { kind = \"mean\" }";
     let cases = [
-        (rayleigh, 0.3, 700e3, 40.0, 0.01),
-        (aerosol, 0.5, 3e3, 30.0, 0.02),
-        (aerosol, 0.2, 700e3, 0.0, 0.02),
-        (maritime, 0.3, 700e3, 20.0, 0.02),
+        (rayleigh, 0.3, 700e3, 40.0, 0.01, ""),
+        (aerosol, 0.5, 3e3, 30.0, 0.02, ""),
+        (aerosol, 0.2, 700e3, 0.0, 0.02, ""),
+        (maritime, 0.3, 700e3, 20.0, 0.02, ""),
+        (aerosol, 0.5, 3e3, 30.0, 0.02, mean),
     ];
     let mut failures = Vec::new();
-    for (k, (air, r, alt, vz, tol)) in cases.into_iter().enumerate() {
-        let s = ground_scene(air, r, 30.0, 1, &sensor(alt, vz));
+    for (k, (air, r, alt, vz, tol, around)) in cases.into_iter().enumerate() {
+        let s = ground_scene(air, r, 30.0, 1, &format!("{}\n{around}", sensor(alt, vz)));
         let report = render_job(&s, &dir.path().join(format!("g{k}")), 0);
         let d = disort(&s.atmosphere_json(false).unwrap());
         let a = report.atmosphere.as_ref().unwrap();
@@ -812,7 +816,8 @@ fn sensor_altitude_keys_are_checked() {
 }
 
 /// Deep water under an aerosol, seen from above the atmosphere 20 degrees
-/// off nadir: the photon map and the path integrator agree band for band
+/// off nadir: the photon map (with the domain repeating, and in its own
+/// mean) and the path integrator agree band for band
 /// on the radiance at the sensor within 3 sigma + 2 % (sigma from their
 /// standard-error cubes; the photon map's pixels share photons, so its
 /// error of the mean is taken as its pixels' mean error, as if they were
@@ -820,7 +825,7 @@ fn sensor_altitude_keys_are_checked() {
 #[test]
 fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
     let dir = tempdir();
-    let text = |integrator: &str, spp: u32| {
+    let text = |integrator: &str, spp: u32, around: &str| {
         format!(
             "name = \"deep\"\n[spectral]\ncenters_nm = [443.0, 560.0, 670.0]\nfwhm_nm = [10.0, 10.0, 10.0]\n\
              [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
@@ -831,12 +836,23 @@ fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
              view_zenith_deg = 20.0\nview_azimuth_deg = 90.0\n\
              [render]\nintegrator = \"{integrator}\"\n\
              [atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.1\n\
-             angstrom = 0.5\nssa = 0.98\nphase = {{ kind = \"henyey-greenstein\", g = 0.75 }}\nscale_height_km = 1.0\n"
+             angstrom = 0.5\nssa = 0.98\nphase = {{ kind = \"henyey-greenstein\", g = 0.75 }}\nscale_height_km = 1.0\n{around}\n"
         )
     };
     let parse = |t: &str| Scene::parse(t, Path::new("deep.toml"), &Overrides::default()).unwrap();
-    let pm = render_job(&parse(&text("photon-map", 4)), &dir.path().join("pm"), 0);
-    let path = render_job(&parse(&text("path", 256)), &dir.path().join("path"), 0);
+    let pm = render_job(
+        &parse(&text("photon-map", 4, "")),
+        &dir.path().join("pm"),
+        0,
+    );
+    let path = render_job(&parse(&text("path", 256, "")), &dir.path().join("path"), 0);
+    // Uniform water in its own mean looks the same from above.
+    let mean = "[surroundings]\nkind = \"mean\"";
+    let pm_mean = render_job(
+        &parse(&text("photon-map", 4, mean)),
+        &dir.path().join("pm-mean"),
+        0,
+    );
     let open = |p: &str| littoral::cube::EnviCube::open(Path::new(p)).unwrap();
     let mean = |c: &littoral::cube::EnviCube, b: usize| {
         let v = c.band(b).unwrap();
@@ -850,10 +866,16 @@ fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
         assert!(*want > 0.0);
         assert!(lpath.band(b).unwrap().iter().all(|&v| v == *want as f32));
     }
-    let (l_pm, l_path) = (open(&pm.outputs.hdr), open(&path.outputs.hdr));
-    let se_pm = open(pm.outputs.stderr_hdr.as_ref().unwrap());
+    let l_path = open(&path.outputs.hdr);
     let se_path = open(path.outputs.stderr_hdr.as_ref().unwrap());
-    for b in 0..l_pm.bands() {
+    for (run, b) in [&pm, &pm_mean]
+        .into_iter()
+        .flat_map(|r| (0..l_path.bands()).map(move |b| (r, b)))
+    {
+        let (l_pm, se_pm) = (
+            open(&run.outputs.hdr),
+            open(run.outputs.stderr_hdr.as_ref().unwrap()),
+        );
         let (a, p) = (mean(&l_pm, b), mean(&l_path, b));
         let sa = mean(&se_pm, b);
         let sp = {

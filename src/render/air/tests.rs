@@ -168,3 +168,106 @@ fn the_control_variate_keeps_the_mean() {
         );
     }
 }
+
+/// With the domain in its own mean (`[surroundings] kind = "mean"`), the
+/// pixel's scattered part (the pooled part plus one drawn path's
+/// difference, counting for every path that lands within the domain)
+/// has the mean of the plain adjoint paths that see the surface's own
+/// radiance within the domain and the table plus the glint beyond it:
+/// from 300 m over a 100 m domain under an aerosol 100 m high, where a
+/// good share of the paths land within, over a surface bright around the
+/// pixel (so the paths within see far more than the table's mean). Within 4 combined standard errors.
+#[test]
+fn the_mean_surroundings_keep_the_mean() {
+    let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
+                [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
+                [surface]\nkind = \"cox-munk\"\nwind_speed = 5.0\n\
+                [domain]\nsize_m = [100.0, 100.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n\
+                [photons]\ncount = 1000\n\
+                [sensor]\npixels = [2, 2]\ngsd_m = 1.0\naltitude_m = 300.0\n\
+                view_zenith_deg = 20.0\nview_azimuth_deg = 200.0\n\
+                [atmosphere]\nsky_photons = 1000\n[atmosphere.aerosol]\nmodel = \"custom\"\n\
+                tau_550 = 0.5\nscale_height_km = 0.1\n[surroundings]\nkind = \"mean\"\n";
+    let scene = Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
+    let nb = scene.bands.len();
+    let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
+    let ground = {
+        let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
+        o + d * (o.z / -d.z)
+    };
+    // Bright within 15 m of the pixel's ground point, where the paths that
+    // land within the domain gather: far from the domain's mean there.
+    let light = Surface(
+        move |ray: &CameraRay, b| {
+            let t = ray.origin.z / -ray.direction.z;
+            let p = (ray.origin + ray.direction * t).as_dvec3();
+            let near = (p - ground).truncate().length() < 15.0;
+            let l = 1.0 + if near { 4.0 } else { 0.0 } + 0.8 * f64::from(-ray.direction.z);
+            l * (1.0 + 0.1 * b as f64)
+        },
+        nb,
+    );
+    let air = AirView::new(&scene, &light).unwrap().unwrap();
+    let n = 200_000u64;
+    let mut within = 0u64;
+    // The plain paths: the surface within the domain, the table beyond.
+    let mut plain = crate::render::BandSums::new(nb);
+    let mut glint = vec![0.0; nb];
+    for i in 0..n {
+        let mut rng = Pcg32::new(3, i);
+        let mut one = vec![0.0; nb];
+        air.adjoint(ground, &mut rng, |rng, meet, dir, w| {
+            let up = -dir;
+            let inside = (0.0..100.0).contains(&meet.x) && (0.0..100.0).contains(&meet.y);
+            let (mut l, mut water) = (vec![0.0; nb], vec![0.0; nb]);
+            if inside {
+                within += 1;
+                let r = CameraRay {
+                    origin: (meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
+                    direction: dir.as_vec3(),
+                };
+                light.camera(r, rng, &mut l, &mut water)?;
+            } else {
+                air.glint(up, &mut glint);
+                let c = air.cell(up);
+                for b in 0..nb {
+                    l[b] = air.env[c * nb + b] + glint[b];
+                }
+            }
+            for b in 0..nb {
+                one[b] = w[b] * l[b];
+            }
+            Ok(())
+        })
+        .unwrap();
+        plain.add(one);
+    }
+    assert!(
+        within > n / 20,
+        "{within} of {n} paths land within the domain"
+    );
+    let mut sums = crate::render::BandSums::new(nb);
+    let (mut out, mut water, mut surface) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
+    for i in 0..n / 4 {
+        let mut rng = Pcg32::new(4, i);
+        air.camera(&light, ray, &mut rng, &mut out, &mut water, &mut surface)
+            .unwrap();
+        sums.add(
+            (0..nb).map(|b| {
+                out[b] - air.view.path_radiance[b] - air.view.transmittance[b] * surface[b]
+            }),
+        );
+    }
+    let (a, b) = (plain.stats(), sums.stats());
+    let (_, pooled_se) = air.pooled_part();
+    for k in 0..nb {
+        let se = (a[k].1 * a[k].1 + b[k].1 * b[k].1 + pooled_se[k] * pooled_se[k]).sqrt();
+        assert!(
+            (a[k].0 - b[k].0).abs() < 4.0 * se,
+            "band {k}: plain {:?} against {:?} (pooled se {})",
+            a[k],
+            b[k],
+            pooled_se[k]
+        );
+    }
+}

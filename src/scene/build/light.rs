@@ -310,10 +310,11 @@ pub(super) fn ground(ctx: &Ctx, f: &SceneFile, ov: &Overrides) -> Result<Option<
     Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
 }
 
-/// `[surroundings]`: the reflectance per band of a Lambertian surface all
-/// around the domain, none for a periodic domain. Only with an atmosphere
-/// (without air no light crosses from beyond the domain to the sensor).
-pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Vec<f64>>> {
+/// `[surroundings]`: a Lambertian surface of a reflectance per band, or
+/// the domain's mean, all around the domain; none for a periodic domain.
+/// Only with an atmosphere (without air no light crosses from beyond the
+/// domain to the sensor).
+pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Surroundings>> {
     let Some(s) = &f.surroundings else {
         return Ok(None);
     };
@@ -326,16 +327,17 @@ pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Vec<f64>>>
     }
     match (s.kind, &s.reflectance) {
         (SurroundingsKind::Periodic, None) => Ok(None),
-        (SurroundingsKind::Periodic, Some(_)) => Err(ctx.err(
+        (SurroundingsKind::Mean, None) => Ok(Some(Surroundings::Mean)),
+        (SurroundingsKind::Periodic | SurroundingsKind::Mean, Some(_)) => Err(ctx.err(
             &key("reflectance"),
-            "only for kind = \"lambertian\" (a periodic domain is surrounded by itself)",
+            "only for kind = \"lambertian\" (periodic and mean surroundings are the domain's own)",
         )),
         (SurroundingsKind::Lambertian, None) => Err(ctx.err(
             &key("reflectance"),
             "Lambertian surroundings need their reflectance: a number, a bottom type or a CSV file",
         )),
-        (SurroundingsKind::Lambertian, Some(r)) => {
-            Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
-        }
+        (SurroundingsKind::Lambertian, Some(r)) => Ok(Some(Surroundings::Lambertian(
+            ctx.reflectance(r, &key("reflectance"))?,
+        ))),
     }
 }
