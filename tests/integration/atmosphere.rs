@@ -494,6 +494,10 @@ fn lambertian_ground_keys_are_checked() {
                 "surroundings.reflectance",
             ),
             (
+                "[surroundings]\nkind = \"mean\"\nreflectance = 0.3",
+                "surroundings.reflectance",
+            ),
+            (
                 &format!("{lambertian}\nreflectance = 1.5"),
                 "surroundings.reflectance",
             ),
