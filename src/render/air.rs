@@ -114,6 +114,10 @@ pub struct AirView<'s> {
     surround: Option<Surround>,
 }
 
+/// An adjoint path that met the ground within the domain: where, its
+/// direction of travel and its band weights.
+type Landing = (DVec3, DVec3, Vec<f64>);
+
 /// What an adjoint path that meets the ground beyond the domain sees.
 enum Surround {
     /// Land: its radiance per band (R E / pi).
@@ -390,32 +394,64 @@ impl<'s> AirView<'s> {
     ) -> Result<()> {
         let nb = self.columns.len();
         let share = 1.0 / SURROUND_PATHS as f64;
-        let [sx, sy] = self.scene.domain.size_m;
         let mut glint = vec![0.0; nb];
-        let mut within: Vec<(DVec3, DVec3, Vec<f64>)> = Vec::new();
+        let within = self.landings(ground, rng, |dir, w, inside| {
+            if inside {
+                let up = -dir;
+                self.glint(up, &mut glint);
+                let c = self.cell(up);
+                for b in 0..nb {
+                    out[b] += share * w[b] * (self.env[c * nb + b] + glint[b]);
+                }
+            } else {
+                for b in 0..nb {
+                    out[b] += share * w[b] * surround[b];
+                }
+            }
+        })?;
+        self.add_one_within(light, &within, rng, out)
+    }
+
+    /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
+    /// `ground`: each that meets the ground goes to `at(direction of
+    /// travel, band weights, within the domain)`, in order, and those
+    /// within the domain are returned.
+    fn landings(
+        &self,
+        ground: DVec3,
+        rng: &mut Pcg32,
+        mut at: impl FnMut(DVec3, &[f64], bool),
+    ) -> Result<Vec<Landing>> {
+        let [sx, sy] = self.scene.domain.size_m;
+        let mut within = Vec::new();
         for _ in 0..SURROUND_PATHS {
             self.adjoint(ground, rng, |_, meet, dir, w| {
-                if meet.x < 0.0 || meet.x >= sx || meet.y < 0.0 || meet.y >= sy {
-                    for b in 0..nb {
-                        out[b] += share * w[b] * surround[b];
-                    }
-                } else {
-                    let up = -dir;
-                    self.glint(up, &mut glint);
-                    let c = self.cell(up);
-                    for b in 0..nb {
-                        out[b] += share * w[b] * (self.env[c * nb + b] + glint[b]);
-                    }
+                let inside = (0.0..sx).contains(&meet.x) && (0.0..sy).contains(&meet.y);
+                at(dir, w, inside);
+                if inside {
                     within.push((meet, dir, w.to_vec()));
                 }
                 Ok(())
             })?;
         }
+        Ok(within)
+    }
+
+    /// One of the paths `within` the domain, drawn uniformly and counting
+    /// for all of them (each path counting 1 / [`SURROUND_PATHS`]), adds
+    /// its difference from the table by an integrator call.
+    fn add_one_within(
+        &self,
+        light: &dyn Integrator,
+        within: &[Landing],
+        rng: &mut Pcg32,
+        out: &mut [f64],
+    ) -> Result<()> {
         if within.is_empty() {
             return Ok(());
         }
         let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
-        let scale = share * within.len() as f64;
+        let scale = within.len() as f64 / SURROUND_PATHS as f64;
         self.add_difference(light, *meet, *dir, w, scale, rng, out)
     }
 
@@ -435,22 +471,8 @@ impl<'s> AirView<'s> {
         rng: &mut Pcg32,
         out: &mut [f64],
     ) -> Result<()> {
-        let [sx, sy] = self.scene.domain.size_m;
-        let mut within: Vec<(DVec3, DVec3, Vec<f64>)> = Vec::new();
-        for _ in 0..SURROUND_PATHS {
-            self.adjoint(ground, rng, |_, meet, dir, w| {
-                if (0.0..sx).contains(&meet.x) && (0.0..sy).contains(&meet.y) {
-                    within.push((meet, dir, w.to_vec()));
-                }
-                Ok(())
-            })?;
-        }
-        if within.is_empty() {
-            return Ok(());
-        }
-        let (meet, dir, w) = &within[rng.below(within.len() as u32) as usize];
-        let scale = within.len() as f64 / SURROUND_PATHS as f64;
-        self.add_difference(light, *meet, *dir, w, scale, rng, out)
+        let within = self.landings(ground, rng, |_, _, _| {})?;
+        self.add_one_within(light, &within, rng, out)
     }
 
     /// One adjoint path from the sensor down its view to the pixel whose

@@ -14,6 +14,7 @@ mod cube_tool;
 mod determinism;
 mod fluorescence;
 mod georef;
+mod ground;
 mod inelastic;
 mod job;
 mod memory;
