@@ -30,5 +30,6 @@ mod sharding;
 mod sky;
 mod slurm;
 mod splitting;
+mod surface;
 mod viewers;
 mod water_optics;
