@@ -187,7 +187,7 @@ fn at_sensor(
     let to_rho: Vec<f64> = a
         .toa_irradiance
         .iter()
-        .map(|&e| super::report::reflectance_factor(e, mu0))
+        .map(|&e| crate::render::reflectance_factor(e, mu0))
         .collect();
     let mut curves = pixel_spectra(report, files, nm, "rhot", &to_rho)?;
     curves.push(Curve {

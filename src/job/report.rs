@@ -345,7 +345,7 @@ impl AtmosphereReport {
                 row.extend([self.spherical_albedo[b], self.spherical_albedo_stderr[b]]);
             }
             if view {
-                let to_rho = reflectance_factor(self.toa_irradiance[b], mu0);
+                let to_rho = crate::render::reflectance_factor(self.toa_irradiance[b], mu0);
                 row.extend([
                     self.t_view[b],
                     self.t_up[b],
@@ -443,18 +443,6 @@ impl AtmosphereReport {
                 .as_ref()
                 .map_or(Vec::new(), |v| v.transmittance_up_se.clone()),
         })
-    }
-}
-
-/// pi / (E_0 mu_0): radiance to reflectance for the sun's beam-normal
-/// irradiance `e0` at the top of the atmosphere and the cosine `mu0` of its
-/// zenith (0 where no sunlight arrives).
-pub fn reflectance_factor(e0: f64, mu0: f64) -> f64 {
-    let top = e0 * mu0;
-    if top > 0.0 {
-        std::f64::consts::PI / top
-    } else {
-        0.0
     }
 }
 

@@ -178,12 +178,7 @@ impl<'s> AirView<'s> {
             pooled: vec![0.0; nb],
             pooled_se: vec![0.0; nb],
             surround: scene.surroundings.as_ref().map(|s| match s.reflectance() {
-                Some(r) => Surround::Land(
-                    r.iter()
-                        .enumerate()
-                        .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
-                        .collect(),
-                ),
+                Some(r) => Surround::Land(super::ground::lambertian_radiance(scene, r)),
                 None => Surround::Mean,
             }),
         })

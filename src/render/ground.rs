@@ -28,13 +28,18 @@ impl Ground {
     pub fn new(scene: &Scene) -> Option<Ground> {
         let r = scene.ground.as_ref()?;
         Some(Ground {
-            radiance: r
-                .iter()
-                .enumerate()
-                .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
-                .collect(),
+            radiance: lambertian_radiance(scene, r),
         })
     }
+}
+
+/// The radiance per band of a Lambertian surface of reflectance `r` per
+/// band under `scene`'s sun and sky: R E / pi.
+pub fn lambertian_radiance(scene: &Scene, r: &[f64]) -> Vec<f64> {
+    r.iter()
+        .enumerate()
+        .map(|(b, r)| r * scene.incident_irradiance(b) / std::f64::consts::PI)
+        .collect()
 }
 
 impl Integrator for Ground {

@@ -277,6 +277,18 @@ pub const AIR_PRODUCTS: [Product; 2] = [
     },
 ];
 
+/// pi / (E_0 mu_0): radiance to reflectance for the sun's beam-normal
+/// irradiance `e0` at the top of the atmosphere and the cosine `mu0` of its
+/// zenith (0 where no sunlight arrives).
+pub fn reflectance_factor(e0: f64, mu0: f64) -> f64 {
+    let top = e0 * mu0;
+    if top > 0.0 {
+        std::f64::consts::PI / top
+    } else {
+        0.0
+    }
+}
+
 /// The product cubes a render of `scene` writes: [`PRODUCTS`], then
 /// [`AIR_PRODUCTS`] with the sensor above the surface.
 pub fn products(scene: &Scene) -> Vec<Product> {
@@ -421,7 +433,7 @@ pub fn render_tile(
         let to_rho: Vec<f64> = a
             .bands
             .iter()
-            .map(|band| crate::job::report::reflectance_factor(band.toa_irradiance, mu0))
+            .map(|band| reflectance_factor(band.toa_irradiance, mu0))
             .collect();
         Some((to_rho, &view.path_radiance))
     });
