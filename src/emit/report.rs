@@ -90,6 +90,10 @@ pub struct Energy {
     pub absorbed_surfaces: Vec<f64>,
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub lost_edges: Vec<f64>,
+    /// Fell on land from the sky (`[land]`): reflected or absorbed there,
+    /// not traced on. Empty in reports written before land existed.
+    #[serde(default, deserialize_with = "crate::nan_json::f64s")]
+    pub on_land: Vec<f64>,
     /// Inelastic light (`[water] raman`, `[water.fluorescence]`): power
     /// taken out of each band by Raman scattering and fluorescence that
     /// was emitted into another band of the grid, emitted beyond the grid,
@@ -397,6 +401,11 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
     let absorbed_water = power(&totals.absorbed_water);
     let absorbed_surfaces = power(&totals.absorbed_surfaces);
     let lost_edges = power(&totals.lost_edges);
+    let on_land = if totals.on_land.is_empty() {
+        vec![0.0; nb]
+    } else {
+        power(&totals.on_land)
+    };
     let (inelastic_out, inelastic_lost, inelastic_in) = (
         power(&totals.inelastic_out),
         power(&totals.inelastic_lost),
@@ -413,6 +422,7 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
             + absorbed_water[b]
             + absorbed_surfaces[b]
             + lost_edges[b]
+            + on_land[b]
             + inelastic_out[b]
             + inelastic_lost[b];
         let res = emitted[b] + inelastic_in[b] - sinks;
@@ -436,6 +446,7 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
         absorbed_water,
         absorbed_surfaces,
         lost_edges,
+        on_land,
         inelastic_out,
         inelastic_lost,
         inelastic_in,

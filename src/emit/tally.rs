@@ -136,11 +136,14 @@ pub enum Fate {
     /// Raman-scattered or fluoresced beyond the grid's last band (or
     /// between the cells of an explicit grid): lost to the bands.
     ShiftedOut,
+    /// Fell on land (`[land]`) from the sky: reflected or absorbed there,
+    /// not traced on.
+    Land,
 }
 
 impl Fate {
     /// Number of fates.
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = 7;
 
     /// Index of the fate in per-fate arrays.
     pub fn index(self) -> usize {
@@ -252,6 +255,10 @@ pub struct Totals {
     pub left_water: Vec<u64>,
     #[serde(default)]
     pub left_water_inelastic: Vec<u64>,
+    /// Weight that fell on land from the sky (none in totals written
+    /// before land existed).
+    #[serde(default)]
+    pub on_land: Vec<u64>,
     /// Fixed-point sums of per-photon contributions, [slot][band].
     pub sum: Vec<i128>,
     pub sum_sq: Vec<i128>,
@@ -278,6 +285,7 @@ impl Totals {
             inelastic_in: vec![0; bands],
             left_water: vec![0; bands],
             left_water_inelastic: vec![0; bands],
+            on_land: vec![0; bands],
             sum: vec![0; slots * bands],
             sum_sq: vec![0; slots * bands],
             traced: 0,
@@ -321,6 +329,10 @@ impl Totals {
         self.lost_edges[band] += fates[Fate::LostEdge.index()];
         self.inelastic_out[band] += fates[Fate::Shifted.index()];
         self.inelastic_lost[band] += fates[Fate::ShiftedOut.index()];
+        if self.on_land.len() != self.bands {
+            self.on_land.resize(self.bands, 0);
+        }
+        self.on_land[band] += fates[Fate::Land.index()];
         self.inelastic_in[band] += inelastic_in;
         self.left_water[band] += left;
         self.left_water_inelastic[band] += left_inelastic;
@@ -357,6 +369,10 @@ impl Totals {
         add(&mut self.inelastic_in, &o.inelastic_in);
         add(&mut self.left_water, &o.left_water);
         add(&mut self.left_water_inelastic, &o.left_water_inelastic);
+        if !o.on_land.is_empty() {
+            self.on_land.resize(self.bands, 0);
+            add(&mut self.on_land, &o.on_land);
+        }
         self.sum.iter_mut().zip(&o.sum).for_each(|(x, y)| *x += y);
         self.sum_sq
             .iter_mut()

@@ -169,6 +169,14 @@ pub fn trace(
     let first = tallies.part(band);
     let tally = &mut tallies.at(first).tally;
     tally.add_above_down();
+    // Land there: the light goes up again in the share the land reflects
+    // (no water to enter, nothing to store).
+    if scene.is_land(pos.x, pos.y) {
+        let reflected = scene.land.as_ref().map_or(0.0, |l| l.reflectance[band]);
+        tally.add_above_up(reflected);
+        end(tallies, band, Fate::Land, 1.0);
+        return path.result;
+    }
     // The surface at this band's refractive index.
     let surface = scene.surface_in(band);
     let ev = surface.interact(dir, rng);
@@ -218,7 +226,7 @@ fn first_footprint(scene: &Scene, pos: Vec3) -> Option<usize> {
         .position(|f| f.contains(&scene.domain, x, y))
 }
 
-/// A surface point drawn uniformly from the points of the domain whose
+/// A surface point drawn uniformly from the water of the domain whose
 /// first split footprint is `j` (by rejection from footprint `j`), so that
 /// the copies of a path split there stand for the same region as the path
 /// itself: the expected power entering each point is unchanged, and the
@@ -238,7 +246,7 @@ fn point_in_footprint(scene: &Scene, j: usize, rng: &mut Pcg32) -> Vec3 {
         };
         let inside = (0.0..d.size_m[0]).contains(&x) && (0.0..d.size_m[1]).contains(&y);
         let p = Vec3::new(x as f32, y as f32, 0.0);
-        if inside && first_footprint(scene, p) == Some(j) {
+        if inside && first_footprint(scene, p) == Some(j) && !scene.is_land(p.x, p.y) {
             return p;
         }
     }
@@ -371,6 +379,12 @@ impl Path<'_> {
                     return (b.band, Fate::LostEdge, b.weight);
                 }
                 b.pos = scene.domain.wrap(next, b.dir);
+                if scene.under_floor(b.pos) {
+                    // A seam where the floor does not meet itself (deeper
+                    // on the side left than on the side entered, or land
+                    // there): the step between is a wall the photon ends at.
+                    return (b.band, Fate::LostEdge, b.weight);
+                }
                 continue;
             }
             // A tentative collision.

@@ -111,7 +111,8 @@ impl GeometryBuilder {
         );
     }
 
-    /// A gridded floor: `depths_m` (m, positive) at `nx` x `ny` points
+    /// A gridded floor: `depths_m` (m, positive down; negative where the
+    /// floor rises above the water line as land) at `nx` x `ny` points
     /// spanning the domain, row-major with rows along y (index `iy * nx +
     /// ix`, point at x = ix * size_x / (nx - 1), y = iy * size_y / (ny - 1)).
     /// Each grid cell becomes two triangles; a skirt of the edge depths
@@ -142,10 +143,10 @@ impl GeometryBuilder {
                 ),
             ));
         }
-        if let Some(i) = depths_m.iter().position(|d| !(d.is_finite() && *d > 0.0)) {
+        if let Some(i) = depths_m.iter().position(|d| !d.is_finite()) {
             return Err(Error::invalid(
                 format!("{FIELD}[row {}][column {}]", i / nx, i % nx),
-                format!("depth {} m is not a positive finite number", depths_m[i]),
+                format!("depth {} m is not a finite number", depths_m[i]),
             ));
         }
         let [sx, sy] = self.domain_size_m;

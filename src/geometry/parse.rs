@@ -25,7 +25,8 @@ fn strip_comment(line: &str) -> &str {
     line.split('#').next().unwrap_or("")
 }
 
-/// Depths (m), one grid row per line, first data line y = 0; see
+/// Depths (m, negative above the water line), one grid row per line, first
+/// data line y = 0; see
 /// [`super::GeometryBuilder::heightfield_from_csv`].
 pub(super) fn read_heightfield_csv(path: &Path) -> Result<(Vec<f32>, usize, usize)> {
     let csv = crate::csv::read(path, "bottom.heightfield")?;
@@ -37,15 +38,8 @@ pub(super) fn read_heightfield_csv(path: &Path) -> Result<(Vec<f32>, usize, usiz
     }
     let mut depths = Vec::with_capacity(csv.rows.len() * csv.width());
     for row in &csv.rows {
-        for d in csv.numbers(row)? {
-            if d <= 0.0 {
-                return Err(csv.error(
-                    Some(row.line),
-                    format!("depth {d} is not a positive number of metres"),
-                ));
-            }
-            depths.push(d as f32);
-        }
+        // Negative depths are land above the water line (`[land]`).
+        depths.extend(csv.numbers(row)?.into_iter().map(|d| d as f32));
     }
     let (nx, rows) = (csv.width(), csv.rows.len());
     if nx < 2 || rows < 2 {

@@ -260,6 +260,9 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         ("absorbed by floor and targets", &en.absorbed_surfaces),
         ("lost at the edges", &en.lost_edges),
     ];
+    if en.on_land.iter().any(|&p| p != 0.0) {
+        parts.push(("fell on land", &en.on_land));
+    }
     if en
         .inelastic_in
         .iter()

@@ -75,6 +75,7 @@ const UNITS: &[(&str, &str)] = &[
     ("energy.absorbed_water", "W nm^-1"),
     ("energy.absorbed_surfaces", "W nm^-1"),
     ("energy.lost_edges", "W nm^-1"),
+    ("energy.on_land", "W nm^-1"),
     ("energy.inelastic_out", "W nm^-1"),
     ("energy.inelastic_lost", "W nm^-1"),
     ("energy.inelastic_in", "W nm^-1"),

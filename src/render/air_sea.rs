@@ -19,6 +19,13 @@ use crate::rng::Pcg32;
 use crate::scene::Scene;
 use glam::Vec3;
 
+/// Water shallower than this (m) at the water line sends no light up: a
+/// ray entering it 0.1 mm down may start under the floor, whose position
+/// the geometry resolves to its self-intersection epsilon (a millimetre
+/// or two at the scale of a 200 m scene). The shallowest flat floor is as
+/// deep (`[bottom] depth_m`).
+pub const SHORE_FILM_M: f32 = 1e-3;
+
 /// Radiance per band arriving at a point in the water along `-dir` (what
 /// an instrument there looking along `dir` sees), written into `out`.
 pub type InWater<'f> = dyn FnMut(Vec3, Vec3, &mut Pcg32, &mut [f64]) -> Result<()> + 'f;
@@ -67,6 +74,35 @@ pub fn from_air_parts(
     water: &mut [f64],
     in_water: &mut InWater,
 ) -> Result<()> {
+    from_air_to(scene, sky_l, ray, true, rng, out, water, in_water)
+}
+
+/// [`from_air_parts`] for a ray whose way down to the sea is known to be
+/// clear of land (one leaving a land point, `render::land`).
+pub fn from_air_beyond_land(
+    scene: &Scene,
+    sky_l: &[f64],
+    ray: CameraRay,
+    rng: &mut Pcg32,
+    out: &mut [f64],
+    water: &mut [f64],
+    in_water: &mut InWater,
+) -> Result<()> {
+    from_air_to(scene, sky_l, ray, false, rng, out, water, in_water)
+}
+
+/// [`from_air_parts`], looking for land on the way down if `look_for_land`.
+#[allow(clippy::too_many_arguments)]
+fn from_air_to(
+    scene: &Scene,
+    sky_l: &[f64],
+    ray: CameraRay,
+    look_for_land: bool,
+    rng: &mut Pcg32,
+    out: &mut [f64],
+    water: &mut [f64],
+    in_water: &mut InWater,
+) -> Result<()> {
     let d = ray.direction;
     water.iter_mut().for_each(|w| *w = 0.0);
     if d.z >= 0.0 {
@@ -75,6 +111,13 @@ pub fn from_air_parts(
     }
     let p = ray.origin + d * (-ray.origin.z / d.z);
     let p = Vec3::new(p.x, p.y, 0.0);
+    // Land in the way: its radiance, none of it from the water's surface.
+    if let Some(hit) = look_for_land
+        .then(|| super::land::meet(scene, p, d))
+        .flatten()
+    {
+        return super::land::radiance(scene, sky_l, &hit, d, 0, rng, out, in_water);
+    }
     let split = scene.surface.split_from_above(d, rng);
     // Each band's facet reflectance at its own refractive index.
     let nb = sky_l.len();
@@ -154,7 +197,18 @@ fn leave_surface(
         (ev.direction, into_water != ev.transmitted, Some(ev))
     };
     if into_water {
-        in_water(p + dir * 1e-4, dir, rng, out)?;
+        if scene.land.is_some()
+            && scene
+                .geometry
+                .floor_depth_at(p.x, p.y)
+                .is_some_and(|d| d < SHORE_FILM_M)
+        {
+            // At the water line, water thinner than the floor's own
+            // resolution: a ray's start there may lie under the floor.
+            out.iter_mut().for_each(|o| *o = 0.0);
+        } else {
+            in_water(p + dir * 1e-4, dir, rng, out)?;
+        }
     } else {
         set_sky(scene, sky_l, dir, out);
     }
@@ -181,7 +235,7 @@ fn leave_surface(
 
 /// The sky radiance toward `s` (unit, up) into the first run of `out`,
 /// zero in the others; `sky_l` is the isotropic sky's radiance.
-fn set_sky(scene: &Scene, sky_l: &[f64], s: Vec3, out: &mut [f64]) {
+pub(super) fn set_sky(scene: &Scene, sky_l: &[f64], s: Vec3, out: &mut [f64]) {
     let (l, rest) = out.split_at_mut(sky_l.len());
     let g = scene.sky.model.at(s);
     for (b, (o, v)) in l.iter_mut().zip(sky_l).enumerate() {

@@ -28,6 +28,7 @@ pub mod air;
 pub mod air_sea;
 pub mod camera;
 pub mod ground;
+pub mod land;
 pub mod march;
 mod moments;
 pub mod path;

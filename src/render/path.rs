@@ -676,6 +676,11 @@ impl<'a> PathTracer<'a> {
                 }
                 scratch.flown += t_edge;
                 pos = domain.wrap(pos + dir * t_edge as f32, dir);
+                if scene.under_floor(pos) {
+                    // A seam where the floor does not meet itself: its
+                    // step is a wall the path ends at, as in emission.
+                    return;
+                }
                 continue;
             } else {
                 // A tentative collision.

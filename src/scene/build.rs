@@ -478,14 +478,27 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
-    let (bottom, deepest_floor_m) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)? {
-        Some((b, deepest)) => (Some(b), Some(deepest)),
-        None => (None, None),
+    let (bottom, deepest_floor_m, highest) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)?
+    {
+        Some((b, deepest, highest)) => (Some(b), Some(deepest), highest),
+        None => (None, None, f64::NEG_INFINITY),
     };
+    let land = floor::land(&ctx, &f, highest)?;
     let (target_reflectance, extents) = floor::targets(&ctx, &f.target, &mut geo)?;
     let geometry = geo.build();
     floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;
     let (sensor, radiometers) = sensor::sensor_and_radiometers(&ctx, &f, &domain, &geometry, ov)?;
+    if let (Some(l), SensorKind::Pinhole { position, .. }) = (&land, &sensor.kind) {
+        if position.z <= l.top_m {
+            return Err(ctx.err(
+                &[K("sensor"), K("position_m")],
+                format!(
+                    "z = {} m is not above the land's highest point ({} m): a pinhole camera looks at land from above it",
+                    position.z, l.top_m
+                ),
+            ));
+        }
+    }
     let atmosphere = atmosphere.map(|mut a| {
         if sensor.altitude_m.is_some() {
             a.view = Some(atmosphere::view(&a, &sun, &sensor, f.seed));
@@ -546,6 +559,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
         water_phase,
         inelastic,
         bottom,
+        land,
         target_reflectance,
         split_footprints: if target_split > 1 {
             extents.iter().map(split_footprint).collect()

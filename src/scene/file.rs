@@ -28,6 +28,8 @@ pub struct SceneFile {
     /// (see [`SceneFile::water`]).
     pub water: Option<WaterFile>,
     pub bottom: Option<BottomFile>,
+    /// The land where the floor rises above the water line.
+    pub land: Option<LandFile>,
     #[serde(default)]
     pub target: Vec<TargetFile>,
     /// As `water`.
@@ -477,6 +479,14 @@ pub struct BottomFile {
     /// Areas of a second bottom type (e.g. a seagrass meadow) as boxes in x, y.
     #[serde(default)]
     pub patch: Vec<PatchFile>,
+}
+
+/// `[land]`: the floor above the water line (a `[bottom]` slope or
+/// heightfield whose depths go negative), a Lambertian surface.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LandFile {
+    pub reflectance: Reflectance,
 }
 
 #[derive(Debug, Deserialize)]

@@ -318,6 +318,18 @@ pub struct Bottom {
 /// Reflecting surface id of the floor in the geometry.
 pub const FLOOR: SurfaceId = 0;
 
+/// Land: the floor where it rises above the water line, a Lambertian
+/// surface (`render::land`).
+#[derive(Clone, Debug)]
+pub struct Land {
+    /// Reflectance per band.
+    pub reflectance: Vec<f64>,
+    /// The largest of `reflectance`.
+    pub max_reflectance: f64,
+    /// The land's highest point above the mean surface (m).
+    pub top_m: f32,
+}
+
 /// The camera.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SensorKind {
@@ -404,6 +416,8 @@ pub struct Scene {
     /// `[water.fluorescence]`), or None.
     pub inelastic: Option<crate::optics::inelastic::Inelastic>,
     pub bottom: Option<Bottom>,
+    /// The floor above the water line, if it rises above it.
+    pub land: Option<Land>,
     /// Lambertian reflectance per band of each target (surface id 1 + index).
     pub target_reflectance: Vec<Vec<f64>>,
     /// The bounds of each target's triangles (surface id 1 + index).
@@ -682,6 +696,9 @@ impl Scene {
     /// Lambertian reflectance of `surface` at `p` in `band`.
     pub fn reflectance(&self, surface: SurfaceId, p: Vec3, band: usize) -> f64 {
         if surface == FLOOR {
+            if let Some(land) = self.land.as_ref().filter(|_| p.z > 0.0) {
+                return land.reflectance[band];
+            }
             let Some(b) = &self.bottom else { return 0.0 };
             let (x, y) = (p.x as f64, p.y as f64);
             b.patches
@@ -761,6 +778,21 @@ impl Scene {
                 })
             })
             .as_ref()
+    }
+
+    /// True when `p` lies below the floor (which a path wrapped across a
+    /// periodic edge reaches where the floor's depths differ at the seam).
+    pub fn under_floor(&self, p: Vec3) -> bool {
+        self.bottom.is_some()
+            && self
+                .geometry
+                .floor_depth_at(p.x, p.y)
+                .is_some_and(|d| p.z < -d)
+    }
+
+    /// True where the floor rises above the water line at (`x`, `y`).
+    pub fn is_land(&self, x: f32, y: f32) -> bool {
+        self.land.is_some() && self.geometry.floor_depth_at(x, y).is_some_and(|d| d < 0.0)
     }
 
     pub fn incident_irradiance(&self, band: usize) -> f64 {

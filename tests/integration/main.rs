@@ -17,6 +17,7 @@ mod georef;
 mod ground;
 mod inelastic;
 mod job;
+mod land;
 mod memory;
 mod oracle;
 mod path;

@@ -2,7 +2,7 @@ use super::*;
 use crate::emit::trace::FATE_UNIT;
 
 /// A whole photon that escaped.
-const ESCAPED: [u64; Fate::COUNT] = [FATE_UNIT, 0, 0, 0, 0, 0];
+const ESCAPED: [u64; Fate::COUNT] = [FATE_UNIT, 0, 0, 0, 0, 0, 0];
 
 #[test]
 fn merging_in_any_order_gives_identical_totals() {

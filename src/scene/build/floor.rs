@@ -5,18 +5,22 @@ use super::*;
 use crate::bounds::Aabb;
 use crate::geometry::Geometry;
 
-/// The floor's shape (into `geo`) and reflectance, and its deepest point
-/// (m); `None` without a floor.
+/// Heights of land above the water line (m) a floor may reach.
+pub const MAX_LAND_M: f64 = 1e4;
+
+/// The floor's shape (into `geo`) and reflectance, its deepest point (m,
+/// down) and its highest (m, up: above 0 where it rises above the water
+/// line as land); `None` without a floor.
 pub(super) fn bottom(
     ctx: &Ctx,
     b: Option<&BottomFile>,
     geo: &mut GeometryBuilder,
-) -> Result<Option<(Bottom, f64)>> {
+) -> Result<Option<(Bottom, f64, f64)>> {
     let bottom = match b {
         None => None,
         Some(b) => {
             let bk = |k| [K("bottom"), K(k)];
-            let deepest = match (b.depth_m, &b.slope, &b.heightfield) {
+            let (deepest, highest) = match (b.depth_m, &b.slope, &b.heightfield) {
                 (Some(d), None, None) => {
                     ctx.within(
                         &bk("depth_m"),
@@ -27,7 +31,7 @@ pub(super) fn bottom(
                         "m",
                     )?;
                     geo.flat_floor(d as f32, FLOOR);
-                    d
+                    (d, -d)
                 }
                 (None, Some(s), None) => {
                     let sk = |k| [K("bottom"), K("slope"), K(k)];
@@ -35,18 +39,48 @@ pub(super) fn bottom(
                         ("from_depth_m", s.from_depth_m),
                         ("to_depth_m", s.to_depth_m),
                     ] {
-                        ctx.within(&sk(k), v, 1e-3, 1e5, "must be a positive depth", "m")?;
+                        ctx.within(
+                            &sk(k),
+                            v,
+                            -MAX_LAND_M,
+                            1e5,
+                            "must be a depth (negative: a height above the water line)",
+                            "m",
+                        )?;
+                    }
+                    if s.from_depth_m.max(s.to_depth_m) < 1e-3 {
+                        return Err(ctx.err(
+                            &sk("to_depth_m"),
+                            "the floor is above the water line everywhere: one end must be under water (for land alone use [surface] kind = \"lambertian\")",
+                        ));
                     }
                     let axis = s.axis.unwrap_or(Axis::X);
                     geo.slope_floor(s.from_depth_m as f32, s.to_depth_m as f32, axis, FLOOR);
-                    s.from_depth_m.max(s.to_depth_m)
+                    (
+                        s.from_depth_m.max(s.to_depth_m),
+                        -s.from_depth_m.min(s.to_depth_m),
+                    )
                 }
                 (None, None, Some(h)) => {
                     let path = ctx.file(h, &bk("heightfield"))?;
                     let (depths, nx, ny) = GeometryBuilder::heightfield_from_csv(&path)?;
                     geo.heightfield_floor(&depths, nx, ny, FLOOR)
                         .map_err(|e| ctx.err(&bk("heightfield"), e.to_string()))?;
-                    depths.iter().fold(0.0f32, |a, &d| a.max(d)) as f64
+                    let deepest = depths.iter().fold(f32::MIN, |a, &d| a.max(d)) as f64;
+                    let highest = -(depths.iter().fold(f32::MAX, |a, &d| a.min(d)) as f64);
+                    if deepest < 1e-3 {
+                        return Err(ctx.err(
+                            &bk("heightfield"),
+                            format!("{}: the floor is above the water line everywhere: some depth must be positive (for land alone use [surface] kind = \"lambertian\")", path.display()),
+                        ));
+                    }
+                    if highest > MAX_LAND_M {
+                        return Err(ctx.err(
+                            &bk("heightfield"),
+                            format!("{}: the land rises {highest} m above the water line: at most {MAX_LAND_M} m", path.display()),
+                        ));
+                    }
+                    (deepest, highest)
                 }
                 _ => {
                     return Err(ctx.err(
@@ -78,10 +112,36 @@ pub(super) fn bottom(
                     patches,
                 },
                 deepest,
+                highest,
             ))
         }
     };
     Ok(bottom)
+}
+
+/// The land, where the floor's highest point `highest` (m, up) is above
+/// the water line: `[land]` is required then, and refused otherwise.
+pub(super) fn land(ctx: &Ctx, f: &SceneFile, highest: f64) -> Result<Option<Land>> {
+    match (&f.land, highest > 0.0) {
+        (None, false) => Ok(None),
+        (Some(_), false) => Err(ctx.err(
+            &[K("land")],
+            "the floor never rises above the water line: give [bottom] depths below zero (a slope or a heightfield) for land, or leave [land] out",
+        )),
+        (None, true) => Err(ctx.err(
+            &[K("bottom")],
+            format!("the floor rises {highest} m above the water line: give the land's [land] reflectance"),
+        )),
+        (Some(l), true) => {
+            let reflectance = ctx.reflectance(&l.reflectance, &[K("land"), K("reflectance")])?;
+            let max_reflectance = reflectance.iter().fold(0.0f64, |a, &r| a.max(r));
+            Ok(Some(Land {
+                reflectance,
+                max_reflectance,
+                top_m: highest as f32,
+            }))
+        }
+    }
 }
 
 /// The targets (into `geo`, surface ids 1, 2, ...), their reflectances

@@ -275,7 +275,8 @@ pub(super) fn ground(ctx: &Ctx, f: &SceneFile, ov: &Overrides) -> Result<Option<
         return Ok(None);
     }
     let sea = "is the sea's: a Lambertian ground ([surface] kind = \"lambertian\") has no water";
-    let given: [(&[Step], bool); 8] = [
+    let given: [(&[Step], bool); 9] = [
+        (&[K("land")], f.land.is_some()),
         (&key("wind_speed"), s.wind_speed.is_some()),
         (&key("refractive_index"), s.refractive_index.is_some()),
         (&key("temperature_c"), s.temperature_c.is_some()),
