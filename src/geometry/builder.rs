@@ -31,6 +31,11 @@ pub struct GeometryBuilder {
 }
 
 impl GeometryBuilder {
+    /// The horizontal domain's [size_x, size_y] (m).
+    pub fn domain_size_m(&self) -> [f32; 2] {
+        self.domain_size_m
+    }
+
     /// A builder for a horizontal domain of `domain_size_m` = [size_x, size_y] (m).
     pub fn new(domain_size_m: [f32; 2]) -> Self {
         GeometryBuilder {

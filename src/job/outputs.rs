@@ -438,6 +438,7 @@ pub(super) fn publish_run(
             .into_iter()
             .chain(report::radiometer_warnings(&rendered.radiometers))
             .chain(rendered.warnings.iter().cloned())
+            .chain(scene.land_warnings())
             .collect(),
         radiometers: rendered.radiometers,
         estimate: scene.estimate.clone(),

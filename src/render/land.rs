@@ -22,8 +22,8 @@
 //! Not in it: land casting shadows on the water or hiding the sky from
 //! it, and light reflected off the land into the water (the water sees the
 //! sky in every direction above the horizon: right for shores lower than
-//! the sun's elevation, `render::targets::land_warnings`); the water-
-//! leaving radiance (L_w) of a pixel that meets land first is zero.
+//! the sun's elevation, and the report warns of steeper land:
+//! `Scene::land_warnings`); the water-leaving radiance (L_w) of a pixel that meets land first is zero.
 
 use super::air_sea::{from_air_beyond_land, set_sky as sky, InWater};
 use super::camera::CameraRay;

@@ -478,12 +478,9 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     // Geometry: floor and targets.
     let mut geo = GeometryBuilder::new([size[0] as f32, size[1] as f32]);
-    let (bottom, deepest_floor_m, highest) = match floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)?
-    {
-        Some((b, deepest, highest)) => (Some(b), Some(deepest), highest),
-        None => (None, None, f64::NEG_INFINITY),
-    };
-    let land = floor::land(&ctx, &f, highest)?;
+    let (bottom, shape) = floor::bottom(&ctx, f.bottom.as_ref(), &mut geo)?.unzip();
+    let deepest_floor_m = shape.as_ref().map(|s| s.deepest_m);
+    let land = floor::land(&ctx, &f, shape.as_ref())?;
     let (target_reflectance, extents) = floor::targets(&ctx, &f.target, &mut geo)?;
     let geometry = geo.build();
     floor::place_targets(&ctx, &f.target, &extents, &domain, &geometry)?;

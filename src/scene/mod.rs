@@ -328,6 +328,8 @@ pub struct Land {
     pub max_reflectance: f64,
     /// The land's highest point above the mean surface (m).
     pub top_m: f32,
+    /// Its steepest slope (degrees).
+    pub steepest_deg: f64,
 }
 
 /// The camera.
@@ -788,6 +790,23 @@ impl Scene {
                 .geometry
                 .floor_depth_at(p.x, p.y)
                 .is_some_and(|d| p.z < -d)
+    }
+
+    /// What the land leaves out here: a warning when it rises more
+    /// steeply than the sun stands, so that it may shade the water, which
+    /// `render::land` does not simulate.
+    pub fn land_warnings(&self) -> Vec<String> {
+        let Some(land) = &self.land else {
+            return Vec::new();
+        };
+        let elevation = 90.0 - self.sun.zenith_rad.to_degrees();
+        if land.steepest_deg <= elevation {
+            return Vec::new();
+        }
+        vec![format!(
+            "the land rises at up to {:.0} degrees, steeper than the sun's elevation ({elevation:.0} degrees): its shadow on the water and the sky it hides from the water are not simulated",
+            land.steepest_deg
+        )]
     }
 
     /// True where the floor rises above the water line at (`x`, `y`).

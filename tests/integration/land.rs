@@ -65,6 +65,8 @@ fn level_land_reads_its_exact_radiance() {
     );
     for integrator in [IntegratorMode::PhotonMap, IntegratorMode::Path] {
         let scene = land_scene(&fragment, integrator, 2);
+        // The ramp (27 degrees) is lower than the sun (50 degrees).
+        assert!(scene.land_warnings().is_empty());
         let nb = scene.bands.len();
         let [l, lw, rrs] = cubes(&scene);
         for b in 0..nb {
@@ -168,7 +170,8 @@ fn mean_and_se(v: &[f64]) -> (f64, f64) {
 }
 
 /// A ridge 6 m high at the far end of a level plateau 1 m above the water
-/// shades it from a sun 60 degrees from the zenith beyond the ridge: the
+/// shades it from a sun 60 degrees from the zenith beyond the ridge (and
+/// the scene warns that land that steep could shade the water): the
 /// plateau within (6 - 1) tan 60 degrees = 8.7 m of the ridge's crest
 /// reads less than its sky's part alone, the plateau farther out more
 /// than the sun's part alone.
@@ -193,6 +196,14 @@ fn land_shades_land() {
          sensor = {{ pixels = [40, 10], gsd_m = 1.0 }}\n"
     );
     let scene = land_scene(&fragment, IntegratorMode::Path, 4);
+    // The ridge's face, 5 m up over 4 m (51 degrees), is steeper than the
+    // sun stands (30 degrees): it could shade water, which is not
+    // simulated, and the report says so.
+    let warnings = scene.land_warnings();
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("51 degrees"),
+        "{warnings:?}"
+    );
     let [l, _, _] = cubes(&scene);
     let b = 0;
     let sky = 0.3 / PI * scene.sky.irradiance[b];

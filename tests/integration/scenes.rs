@@ -19,7 +19,10 @@ fn the_builtin_scene_is_valid_and_as_described() {
     assert!((s.bands.centers_nm()[s.bands.len() - 1] - 800.0).abs() < 1e-3);
     assert_eq!(s.domain.size_m, [200.0, 200.0]);
     let floor = |x: f32| s.geometry.floor_depth_at(x, 100.0).unwrap();
-    assert!((floor(0.0) - 0.5).abs() < 0.01 && (floor(200.0) - 15.0).abs() < 0.01);
+    // A beach 1 m high at x = 0, the water line at 12.5 m, 15 m offshore.
+    assert!((floor(0.0) + 1.0).abs() < 0.01 && (floor(200.0) - 15.0).abs() < 0.01);
+    assert!(s.is_land(12.4, 100.0) && !s.is_land(12.6, 100.0));
+    assert!(s.land.is_some() && s.land_warnings().is_empty());
     assert_eq!(s.target_reflectance.len(), 2);
     assert!((s.sun.zenith_rad.to_degrees() - 35.0).abs() < 1e-9);
     assert!(s.sky.irradiance.iter().all(|&e| e > 0.0));

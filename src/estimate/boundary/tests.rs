@@ -556,7 +556,7 @@ fn grid_matches_tracing() {
 /// that stores distances capped at 2R has a kink inside the cells next to
 /// the floor and interpolates it badly; storing up to 30 m keeps the
 /// field linear there (the below-floor extension is exact for a planar
-/// slope). The periodic edge joins the 0.5 m shore to 15 m water: a -x
+/// slope). The periodic edge joins the beach to 15 m water: a -x
 /// ray near the shore either meets the slope or passes over the step
 /// into deep water, a discontinuity like a target's edge, so sites
 /// within 15 m of the edge are reported apart. Away from the step the 30 m
@@ -570,8 +570,8 @@ fn grid_on_a_sloping_floor() {
     let s = Scene::coastal(&Overrides::default()).unwrap();
     let r = 2.0f32;
     let targets = [
-        Vec3::new(52.0, 140.0, -3.95),
-        Vec3::new(105.0, 150.0, -7.65),
+        Vec3::new(66.0, 140.0, -3.95),
+        Vec3::new(114.0, 150.0, -7.65),
     ];
     let mut rng = Pcg32::new(71, 0);
     let mut sites = Vec::new();
@@ -581,7 +581,8 @@ fn grid_on_a_sloping_floor() {
             .iter()
             .all(|t| (t.x - x).abs() > 6.5 || (t.y - y).abs() > 6.5);
         let depth = s.geometry.floor_depth_at(x, y).unwrap();
-        if far {
+        // (Under water: the beach rises above it toward x = 0.)
+        if far && depth > 0.0 {
             sites.push(Vec3::new(
                 x,
                 y,

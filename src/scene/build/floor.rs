@@ -8,19 +8,60 @@ use crate::geometry::Geometry;
 /// Heights of land above the water line (m) a floor may reach.
 pub const MAX_LAND_M: f64 = 1e4;
 
-/// The floor's shape (into `geo`) and reflectance, its deepest point (m,
-/// down) and its highest (m, up: above 0 where it rises above the water
-/// line as land); `None` without a floor.
+/// What [`bottom`] found of the floor's shape.
+pub(super) struct FloorShape {
+    /// Its deepest point (m, down).
+    pub deepest_m: f64,
+    /// Its highest point (m, up: above 0 where it rises above the water
+    /// line as land).
+    pub highest_m: f64,
+    /// The steepest slope of the land (degrees; 0 without land).
+    pub steepest_land_deg: f64,
+}
+
+/// The domain's size (m) as the geometry has it.
+fn domain_size(geo: &GeometryBuilder) -> [f64; 2] {
+    geo.domain_size_m().map(f64::from)
+}
+
+/// The steepest slope (degrees) of the heightfield's cells that reach
+/// above the water line, from each cell's edge differences.
+fn steepest_land_deg(depths: &[f32], nx: usize, ny: usize, sx: f64, sy: f64) -> f64 {
+    let (dx, dy) = (sx / (nx - 1) as f64, sy / (ny - 1) as f64);
+    let d = |i: usize, j: usize| f64::from(depths[j * nx + i]);
+    let mut steepest = 0.0f64;
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let corners = [d(i, j), d(i + 1, j), d(i, j + 1), d(i + 1, j + 1)];
+            if corners.iter().all(|&c| c >= 0.0) {
+                continue;
+            }
+            let gx = (d(i + 1, j) - d(i, j))
+                .abs()
+                .max((d(i + 1, j + 1) - d(i, j + 1)).abs())
+                / dx;
+            let gy = (d(i, j + 1) - d(i, j))
+                .abs()
+                .max((d(i + 1, j + 1) - d(i + 1, j)).abs())
+                / dy;
+            steepest = steepest.max(gx.hypot(gy).atan().to_degrees());
+        }
+    }
+    steepest
+}
+
+/// The floor's shape (into `geo`) and reflectance, and what it is like;
+/// `None` without a floor.
 pub(super) fn bottom(
     ctx: &Ctx,
     b: Option<&BottomFile>,
     geo: &mut GeometryBuilder,
-) -> Result<Option<(Bottom, f64, f64)>> {
+) -> Result<Option<(Bottom, FloorShape)>> {
     let bottom = match b {
         None => None,
         Some(b) => {
             let bk = |k| [K("bottom"), K(k)];
-            let (deepest, highest) = match (b.depth_m, &b.slope, &b.heightfield) {
+            let (deepest, highest, steepest) = match (b.depth_m, &b.slope, &b.heightfield) {
                 (Some(d), None, None) => {
                     ctx.within(
                         &bk("depth_m"),
@@ -31,7 +72,7 @@ pub(super) fn bottom(
                         "m",
                     )?;
                     geo.flat_floor(d as f32, FLOOR);
-                    (d, -d)
+                    (d, -d, 0.0)
                 }
                 (None, Some(s), None) => {
                     let sk = |k| [K("bottom"), K("slope"), K(k)];
@@ -56,9 +97,15 @@ pub(super) fn bottom(
                     }
                     let axis = s.axis.unwrap_or(Axis::X);
                     geo.slope_floor(s.from_depth_m as f32, s.to_depth_m as f32, axis, FLOOR);
+                    let length = match axis {
+                        Axis::X => domain_size(geo)[0],
+                        Axis::Y => domain_size(geo)[1],
+                    };
+                    let steepest = ((s.to_depth_m - s.from_depth_m).abs() / length).atan();
                     (
                         s.from_depth_m.max(s.to_depth_m),
                         -s.from_depth_m.min(s.to_depth_m),
+                        steepest.to_degrees(),
                     )
                 }
                 (None, None, Some(h)) => {
@@ -80,7 +127,9 @@ pub(super) fn bottom(
                             format!("{}: the land rises {highest} m above the water line: at most {MAX_LAND_M} m", path.display()),
                         ));
                     }
-                    (deepest, highest)
+                    let [sx, sy] = domain_size(geo);
+                    let steepest = steepest_land_deg(&depths, nx, ny, sx, sy);
+                    (deepest, highest, steepest)
                 }
                 _ => {
                     return Err(ctx.err(
@@ -111,17 +160,22 @@ pub(super) fn bottom(
                     reflectance,
                     patches,
                 },
-                deepest,
-                highest,
+                FloorShape {
+                    deepest_m: deepest,
+                    highest_m: highest,
+                    steepest_land_deg: steepest,
+                },
             ))
         }
     };
     Ok(bottom)
 }
 
-/// The land, where the floor's highest point `highest` (m, up) is above
+/// The land, where the floor's highest point (m, up) is above
 /// the water line: `[land]` is required then, and refused otherwise.
-pub(super) fn land(ctx: &Ctx, f: &SceneFile, highest: f64) -> Result<Option<Land>> {
+pub(super) fn land(ctx: &Ctx, f: &SceneFile, shape: Option<&FloorShape>) -> Result<Option<Land>> {
+    let highest = shape.map_or(f64::NEG_INFINITY, |s| s.highest_m);
+    let steepest_deg = shape.map_or(0.0, |s| s.steepest_land_deg);
     match (&f.land, highest > 0.0) {
         (None, false) => Ok(None),
         (Some(_), false) => Err(ctx.err(
@@ -139,6 +193,7 @@ pub(super) fn land(ctx: &Ctx, f: &SceneFile, highest: f64) -> Result<Option<Land
                 reflectance,
                 max_reflectance,
                 top_m: highest as f32,
+                steepest_deg,
             }))
         }
     }
