@@ -488,8 +488,16 @@ fn integrate(f: &impl Fn(f64) -> f64, p: f64, q: f64, pieces: usize) -> f64 {
 /// within `t_max`, with the surface hit; `None` when nothing is hit. In a
 /// periodic domain horizontal rays leaving an edge continue from the
 /// opposite edge, as photons do; one that comes out under the floor there
-/// stops at the edge.
-fn trace_axis(scene: &Scene, o: Vec3, k: usize, t_max: f32) -> Option<(f32, u32)> {
+/// stops at the edge. With `from_point`, `o` is a point in the water, not
+/// on a surface: a surface closer than the geometry's self-intersection
+/// epsilon counts ([`crate::geometry::Geometry::intersect_from_point`]).
+fn trace_axis(
+    scene: &Scene,
+    o: Vec3,
+    k: usize,
+    t_max: f32,
+    from_point: bool,
+) -> Option<(f32, u32)> {
     // Bounds the loop when a tiny periodic domain meets a long ray.
     const MAX_STEPS: usize = 256;
     let geo = &scene.geometry;
@@ -515,7 +523,12 @@ fn trace_axis(scene: &Scene, o: Vec3, k: usize, t_max: f32) -> Option<(f32, u32)
         });
         let segment = wall.map_or(remaining, |w| w.min(remaining));
         if segment > 0.0 {
-            if let Some(hit) = geo.intersect(origin, dir, segment) {
+            let hit = if from_point && travelled == 0.0 {
+                geo.intersect_from_point(origin, dir, segment)
+            } else {
+                geo.intersect(origin, dir, segment)
+            };
+            if let Some(hit) = hit {
                 return Some((travelled + hit.t, hit.surface));
             }
         }
@@ -576,7 +589,7 @@ pub fn axial_distances_traced(scene: &Scene, o: Vec3, r: f32) -> AxialDistances 
         return AxialDistances([0.0; 6]);
     }
     AxialDistances(std::array::from_fn(|k| {
-        let hit = trace_axis(scene, o, k, r).map_or(f32::INFINITY, |(t, _)| t);
+        let hit = trace_axis(scene, o, k, r, false).map_or(f32::INFINITY, |(t, _)| t);
         hit.min(analytic_distance(scene, o, k)).clamp(0.0, r)
     }))
 }

@@ -219,9 +219,10 @@ impl BoundaryGrid {
 /// The six stored values of the grid node at `p`.
 fn node_values(scene: &Scene, p: Vec3, max_distance_m: f32) -> [f32; 6] {
     let geo = &scene.geometry;
-    let forward = |q: Vec3, k: usize| {
-        trace_axis(scene, q, k, max_distance_m).map_or(max_distance_m, |(t, _)| t)
+    let trace = |q: Vec3, k: usize, from_point: bool| {
+        trace_axis(scene, q, k, max_distance_m, from_point).map_or(max_distance_m, |(t, _)| t)
     };
+    let forward = |q: Vec3, k: usize| trace(q, k, false);
     // A node on or below the floor cannot trace its own values (rays from a
     // surface ignore it). Its values continue the water's linearly: moving
     // the site by m along a direction shortens that direction's distance by
@@ -230,12 +231,20 @@ fn node_values(scene: &Scene, p: Vec3, max_distance_m: f32) -> [f32; 6] {
     // (exact for a planar sloping floor).
     let lift = 4.0 * geo.epsilon_m();
     match geo.floor_depth_at(p.x, p.y).map(|d| -d) {
+        // In the water but within the epsilon's reach of the floor (not on
+        // it, where horizontal rays would run in its plane): traced as from
+        // a point in the water, which finds the floor however near. (Lifted, a node a few millimetres above a gentle slope read
+        // the lifted point's distance, lift / slope too long: 0.1 m at the
+        // built-in scene's 1 in 12.5.)
+        Some(floor_z) if p.z > floor_z && p.z < floor_z + lift => {
+            std::array::from_fn(|k| trace(p, k, true))
+        }
         Some(floor_z) if p.z < floor_z + lift => {
             let q = Vec3::new(p.x, p.y, floor_z + lift);
             std::array::from_fn(|k| {
                 if k < 4 {
                     let back = k ^ 1;
-                    if let Some((t, FLOOR)) = trace_axis(scene, p, back, max_distance_m) {
+                    if let Some((t, FLOOR)) = trace_axis(scene, p, back, max_distance_m, false) {
                         return -t;
                     }
                 }
