@@ -77,23 +77,11 @@ pub fn from_air_parts(
     from_air_to(scene, sky_l, ray, true, rng, out, water, in_water)
 }
 
-/// [`from_air_parts`] for a ray whose way down to the sea is known to be
-/// clear of land (one leaving a land point, `render::land`).
-pub fn from_air_beyond_land(
-    scene: &Scene,
-    sky_l: &[f64],
-    ray: CameraRay,
-    rng: &mut Pcg32,
-    out: &mut [f64],
-    water: &mut [f64],
-    in_water: &mut InWater,
-) -> Result<()> {
-    from_air_to(scene, sky_l, ray, false, rng, out, water, in_water)
-}
-
-/// [`from_air_parts`], looking for land on the way down if `look_for_land`.
+/// [`from_air_parts`], looking for land on the way down if `look_for_land`
+/// (not for a ray leaving a land point, `render::land`, whose way down to
+/// the sea is known to be clear of it).
 #[allow(clippy::too_many_arguments)]
-fn from_air_to(
+pub(super) fn from_air_to(
     scene: &Scene,
     sky_l: &[f64],
     ray: CameraRay,

@@ -25,7 +25,7 @@
 //! the sun's elevation, and the report warns of steeper land:
 //! `Scene::land_warnings`); the water-leaving radiance (L_w) of a pixel that meets land first is zero.
 
-use super::air_sea::{from_air_beyond_land, set_sky as sky, InWater};
+use super::air_sea::{from_air_to, set_sky as sky, InWater};
 use super::camera::CameraRay;
 use crate::error::Result;
 use crate::geometry::Hit;
@@ -123,13 +123,14 @@ pub fn radiance(
             // The sea: what a ray from the air meets there, the way to it
             // clear of land.
             let mut water = vec![0.0; nb];
-            from_air_beyond_land(
+            from_air_to(
                 scene,
                 sky_l,
                 CameraRay {
                     origin: from,
                     direction: w,
                 },
+                false,
                 rng,
                 &mut incoming,
                 &mut water,

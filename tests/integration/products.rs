@@ -251,9 +251,10 @@ fn sensor_response_writes_the_cubes_in_the_sensor_bands() {
 }
 
 /// Profiles are means over the water present at each depth: over the
-/// built-in scene's floor, sloping from 0.5 m to 15 m along x, the share
-/// of the domain that is water at depth d is (15 - d) / 14.5 (1 above
-/// 0.5 m), to the sampling grid's 1/256; and a tally's irradiance is that
+/// built-in scene's floor, sloping from a beach 1 m above the water to
+/// 15 m deep along x, the share of the domain that is water at depth d is
+/// (15 - d) / 16 (the beach is none of it), to the sampling grid's 1/256;
+/// and a tally's irradiance is that
 /// of the water there. Two scenes over the same deep water, one whose
 /// floor rises to 1 m over the east half (a step), read the same E_d at
 /// 3 m within their standard errors (5 sigma), where the domain mean of
@@ -262,11 +263,11 @@ fn sensor_response_writes_the_cubes_in_the_sensor_bands() {
 fn profiles_are_means_over_the_water_present() {
     let s = Scene::coastal(&Overrides::default()).unwrap();
     for (d, want) in [
-        (0.0, 1.0),
-        (0.3, 1.0),
-        (1.0, 14.0 / 14.5),
-        (5.0, 10.0 / 14.5),
-        (14.0, 1.0 / 14.5),
+        (0.0, 15.0 / 16.0),
+        (0.3, 14.7 / 16.0),
+        (1.0, 14.0 / 16.0),
+        (5.0, 10.0 / 16.0),
+        (14.0, 1.0 / 16.0),
     ] {
         let got = littoral::emit::report::water_fraction(&s, d);
         assert!(
