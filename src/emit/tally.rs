@@ -329,9 +329,6 @@ impl Totals {
         self.lost_edges[band] += fates[Fate::LostEdge.index()];
         self.inelastic_out[band] += fates[Fate::Shifted.index()];
         self.inelastic_lost[band] += fates[Fate::ShiftedOut.index()];
-        if self.on_land.len() != self.bands {
-            self.on_land.resize(self.bands, 0);
-        }
         self.on_land[band] += fates[Fate::Land.index()];
         self.inelastic_in[band] += inelastic_in;
         self.left_water[band] += left;

@@ -23,7 +23,8 @@
 //! it, and light reflected off the land into the water (the water sees the
 //! sky in every direction above the horizon: right for shores lower than
 //! the sun's elevation, and the report warns of steeper land:
-//! `Scene::land_warnings`); the water-leaving radiance (L_w) of a pixel that meets land first is zero.
+//! `Scene::land_warnings`). The water-leaving radiance (L_w) of a pixel
+//! that meets land first is zero.
 
 use super::air_sea::{from_air_to, set_sky as sky, InWater};
 use super::camera::CameraRay;
