@@ -42,6 +42,18 @@
 //! unbiased whatever the table holds, with the glint's and the sky's
 //! sampling noise and the water's mean taken out of the pixel's variance.
 //!
+//! **Land in the domain** (`[land]`) is far brighter than the water, so
+//! a table of the domain's mean leaves the paths that meet the beach with
+//! large differences. With land the table is kept per class, one over the
+//! water (where the glint is taken out) and one over the land, each from
+//! points of its own class; the pooled part keeps the water's. Each
+//! sample then sends [`SURROUND_PATHS`] adjoint paths: those that meet the
+//! land add their class's table less the water's (a lookup), and one path,
+//! drawn uniformly and counting for all, adds its difference from its own
+//! class's table by an integrator call. Unbiased whatever the tables hold;
+//! the land's share of the view is averaged over the paths instead of
+//! carried by one.
+//!
 //! Not in it over the sea: light the surface sends up that the air
 //! returns down to the surface (the sky at the surface is over a black
 //! surface). Over a Lambertian ground the sky holds it
@@ -57,8 +69,17 @@ use crate::scene::{Scene, ViewLight};
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// Height above the surface of the rays handed to the integrator (m).
+/// Height above the surface (or above the land's top) of the rays handed
+/// to the integrator (m).
 const RAY_HEIGHT_M: f64 = 10.0;
+
+/// Points per side of the grid that measures the land's share of the
+/// domain.
+const LAND_GRID: usize = 256;
+
+/// Draws of a point of one class (land or water) before the table takes
+/// whatever point it has: the table's values do not bias the pixel.
+const CLASS_TRIES: u32 = 1 << 20;
 
 /// A path's largest band weight below which it plays Russian roulette.
 const ROULETTE: f64 = 0.1;
@@ -84,6 +105,7 @@ pub const SURROUND_PATHS: usize = 16;
 /// Streams of the table's and the pooled paths' randoms.
 const ENV_KEY: u64 = 0x656e_765f_7461_626c;
 const POOLED_KEY: u64 = 0x706f_6f6c_6564_5f70;
+const LAND_KEY: u64 = 0x6c61_6e64_5f74_6162;
 
 /// The air between the ground and a sensor above it.
 pub struct AirView<'s> {
@@ -104,8 +126,15 @@ pub struct AirView<'s> {
     toward: DVec3,
     altitude_km: f64,
     /// Per direction cell and band (cell-major): the mean radiance leaving
-    /// the surface, sun glint taken out.
+    /// the surface, sun glint taken out (with land in the domain: the
+    /// water's).
     env: Vec<f64>,
+    /// The same for the land in the domain; empty without land.
+    land_env: Vec<f64>,
+    /// The land's share of the domain (0 without land).
+    land_share: f64,
+    /// Height above z = 0 of the rays handed to the integrator (m).
+    ray_height_m: f64,
     /// Per band: the scattered part the table and the glint give, and its
     /// standard error (from the chunks' spread).
     pooled: Vec<f64>,
@@ -135,7 +164,10 @@ impl<'s> AirView<'s> {
         let Some(mut air) = Self::air(scene) else {
             return Ok(None);
         };
-        air.env = air.environment(light)?;
+        air.env = air.environment(light, false)?;
+        if air.land_share > 0.0 {
+            air.land_env = air.environment(light, true)?;
+        }
         if !matches!(air.surround, Some(Surround::Land(_))) {
             (air.pooled, air.pooled_se) = air.pooled();
         }
@@ -175,6 +207,13 @@ impl<'s> AirView<'s> {
             toward: scene.sensor.toward.as_dvec3().normalize(),
             altitude_km: view.altitude_m * 1e-3,
             env: vec![0.0; CELLS * nb],
+            land_env: Vec::new(),
+            land_share: land_share(scene),
+            ray_height_m: RAY_HEIGHT_M
+                + scene
+                    .land
+                    .as_ref()
+                    .map_or(0.0, |l| f64::from(l.top_m.max(0.0))),
             pooled: vec![0.0; nb],
             pooled_se: vec![0.0; nb],
             surround: scene.surroundings.as_ref().map(|s| match s.reflectance() {
@@ -199,14 +238,93 @@ impl<'s> AirView<'s> {
         cell_of(up.z, phi)
     }
 
+    /// A point of the domain at random: with land in the domain, one of
+    /// the land (`land`) or of the water, by rejection.
+    fn point_of_class(&self, rng: &mut Pcg32, sx: f64, sy: f64, land: bool) -> DVec3 {
+        let mut tries = 0;
+        loop {
+            let at = DVec3::new(rng.uniform_f64() * sx, rng.uniform_f64() * sy, 0.0);
+            tries += 1;
+            if self.land_share == 0.0 || self.on_land(at) == land || tries >= CLASS_TRIES {
+                return at;
+            }
+        }
+    }
+
+    /// True where a path meeting the ground at `meet` takes the land's
+    /// table.
+    fn on_land(&self, meet: DVec3) -> bool {
+        self.land_share > 0.0 && self.scene.is_land(meet.x as f32, meet.y as f32)
+    }
+
+    /// The ray handed to the integrator for the radiance leaving the
+    /// ground at `at` toward `up`: from above the land's top.
+    fn ray_to(&self, at: DVec3, up: DVec3) -> CameraRay {
+        CameraRay {
+            origin: (at + up * (self.ray_height_m / up.z)).as_vec3(),
+            direction: (-up).as_vec3(),
+        }
+    }
+
+    /// The sun glint per band leaving the ground at `at` toward `up`: none
+    /// on land.
+    fn glint_at(&self, at: DVec3, up: DVec3, out: &mut [f64]) {
+        if self.on_land(at) {
+            out.iter_mut().for_each(|o| *o = 0.0);
+        } else {
+            self.glint(up, out);
+        }
+    }
+
+    /// The control for a path meeting the ground at `meet` within the
+    /// domain toward `up`, per band: its class's table plus, over the
+    /// water, the glint there (`glint` is scratch).
+    fn control(&self, meet: DVec3, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
+        let nb = self.columns.len();
+        let c = self.cell(up);
+        if self.on_land(meet) {
+            out.copy_from_slice(&self.land_env[c * nb..(c + 1) * nb]);
+        } else {
+            self.glint(up, glint);
+            for b in 0..nb {
+                out[b] = self.env[c * nb + b] + glint[b];
+            }
+        }
+    }
+
+    /// The control's excess over the pooled part's (the water's table
+    /// plus the glint) for a path meeting the ground at `meet` toward
+    /// `up`, per band: within the domain, the land's table less the
+    /// water's over the land (zero over the water); beyond it, for mean
+    /// surroundings, the land's share of that.
+    fn excess(&self, meet: DVec3, up: DVec3, inside: bool, glint: &mut [f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let share = match (inside, self.on_land(meet)) {
+            (false, _) => self.land_share,
+            (true, true) => 1.0,
+            (true, false) => 0.0,
+        };
+        if share == 0.0 {
+            return;
+        }
+        let nb = self.columns.len();
+        let c = self.cell(up);
+        self.glint(up, glint);
+        for b in 0..nb {
+            out[b] = share * (self.land_env[c * nb + b] - self.env[c * nb + b] - glint[b]);
+        }
+    }
+
     /// The mean radiance leaving the surface per direction cell and band,
     /// glint taken out: `ENV_SAMPLES` integrator calls per cell, at random
     /// points of the domain and directions cosine-weighted within the
-    /// cell, on either side of the sun's vertical plane.
-    fn environment(&self, light: &dyn Integrator) -> Result<Vec<f64>> {
+    /// cell, on either side of the sun's vertical plane. With land in the
+    /// domain, at points of the land (`land`) or of the water only.
+    fn environment(&self, light: &dyn Integrator, land: bool) -> Result<Vec<f64>> {
         let nb = self.columns.len();
         let channels = light.channels();
-        let seed = crate::rng::mix64(self.scene.seed ^ ENV_KEY);
+        let key = if land { LAND_KEY } else { ENV_KEY };
+        let seed = crate::rng::mix64(self.scene.seed ^ key);
         let [sx, sy] = self.scene.domain.size_m;
         let [w, h] = self.scene.sensor.pixels;
         let samples = (w * h) as f64 * f64::from(self.scene.sensor.samples_per_pixel);
@@ -228,13 +346,10 @@ impl<'s> AirView<'s> {
                         + self.scene.sun.azimuth_rad;
                     let sz = (1.0 - mu * mu).max(0.0).sqrt();
                     let up = DVec3::new(sz * phi.cos(), sz * phi.sin(), mu.max(1e-3)).normalize();
-                    let at = DVec3::new(rng.uniform_f64() * sx, rng.uniform_f64() * sy, 0.0);
-                    let ray = CameraRay {
-                        origin: (at + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
-                        direction: (-up).as_vec3(),
-                    };
+                    let at = self.point_of_class(&mut rng, sx, sy, land);
+                    let ray = self.ray_to(at, up);
                     light.camera(ray, &mut rng, &mut out, &mut water)?;
-                    self.glint(up, &mut glint);
+                    self.glint_at(at, up, &mut glint);
                     for b in 0..nb {
                         sum[b] += (out[b] - glint[b]) / per_cell as f64;
                     }
@@ -325,7 +440,8 @@ impl<'s> AirView<'s> {
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
         match &self.surround {
             Some(Surround::Land(land)) => return self.surrounded(light, ground, land, rng, out),
-            Some(Surround::Mean) => return self.in_the_mean(light, ground, rng, out),
+            Some(Surround::Mean) => return self.by_class(light, ground, rng, out),
+            None if self.land_share > 0.0 => return self.by_class(light, ground, rng, out),
             None => {}
         }
         self.adjoint(ground, rng, |rng, meet, dir, w| {
@@ -335,9 +451,9 @@ impl<'s> AirView<'s> {
 
     /// Add to `out`, times `scale`, the band weights `w` times the
     /// difference between the integrator's radiance leaving the ground at
-    /// `meet` along the direction of travel `dir` reversed and the table's
-    /// mean plus the glint there (channel 0; the photon groups' parts as
-    /// they are).
+    /// `meet` along the direction of travel `dir` reversed and the control
+    /// there, its class's table plus the glint (channel 0; the photon
+    /// groups' parts as they are).
     #[allow(clippy::too_many_arguments)]
     fn add_difference(
         &self,
@@ -351,21 +467,14 @@ impl<'s> AirView<'s> {
     ) -> Result<()> {
         let nb = self.columns.len();
         let up = -dir;
-        let ray = CameraRay {
-            origin: (meet + up * (RAY_HEIGHT_M / up.z)).as_vec3(),
-            direction: dir.as_vec3(),
-        };
+        let ray = self.ray_to(meet, up);
         let (mut tmp, mut water, mut glint) = (vec![0.0; out.len()], vec![0.0; nb], vec![0.0; nb]);
         light.camera(ray, rng, &mut tmp, &mut water)?;
-        self.glint(up, &mut glint);
-        let c = self.cell(up);
+        let mut control = vec![0.0; nb];
+        self.control(meet, up, &mut glint, &mut control);
         for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {
             let b = k % nb;
-            let mean = if k < nb {
-                self.env[c * nb + b] + glint[b]
-            } else {
-                0.0
-            };
+            let mean = if k < nb { control[b] } else { 0.0 };
             *o += scale * w[b] * (t - mean);
         }
         Ok(())
@@ -375,7 +484,8 @@ impl<'s> AirView<'s> {
     /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
     /// `ground`, each counting 1 / N. One that meets the ground beyond the
     /// domain sees the surroundings' radiance `surround`. One that meets it
-    /// within sees the table's mean plus the glint there, and one of those
+    /// within sees the control there (its class's table plus the glint),
+    /// and one of those
     /// (drawn uniformly, counting as many as there are) adds its own
     /// difference from that, by an integrator call: unbiased, at most one
     /// call per sample.
@@ -389,14 +499,12 @@ impl<'s> AirView<'s> {
     ) -> Result<()> {
         let nb = self.columns.len();
         let share = 1.0 / SURROUND_PATHS as f64;
-        let mut glint = vec![0.0; nb];
-        let within = self.landings(ground, rng, |dir, w, inside| {
+        let (mut glint, mut control) = (vec![0.0; nb], vec![0.0; nb]);
+        let within = self.landings(ground, rng, |meet, dir, w, inside| {
             if inside {
-                let up = -dir;
-                self.glint(up, &mut glint);
-                let c = self.cell(up);
+                self.control(meet, -dir, &mut glint, &mut control);
                 for b in 0..nb {
-                    out[b] += share * w[b] * (self.env[c * nb + b] + glint[b]);
+                    out[b] += share * w[b] * control[b];
                 }
             } else {
                 for b in 0..nb {
@@ -408,21 +516,21 @@ impl<'s> AirView<'s> {
     }
 
     /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
-    /// `ground`: each that meets the ground goes to `at(direction of
-    /// travel, band weights, within the domain)`, in order, and those
+    /// `ground`: each that meets the ground goes to `at(where, direction
+    /// of travel, band weights, within the domain)`, in order, and those
     /// within the domain are returned.
     fn landings(
         &self,
         ground: DVec3,
         rng: &mut Pcg32,
-        mut at: impl FnMut(DVec3, &[f64], bool),
+        mut at: impl FnMut(DVec3, DVec3, &[f64], bool),
     ) -> Result<Vec<Landing>> {
         let [sx, sy] = self.scene.domain.size_m;
         let mut within = Vec::new();
         for _ in 0..SURROUND_PATHS {
             self.adjoint(ground, rng, |_, meet, dir, w| {
                 let inside = (0.0..sx).contains(&meet.x) && (0.0..sy).contains(&meet.y);
-                at(dir, w, inside);
+                at(meet, dir, w, inside);
                 if inside {
                     within.push((meet, dir, w.to_vec()));
                 }
@@ -450,23 +558,32 @@ impl<'s> AirView<'s> {
         self.add_difference(light, *meet, *dir, w, scale, rng, out)
     }
 
-    /// The scattered part with the domain in its own mean (`out` already
-    /// holds the pooled part, the table and glint over every path):
-    /// [`SURROUND_PATHS`] adjoint paths, of which those that meet the ground
-    /// beyond the domain add nothing more (they see the table and the
-    /// glint), and one of those within, drawn uniformly and counting for
-    /// all of them, adds its difference from the table by an integrator
-    /// call. Unbiased for these surroundings, at most one call per sample,
-    /// and only the paths that land within the domain carry its spatial
-    /// variance.
-    fn in_the_mean(
+    /// The scattered part with the domain in its own mean, or over a
+    /// periodic domain with land in it (`out` already holds the pooled
+    /// part, the water's table and the glint over every path):
+    /// [`SURROUND_PATHS`] adjoint paths, each counting 1 / N, of which
+    /// those that meet the land add its table's excess over the water's
+    /// (beyond the domain, the land's share of it), and one of those
+    /// within, drawn uniformly and counting for all of them, adds its
+    /// difference from its own class's table by an integrator call.
+    /// Unbiased, at most one call per sample, and only the paths that land
+    /// within the domain carry its spatial variance within each class.
+    fn by_class(
         &self,
         light: &dyn Integrator,
         ground: DVec3,
         rng: &mut Pcg32,
         out: &mut [f64],
     ) -> Result<()> {
-        let within = self.landings(ground, rng, |_, _, _| {})?;
+        let nb = self.columns.len();
+        let share = 1.0 / SURROUND_PATHS as f64;
+        let (mut glint, mut excess) = (vec![0.0; nb], vec![0.0; nb]);
+        let within = self.landings(ground, rng, |meet, dir, w, inside| {
+            self.excess(meet, -dir, inside, &mut glint, &mut excess);
+            for b in 0..nb {
+                out[b] += share * w[b] * excess[b];
+            }
+        })?;
         self.add_one_within(light, &within, rng, out)
     }
 
@@ -591,6 +708,24 @@ impl<'s> AirView<'s> {
         let [sx, sy] = self.scene.domain.size_m;
         DVec3::new(p.x.rem_euclid(sx), p.y.rem_euclid(sy), 0.0)
     }
+}
+
+/// The share of the domain that is land, on a grid of `LAND_GRID`^2
+/// points at cell centres (0 without land).
+fn land_share(scene: &Scene) -> f64 {
+    if scene.land.is_none() {
+        return 0.0;
+    }
+    let [sx, sy] = scene.domain.size_m;
+    let n = LAND_GRID;
+    let land = (0..n * n)
+        .filter(|k| {
+            let x = (k % n) as f64 + 0.5;
+            let y = (k / n) as f64 + 0.5;
+            scene.is_land((x * sx / n as f64) as f32, (y * sy / n as f64) as f32)
+        })
+        .count();
+    land as f64 / (n * n) as f64
 }
 
 #[cfg(test)]

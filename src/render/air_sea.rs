@@ -26,6 +26,11 @@ use glam::Vec3;
 /// deep (`[bottom] depth_m`).
 pub const SHORE_FILM_M: f32 = 1e-3;
 
+/// Facets per ray for the mean sky a rough sea reflects along a ray other
+/// than the orthographic sensor's view: the sky's aureole, which one facet
+/// reflects now and then, made a mean of this many.
+const RAY_SKY_FACETS: u64 = 32;
+
 /// Radiance per band arriving at a point in the water along `-dir` (what
 /// an instrument there looking along `dir` sees), written into `out`.
 pub type InWater<'f> = dyn FnMut(Vec3, Vec3, &mut Pcg32, &mut [f64]) -> Result<()> + 'f;
@@ -119,11 +124,22 @@ pub(super) fn from_air_to(
     let mut part = vec![0.0; out.len()];
     let (reflected_from_water, reflected_sky) =
         leave_surface(scene, sky_l, p, split.reflected, false, rng, out, in_water)?;
-    // Along an orthographic sensor's view over a rough sea, the sky this
-    // one facet reflects gives way to the facets' mean (a control variate:
-    // the estimate minus the sampled sky plus its expectation).
-    let mean_sky = scene.reflected_sky().filter(|m| m.direction == d);
-    if let (Some(_), true) = (mean_sky, reflected_sky) {
+    // Over a rough sea the sky this one facet reflects gives way to the
+    // facets' mean (a control variate: the estimate minus the sampled sky
+    // plus its expectation): along an orthographic sensor's view the
+    // scene's, along any other ray the mean of `RAY_SKY_FACETS` facets of
+    // its own (an adjoint path of the air landing toward the sun's
+    // aureole, a pinhole's ray).
+    let mean_sky = scene
+        .reflected_sky()
+        .filter(|m| m.direction == d)
+        .map(|m| std::borrow::Cow::Borrowed(&m.mean[..]))
+        .or_else(|| {
+            (scene.surface.slope_variance > 0.0).then(|| {
+                std::borrow::Cow::Owned(scene.facets_reflected_sky(d, sky_l, RAY_SKY_FACETS, rng))
+            })
+        });
+    if let (Some(_), true) = (&mean_sky, reflected_sky) {
         out[..nb].iter_mut().for_each(|o| *o = 0.0);
     }
     let (refracted_from_water, _) = leave_surface(
@@ -149,7 +165,7 @@ pub(super) fn from_air_to(
         *o = r * *o + (1.0 - r) * t;
     }
     if let Some(m) = mean_sky {
-        for (o, s) in out.iter_mut().zip(&m.mean) {
+        for (o, s) in out.iter_mut().zip(m.iter()) {
             *o += s;
         }
     }
@@ -274,9 +290,12 @@ mod tests {
 
     /// The facets' mean reflected sky replaces each sample's one facet
     /// without moving the mean: over black water under a rough sea and a
-    /// CIE clear sky, camera rays along the sensor's view (with the mean)
-    /// and along a view 1e-6 rad away (without it) agree within 4 combined
-    /// standard errors, the first with a fraction of the spread.
+    /// CIE clear sky, camera rays along the sensor's view (with the
+    /// scene's mean), along a view 1e-6 rad away (with a mean of its own
+    /// `RAY_SKY_FACETS` facets) and the plain estimate of one facet (the
+    /// reflected and refracted rays as `from_air_to` traces them, no
+    /// mean) agree within 4 combined standard errors, the first two with
+    /// a fraction of the plain one's spread.
     #[test]
     fn the_mean_reflected_sky_keeps_the_mean() {
         let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
@@ -317,23 +336,67 @@ mod tests {
             }
             sums.stats()
         };
+        // One facet, as `from_air_to` traces it, with no mean.
+        let plain = |d: Vec3, seed: u64| {
+            let mut sums = crate::render::BandSums::new(nb);
+            let (mut out, mut part) = (vec![0.0; nb], vec![0.0; nb]);
+            let p = Vec3::new(5.0, 5.0, 0.0);
+            let black = &mut |_: Vec3, _: Vec3, _: &mut Pcg32, o: &mut [f64]| {
+                o.iter_mut().for_each(|v| *v = 0.0);
+                Ok(())
+            };
+            for i in 0..200_000u64 {
+                let mut rng = Pcg32::new(seed, i);
+                let split = scene.surface.split_from_above(d, &mut rng);
+                leave_surface(
+                    &scene,
+                    &sky_l,
+                    p,
+                    split.reflected,
+                    false,
+                    &mut rng,
+                    &mut out,
+                    black,
+                )
+                .unwrap();
+                leave_surface(
+                    &scene,
+                    &sky_l,
+                    p,
+                    split.refracted,
+                    true,
+                    &mut rng,
+                    &mut part,
+                    black,
+                )
+                .unwrap();
+                for (o, t) in out.iter_mut().zip(&part) {
+                    *o = split.reflectance * *o + (1.0 - split.reflectance) * t;
+                }
+                add_glint(&scene, -d, &mut out);
+                sums.add(out.iter().copied());
+            }
+            sums.stats()
+        };
         let nearby = (view + Vec3::new(1e-6, 0.0, 0.0)).normalize();
         assert_ne!(nearby, view);
-        let (with, without) = (run(view, 1), run(nearby, 2));
-        for b in 0..nb {
-            let se = (with[b].1.powi(2) + without[b].1.powi(2)).sqrt();
-            assert!(
-                (with[b].0 - without[b].0).abs() < 4.0 * se,
-                "band {b}: {:?} against {:?}",
-                with[b],
-                without[b]
-            );
-            assert!(
-                with[b].2 < 0.5 * without[b].2,
-                "{:?} {:?}",
-                with[b],
-                without[b]
-            );
+        let without = plain(view, 3);
+        for with in [run(view, 1), run(nearby, 2)] {
+            for b in 0..nb {
+                let se = (with[b].1.powi(2) + without[b].1.powi(2)).sqrt();
+                assert!(
+                    (with[b].0 - without[b].0).abs() < 4.0 * se,
+                    "band {b}: {:?} against {:?}",
+                    with[b],
+                    without[b]
+                );
+                assert!(
+                    with[b].2 < 0.5 * without[b].2,
+                    "{:?} {:?}",
+                    with[b],
+                    without[b]
+                );
+            }
         }
     }
 }

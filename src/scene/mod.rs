@@ -730,8 +730,6 @@ impl Scene {
                     return None;
                 }
                 let d = -self.sensor.toward;
-                let nb = self.bands.len();
-                let dispersive = self.dispersive();
                 let sky_l: Vec<f64> = self
                     .sky
                     .irradiance
@@ -740,34 +738,48 @@ impl Scene {
                     .collect();
                 let mut rng =
                     crate::rng::Pcg32::new(crate::rng::mix64(self.seed ^ REFLECTED_SKY_KEY), 0);
-                let mut sum = vec![0.0; nb];
-                for _ in 0..REFLECTED_SKY_FACETS {
-                    let split = self.surface.split_from_above(d, &mut rng);
-                    let dir = split.reflected;
-                    if !(dir.z > 0.0 && rng.uniform_f64() < self.surface.masking(dir.as_dvec3())) {
-                        continue;
-                    }
-                    let g = self.sky.model.at(dir);
-                    for (b, s) in sum.iter_mut().enumerate() {
-                        let r = if dispersive {
-                            crate::optics::surface::fresnel_reflectance(
-                                split.cos_i,
-                                1.0,
-                                self.water_index[b],
-                            )
-                        } else {
-                            split.reflectance
-                        };
-                        *s += r * sky_l[b] * g.band(b);
-                    }
-                }
-                let n = REFLECTED_SKY_FACETS as f64;
-                Some(ReflectedSky {
-                    direction: d,
-                    mean: sum.iter().map(|s| s / n).collect(),
-                })
+                let mean = self.facets_reflected_sky(d, &sky_l, REFLECTED_SKY_FACETS, &mut rng);
+                Some(ReflectedSky { direction: d, mean })
             })
             .as_ref()
+    }
+
+    /// The sky a rough sea reflects toward a ray travelling along `d`
+    /// (down) from above, per band, averaged over `n` facets drawn as one
+    /// camera ray draws them (`SeaSurface::split_from_above`; Smith's
+    /// masking of the reflected ray as a weight; each band's Fresnel
+    /// reflectance); `sky_l` is the isotropic sky's radiance per band.
+    pub fn facets_reflected_sky(
+        &self,
+        d: Vec3,
+        sky_l: &[f64],
+        n: u64,
+        rng: &mut crate::rng::Pcg32,
+    ) -> Vec<f64> {
+        let dispersive = self.dispersive();
+        let mut sum = vec![0.0; sky_l.len()];
+        for _ in 0..n {
+            let split = self.surface.split_from_above(d, rng);
+            let dir = split.reflected;
+            if dir.z <= 0.0 {
+                continue;
+            }
+            let unmasked = self.surface.masking(dir.as_dvec3());
+            let g = self.sky.model.at(dir);
+            for (b, s) in sum.iter_mut().enumerate() {
+                let r = if dispersive {
+                    crate::optics::surface::fresnel_reflectance(
+                        split.cos_i,
+                        1.0,
+                        self.water_index[b],
+                    )
+                } else {
+                    split.reflectance
+                };
+                *s += unmasked * r * sky_l[b] * g.band(b);
+            }
+        }
+        sum.iter().map(|s| s / n as f64).collect()
     }
 
     pub fn incident_irradiance(&self, band: usize) -> f64 {
