@@ -26,6 +26,7 @@ def render(
     spp: Optional[int] = None,
     integrator: Optional[str] = None,
     inelastic: Optional[bool] = None,
+    no_atmosphere: bool = False,
     mem_budget: str = "512MiB",
     threads: int = 0,
     map: Optional[PathLike] = None,  # noqa: A002 - as on the command line
@@ -40,6 +41,9 @@ def render(
       constituents, chlorophyll and CDOM fluorescence; ``False``: none)
       override the scene's values, as the command line's flags do;
       ``None`` keeps them.
+    - ``no_atmosphere``: see the sea from just above the surface, as
+      ``--no-atmosphere``: the scene's ``sensor.altitude_m`` is dropped
+      while its atmosphere still lights the sea.
     - ``mem_budget`` bounds the run's memory (``"512MiB"``, ``"2GiB"``);
       ``threads`` = 0 uses every core. The result is the same for any
       number of threads.
@@ -71,6 +75,7 @@ def render(
         samples_per_pixel=spp,
         integrator=integrator,
         inelastic=inelastic,
+        no_atmosphere=no_atmosphere or None,
     )
     temp = None
     if out is None:

@@ -265,3 +265,9 @@ def test_a_sensor_above_the_atmosphere_adds_rho_t_and_the_path_radiance(small):
     want = np.asarray(a["L_path"], dtype=np.float32)[:, None, None]
     assert np.all(r.cube.L_path.values == want) and np.all(want > 0)
     assert "rho_t" not in littoral.render(small, progress=False).cube
+    # From just above the surface: the same water, no air between.
+    near = littoral.render(scene, no_atmosphere=True, progress=False)
+    assert "rho_t" not in near.cube and "L_path" not in near.cube
+    assert near.cube.L_w.values.tobytes() == r.cube.L_w.values.tobytes()
+    assert near.cube.L_surface.values.tobytes() == r.cube.L_surface.values.tobytes()
+    assert not np.array_equal(near.cube.L_t.values, r.cube.L_t.values)

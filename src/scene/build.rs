@@ -250,6 +250,11 @@ fn parse(src: &Source, text: &str, path: &Path, ov: &Overrides) -> Result<SceneF
     if let Some(s) = ov.seed {
         f.seed = s;
     }
+    if ov.no_atmosphere {
+        if let Some(sensor) = f.sensor.as_mut() {
+            sensor.altitude_m = None;
+        }
+    }
     if let Some(on) = ov.inelastic.filter(|_| !f.lambertian_ground()) {
         // On: every process the water supports (fluorescence needs
         // constituents), at the scene's quantum yield where it gives one.

@@ -494,6 +494,11 @@ pub struct Overrides {
     /// turns them all off.
     #[serde(default)]
     pub inelastic: Option<bool>,
+    /// The sensor sees from just above the surface (`--no-atmosphere`):
+    /// `[sensor] altitude_m` is dropped, and an `[atmosphere]` still
+    /// lights the sea. Nothing changes for a scene without one.
+    #[serde(default)]
+    pub no_atmosphere: bool,
 }
 
 impl Scene {

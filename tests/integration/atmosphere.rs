@@ -572,3 +572,67 @@ fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
         );
     }
 }
+
+/// `render --no-atmosphere` sees the sea from just above the surface
+/// through a scene whose sensor flies above it: from the same photon map
+/// (reused, not emitted again) the water-leaving radiance, R_rs and the
+/// radiance leaving the surface are byte for byte the airborne render's,
+/// the cube is that radiance leaving the surface (not the darker one
+/// through the air), and the products of the air are not written.
+#[test]
+fn no_atmosphere_sees_the_airborne_scene_from_the_surface() {
+    let dir = tempdir();
+    let text = littoral::scene::text::SceneText::parse(
+        &MINIMAL_SCENE.replace("irradiance = 1.0", "spectrum = \"extraterrestrial\""),
+    )
+    .unwrap()
+    .merge(
+        "name = \"air\"\n\
+         sensor = { pixels = [4, 4], gsd_m = 1.0, altitude_m = 3000.0 }\n\
+         atmosphere = { sky_photons = 2000, aerosol = { model = \"custom\", tau_550 = 0.3 } }",
+    )
+    .unwrap()
+    .text();
+    let scene = dir.path().join("air.toml");
+    std::fs::write(&scene, text).unwrap();
+    let map = dir.path().join("air.map");
+    let (up, down) = (dir.path().join("up"), dir.path().join("down"));
+    for (out, flag) in [(&up, None), (&down, Some("--no-atmosphere"))] {
+        let mut args = vec![
+            "render",
+            p(&scene),
+            "--out",
+            p(out),
+            "--map",
+            p(&map),
+            "--quiet",
+        ];
+        args.extend(flag);
+        let run = littoral(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(down.join("air.json")).unwrap()).unwrap();
+    assert_eq!(report["reused_map"], true);
+    assert!(report["atmosphere"]["altitude_m"].is_null());
+    for product in ["lw", "rrs", "surface"] {
+        let name = format!("air.{product}.bsq");
+        assert_eq!(
+            std::fs::read(up.join(&name)).unwrap(),
+            std::fs::read(down.join(&name)).unwrap(),
+            "{name}"
+        );
+    }
+    assert!(up.join("air.rhot.bsq").exists() && up.join("air.lpath.bsq").exists());
+    assert!(!down.join("air.rhot.bsq").exists() && !down.join("air.lpath.bsq").exists());
+    // The surface's radiance at the surface; through the air, L_path plus
+    // the attenuated surface: different.
+    assert_ne!(
+        std::fs::read(up.join("air.bsq")).unwrap(),
+        std::fs::read(down.join("air.bsq")).unwrap()
+    );
+}

@@ -65,6 +65,7 @@ impl RenderArgs {
             integrator: self.integrator,
             samples_per_pixel: self.spp,
             inelastic: self.inelastic.map(OnOff::on),
+            no_atmosphere: self.no_atmosphere,
         }
     }
 }
@@ -141,6 +142,12 @@ pub struct RenderArgs {
     /// (`[water.fluorescence]`); `off` is the elastic-only ablation.
     #[arg(long, value_enum)]
     pub inelastic: Option<OnOff>,
+    /// See the sea from just above the surface, without the air between:
+    /// the scene's `[sensor] altitude_m` is dropped, while its
+    /// `[atmosphere]` still gives the sun and the sky at the surface (the
+    /// same photon map serves both views).
+    #[arg(long)]
+    pub no_atmosphere: bool,
     /// Render only part I of N of the image tiles into --out (a part
     /// directory), from the photon map at --map; `littoral assemble`
     /// joins the parts. Started again, a part keeps its finished tiles.
