@@ -9,7 +9,9 @@
 # the domain) and its excess over the bay's centre (pixels 750 m or more
 # from the shore), by the photon map (4 M photons, 4 samples per pixel) and
 # by the path integrator (256 paths per pixel), with standard errors from
-# the pixels' spread.
+# the pixels' spread. Also OUTDIR/adjacency.svg: the excess of every ring
+# of pixels against its distance from the shore, both integrators, both
+# heights, the three bands (benches/adjacency.svg is the one measured).
 # Usage: benches/scripts/adjacency.sh [OUTDIR]
 # Needs python3 with numpy (tools/test.sh installs it in .venv).
 set -euo pipefail
@@ -60,7 +62,8 @@ reflectance = 0.3
 TOML
     /usr/bin/time -f "%e s wall" "$bin" render "$out/bay-$h-$integrator.toml" --out "$out/$h-$integrator" --quiet
   done
-  "$py" - "$out/$h-photon-map/bay" "$out/$h-path/bay" "$h" <<'PY'
+  "$py" - "$out/$h-photon-map/bay" "$out/$h-path/bay" "$h" "$out/rings-$h.json" <<'PY'
+import json
 import sys
 import numpy as np
 
@@ -93,5 +96,51 @@ for lo, hi in zip(bins[:-1], bins[1:]):
     print(f"{lo:.0f}-{hi:.0f} | " + " | ".join(cells))
 c = [[r[b][centre].mean() for b in range(nb)] for r in runs]
 print("centre (>= 750 m) | " + " | ".join(f"{c[0][b]:.4f} / {c[1][b]:.4f}" for b in range(nb)))
+# Each ring of pixels (its distance from the shore), for the plot.
+rings = sorted(set(d[~centre].ravel()))
+json.dump(
+    {
+        "distance_m": rings,
+        "excess": [[[float(r[b][d == x].mean() - r[b][centre].mean()) for x in rings] for b in range(nb)] for r in runs],
+    },
+    open(sys.argv[4], "w"),
+)
 PY
 done
+"$py" - "$out" <<'PY'
+# The rings' excess against distance as an SVG, drawn by hand (no plotting
+# package needed): a panel per aerosol height, a colour per band, the
+# photon map solid and the path integrator dashed.
+import json
+import sys
+
+out = sys.argv[1]
+W, H, pad = 360, 260, 48
+colours = {"443 nm": "#1f5fbf", "555 nm": "#2a9d3f", "670 nm": "#c0392b"}
+xmax, ymax = 750.0, 0.016
+svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * W}" height="{H + 30}" font-family="sans-serif" font-size="11">']
+for k, h in enumerate(("1.0", "3.0")):
+    data = json.load(open(f"{out}/rings-{h}.json"))
+    x0 = k * W + pad
+    px = lambda d: x0 + (W - pad - 12) * d / xmax
+    py = lambda e: 12 + (H - pad) * (1 - e / ymax)
+    svg.append(f'<text x="{x0 + 60}" y="{H + 22}">distance from the shore (m); aerosol {h} km</text>')
+    svg.append(f'<line x1="{px(0)}" y1="{py(0)}" x2="{px(xmax)}" y2="{py(0)}" stroke="black"/>')
+    svg.append(f'<line x1="{px(0)}" y1="{py(0)}" x2="{px(0)}" y2="{py(ymax)}" stroke="black"/>')
+    for t in range(0, 751, 250):
+        svg.append(f'<text x="{px(t) - 8}" y="{py(0) + 14}">{t}</text>')
+    for t in (0.0, 0.004, 0.008, 0.012, 0.016):
+        svg.append(f'<text x="{x0 - 44}" y="{py(t) + 4}">{t:.3f}</text>')
+    svg.append(f'<text x="{x0 + 4}" y="{py(ymax) + 10}">excess of rho_t over the centre</text>')
+    for run, dash in ((0, ""), (1, ' stroke-dasharray="4 3"')):
+        for b, (name, colour) in enumerate(colours.items()):
+            pts = " ".join(f"{px(d):.1f},{py(e):.1f}" for d, e in zip(data["distance_m"], data["excess"][run][b]))
+            svg.append(f'<polyline points="{pts}" fill="none" stroke="{colour}"{dash}/>')
+    if k == 1:
+        for b, (name, colour) in enumerate(colours.items()):
+            svg.append(f'<text x="{x0 + 180}" y="{py(ymax) + 26 + 14 * b}" fill="{colour}">{name}</text>')
+        svg.append(f'<text x="{x0 + 180}" y="{py(ymax) + 26 + 42}">solid: photon map; dashed: path</text>')
+svg.append("</svg>")
+open(f"{out}/adjacency.svg", "w").write("\n".join(svg) + "\n")
+print(f"\nplot: {out}/adjacency.svg")
+PY
