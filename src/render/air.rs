@@ -54,6 +54,11 @@
 //! the land's share of the view is averaged over the paths instead of
 //! carried by one.
 //!
+//! **Surroundings.** Beyond the domain a path sees Lambertian land
+//! (`kind = "lambertian"`), deep water of its own IOPs (`kind =
+//! "water"`: that sea's own table, from path-integrator calls on the
+//! scene with its water replaced, plus the glint) or the domain's mean.
+//!
 //! Not in it over the sea: light the surface sends up that the air
 //! returns down to the surface (the sky at the surface is over a black
 //! surface). Over a Lambertian ground the sky holds it
@@ -106,6 +111,13 @@ pub const SURROUND_PATHS: usize = 16;
 const ENV_KEY: u64 = 0x656e_765f_7461_626c;
 const POOLED_KEY: u64 = 0x706f_6f6c_6564_5f70;
 const LAND_KEY: u64 = 0x6c61_6e64_5f74_6162;
+const SEA_KEY: u64 = 0x7365_615f_6265_796f;
+
+/// Path-integrator calls per direction cell for the radiance leaving
+/// water surroundings: the table is what the air sees beyond the domain
+/// (not a control variate), the same for every pixel, so it is given more
+/// calls than the domain's own.
+const SEA_SAMPLES: u64 = 64;
 
 /// The air between the ground and a sensor above it.
 pub struct AirView<'s> {
@@ -153,6 +165,10 @@ enum Surround {
     Land(Vec<f64>),
     /// The table's mean radiance per direction plus the glint.
     Mean,
+    /// Deep water: its own table of the mean radiance leaving it per
+    /// direction cell and band (cell-major, glint taken out), plus the
+    /// glint.
+    Water(Vec<f64>),
 }
 
 impl<'s> AirView<'s> {
@@ -168,7 +184,12 @@ impl<'s> AirView<'s> {
         if air.land_share > 0.0 {
             air.land_env = air.environment(light, true)?;
         }
-        if !matches!(air.surround, Some(Surround::Land(_))) {
+        if let Some(crate::scene::Surroundings::Water(sea)) = &scene.surroundings {
+            let beyond = super::path::PathTracer::new(sea);
+            let table = air.table(&beyond, false, SEA_SAMPLES, SEA_KEY)?;
+            air.surround = Some(Surround::Water(table));
+        }
+        if !matches!(air.surround, Some(Surround::Land(_) | Surround::Water(_))) {
             (air.pooled, air.pooled_se) = air.pooled();
         }
         Ok(Some(air))
@@ -216,6 +237,7 @@ impl<'s> AirView<'s> {
                     .map_or(0.0, |l| f64::from(l.top_m.max(0.0))),
             pooled: vec![0.0; nb],
             pooled_se: vec![0.0; nb],
+            // Water surroundings get their table in `new`.
             surround: scene.surroundings.as_ref().map(|s| match s.reflectance() {
                 Some(r) => Surround::Land(super::ground::lambertian_radiance(scene, r)),
                 None => Surround::Mean,
@@ -292,6 +314,26 @@ impl<'s> AirView<'s> {
         }
     }
 
+    /// What a path meeting the ground beyond the domain toward `up` sees
+    /// there, per band: the land's radiance, or a table (the sea's, or the
+    /// domain's mean) plus the glint (`glint` is scratch).
+    fn beyond(&self, surround: &Surround, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
+        let nb = self.columns.len();
+        let table = match surround {
+            Surround::Land(land) => {
+                out.copy_from_slice(land);
+                return;
+            }
+            Surround::Water(sea) => sea,
+            Surround::Mean => &self.env,
+        };
+        let c = self.cell(up);
+        self.glint(up, glint);
+        for b in 0..nb {
+            out[b] = table[c * nb + b] + glint[b];
+        }
+    }
+
     /// The control's excess over the pooled part's (the water's table
     /// plus the glint) for a path meeting the ground at `meet` toward
     /// `up`, per band: within the domain, the land's table less the
@@ -321,14 +363,26 @@ impl<'s> AirView<'s> {
     /// cell, on either side of the sun's vertical plane. With land in the
     /// domain, at points of the land (`land`) or of the water only.
     fn environment(&self, light: &dyn Integrator, land: bool) -> Result<Vec<f64>> {
-        let nb = self.columns.len();
-        let channels = light.channels();
-        let key = if land { LAND_KEY } else { ENV_KEY };
-        let seed = crate::rng::mix64(self.scene.seed ^ key);
-        let [sx, sy] = self.scene.domain.size_m;
         let [w, h] = self.scene.sensor.pixels;
         let samples = (w * h) as f64 * f64::from(self.scene.sensor.samples_per_pixel);
         let per_cell = ((samples * ENV_SHARE / CELLS as f64) as u64).clamp(1, ENV_SAMPLES);
+        let key = if land { LAND_KEY } else { ENV_KEY };
+        self.table(light, land, per_cell, key)
+    }
+
+    /// The table of [`AirView::environment`] from `per_cell` calls of
+    /// `light` per cell, drawn from the stream `key`.
+    fn table(
+        &self,
+        light: &dyn Integrator,
+        land: bool,
+        per_cell: u64,
+        key: u64,
+    ) -> Result<Vec<f64>> {
+        let nb = self.columns.len();
+        let channels = light.channels();
+        let seed = crate::rng::mix64(self.scene.seed ^ key);
+        let [sx, sy] = self.scene.domain.size_m;
         let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
             .into_par_iter()
             .map(|c| {
@@ -339,7 +393,7 @@ impl<'s> AirView<'s> {
                     vec![0.0; nb],
                 );
                 for k in 0..per_cell {
-                    let mut rng = Pcg32::new(seed, c as u64 * ENV_SAMPLES + k);
+                    let mut rng = Pcg32::new(seed, c as u64 * per_cell.max(ENV_SAMPLES) + k);
                     let u = [rng.uniform_f64(), rng.uniform_f64()];
                     let (mu, phi) = point_in_cell(c / AZIMUTH_BINS, c % AZIMUTH_BINS, u);
                     let phi = if rng.uniform_f64() < 0.5 { phi } else { -phi }
@@ -439,7 +493,9 @@ impl<'s> AirView<'s> {
         let ground = ray.origin.as_dvec3()
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
         match &self.surround {
-            Some(Surround::Land(land)) => return self.surrounded(light, ground, land, rng, out),
+            Some(s @ (Surround::Land(_) | Surround::Water(_))) => {
+                return self.surrounded(light, ground, s, rng, out)
+            }
             Some(Surround::Mean) => return self.by_class(light, ground, rng, out),
             None if self.land_share > 0.0 => return self.by_class(light, ground, rng, out),
             None => {}
@@ -493,7 +549,7 @@ impl<'s> AirView<'s> {
         &self,
         light: &dyn Integrator,
         ground: DVec3,
-        surround: &[f64],
+        surround: &Surround,
         rng: &mut Pcg32,
         out: &mut [f64],
     ) -> Result<()> {
@@ -503,13 +559,11 @@ impl<'s> AirView<'s> {
         let within = self.landings(ground, rng, |meet, dir, w, inside| {
             if inside {
                 self.control(meet, -dir, &mut glint, &mut control);
-                for b in 0..nb {
-                    out[b] += share * w[b] * control[b];
-                }
             } else {
-                for b in 0..nb {
-                    out[b] += share * w[b] * surround[b];
-                }
+                self.beyond(surround, -dir, &mut glint, &mut control);
+            }
+            for b in 0..nb {
+                out[b] += share * w[b] * control[b];
             }
         })?;
         self.add_one_within(light, &within, rng, out)

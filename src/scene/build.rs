@@ -446,7 +446,7 @@ pub(super) fn build(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
 
     let has_air = f.atmosphere.is_some();
     let ground = light::ground(&ctx, &f, ov)?;
-    let surroundings = light::surroundings(&ctx, &f)?;
+    let surroundings = light::surroundings(&ctx, &f, text, path, ov)?;
     let sun = light::sun(&ctx, &f.sun, has_air)?;
     let sky = light::sky(&ctx, &f.sky, &sun, has_air)?;
     let (sun, sky, atmosphere) = match &f.atmosphere {

@@ -56,6 +56,9 @@ pub struct SurroundingsFile {
     pub kind: SurroundingsKind,
     /// For `kind = "lambertian"`.
     pub reflectance: Option<Reflectance>,
+    /// For `kind = "water"`: the water beyond the domain, as a `[water]`
+    /// table.
+    pub water: Option<toml::Table>,
 }
 
 /// `[surroundings] kind`.
@@ -68,6 +71,8 @@ pub enum SurroundingsKind {
     Lambertian,
     /// The domain's own mean radiance per direction all around it.
     Mean,
+    /// Deep water of its own IOPs all around the domain.
+    Water,
 }
 
 impl SceneFile {

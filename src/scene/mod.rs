@@ -135,7 +135,7 @@ pub struct ViewLight {
 }
 
 /// The surface beyond the domain (`[surroundings]`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum Surroundings {
     /// Land of this reflectance per band (`kind = "lambertian"`), with
     /// which the sky also exchanges light.
@@ -143,6 +143,22 @@ pub enum Surroundings {
     /// The domain's own mean radiance per direction (`kind = "mean"`): the
     /// domain sits in a surface that looks like its average.
     Mean,
+    /// Deep water of its own IOPs (`kind = "water"`): this scene with its
+    /// `[water]` replaced and its floor, land, targets and radiometers
+    /// taken out, whose radiance leaving the surface per direction the
+    /// air sees beyond the domain (`render::air`).
+    Water(std::sync::Arc<Scene>),
+}
+
+impl PartialEq for Surroundings {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Surroundings::Lambertian(a), Surroundings::Lambertian(b)) => a == b,
+            (Surroundings::Mean, Surroundings::Mean) => true,
+            (Surroundings::Water(a), Surroundings::Water(b)) => std::sync::Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
 }
 
 impl Surroundings {
@@ -150,7 +166,7 @@ impl Surroundings {
     pub fn reflectance(&self) -> Option<&[f64]> {
         match self {
             Surroundings::Lambertian(r) => Some(r),
-            Surroundings::Mean => None,
+            Surroundings::Mean | Surroundings::Water(_) => None,
         }
     }
 }

@@ -311,11 +311,18 @@ pub(super) fn ground(ctx: &Ctx, f: &SceneFile, ov: &Overrides) -> Result<Option<
     Ok(Some(ctx.reflectance(r, &key("reflectance"))?))
 }
 
-/// `[surroundings]`: a Lambertian surface of a reflectance per band, or
-/// the domain's mean, all around the domain; none for a periodic domain.
-/// Only with an atmosphere (without air no light crosses from beyond the
-/// domain to the sensor).
-pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Surroundings>> {
+/// `[surroundings]`: a Lambertian surface of a reflectance per band, the
+/// domain's mean, or deep water of its own IOPs, all around the domain;
+/// none for a periodic domain. Only with an atmosphere (without air no
+/// light crosses from beyond the domain to the sensor). The scene `text`
+/// at `path` with its overrides `ov` makes the water's scene.
+pub(super) fn surroundings(
+    ctx: &Ctx,
+    f: &SceneFile,
+    text: &str,
+    path: &std::path::Path,
+    ov: &crate::scene::Overrides,
+) -> Result<Option<Surroundings>> {
     let Some(s) = &f.surroundings else {
         return Ok(None);
     };
@@ -326,7 +333,23 @@ pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Surroundin
             "only with [atmosphere]: without air no light from beyond the domain reaches the sensor",
         ));
     }
+    if s.water.is_some() != (s.kind == SurroundingsKind::Water) {
+        return Err(ctx.err(
+            &key("water"),
+            "kind = \"water\" and its [water] table go together: water = { chl = ... } or { iop = ... }",
+        ));
+    }
     match (s.kind, &s.reflectance) {
+        (SurroundingsKind::Water, None) => {
+            let water = s.water.as_ref().expect("checked above");
+            Ok(Some(Surroundings::Water(std::sync::Arc::new(sea_beyond(
+                ctx, text, path, ov, water,
+            )?))))
+        }
+        (SurroundingsKind::Water, Some(_)) => Err(ctx.err(
+            &key("reflectance"),
+            "only for kind = \"lambertian\" (water surroundings are given by their water)",
+        )),
         (SurroundingsKind::Periodic, None) => Ok(None),
         (SurroundingsKind::Mean, None) => Ok(Some(Surroundings::Mean)),
         (SurroundingsKind::Periodic | SurroundingsKind::Mean, Some(_)) => Err(ctx.err(
@@ -341,4 +364,44 @@ pub(super) fn surroundings(ctx: &Ctx, f: &SceneFile) -> Result<Option<Surroundin
             ctx.reflectance(r, &key("reflectance"))?,
         ))),
     }
+}
+
+/// The sea beyond the domain for `[surroundings] kind = "water"`: the
+/// scene `text` with `water` as its `[water]` and without its floor,
+/// land, targets, radiometers, surroundings and sensor altitude (deep
+/// water under the same sun, sky, atmosphere and sea surface). A fault in
+/// the water names `surroundings.water`.
+fn sea_beyond(
+    ctx: &Ctx,
+    text: &str,
+    path: &std::path::Path,
+    ov: &crate::scene::Overrides,
+    water: &toml::Table,
+) -> Result<crate::scene::Scene> {
+    let steps = [K("surroundings"), K("water")];
+    let mut wrapped = toml::Table::new();
+    wrapped.insert("water".into(), toml::Value::Table(water.clone()));
+    let fragment = toml::to_string(&wrapped).map_err(|e| ctx.err(&steps, e.to_string()))?;
+    let mut derived = crate::scene::text::SceneText::parse(text)?;
+    for key in [
+        "water",
+        "bottom",
+        "land",
+        "target",
+        "radiometer",
+        "surroundings",
+        "sensor.altitude_m",
+    ] {
+        derived = derived.remove(key);
+    }
+    let derived = derived
+        .merge(&fragment)
+        .map_err(|e| ctx.err(&steps, e.to_string()))?;
+    crate::scene::Scene::parse(&derived.text(), path, ov).map_err(|e| match e {
+        crate::error::Error::Scene { key, what, .. } => ctx.err(
+            &steps,
+            format!("{}: {what}", key.strip_prefix("water.").unwrap_or(&key)),
+        ),
+        other => other,
+    })
 }
