@@ -110,24 +110,14 @@ fn the_diffuse_transmittance_up_is_the_sky_s_down_by_reciprocity() {
 /// at a fraction of their spread.
 #[test]
 fn the_control_variate_keeps_the_mean() {
-    let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
-                [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
-                [surface]\nkind = \"cox-munk\"\nwind_speed = 5.0\n\
-                [domain]\nsize_m = [10.0, 10.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n\
-                [photons]\ncount = 1000\n\
-                [sensor]\npixels = [2, 2]\ngsd_m = 1.0\naltitude_m = 800000.0\n\
-                view_zenith_deg = 20.0\nview_azimuth_deg = 200.0\n\
-                [atmosphere]\nsky_photons = 1000\n[atmosphere.aerosol]\nmodel = \"custom\"\n\
-                tau_550 = 0.3\nscale_height_km = 1.0\n";
-    let scene = Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
+    let scene = rough_sea_under_air(10.0, 800000.0, 0.3, 1.0, "");
     let nb = scene.bands.len();
     // A surface whose radiance changes with place, direction and band.
     let light = Surface(
         |ray: &CameraRay, b| {
-            let t = ray.origin.z / -ray.direction.z;
-            let p = ray.origin + ray.direction * t;
+            let p = foot(ray);
             let l = 1.0
-                + 0.5 * (std::f64::consts::TAU * f64::from(p.x) / 10.0).sin()
+                + 0.5 * (std::f64::consts::TAU * p.x / 10.0).sin()
                 + 0.8 * f64::from(-ray.direction.z);
             l * (1.0 + 0.1 * b as f64)
         },
@@ -179,28 +169,15 @@ fn the_control_variate_keeps_the_mean() {
 /// pixel (so the paths within see far more than the table's mean). Within 4 combined standard errors.
 #[test]
 fn the_mean_surroundings_keep_the_mean() {
-    let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
-                [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
-                [surface]\nkind = \"cox-munk\"\nwind_speed = 5.0\n\
-                [domain]\nsize_m = [100.0, 100.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n\
-                [photons]\ncount = 1000\n\
-                [sensor]\npixels = [2, 2]\ngsd_m = 1.0\naltitude_m = 300.0\n\
-                view_zenith_deg = 20.0\nview_azimuth_deg = 200.0\n\
-                [atmosphere]\nsky_photons = 1000\n[atmosphere.aerosol]\nmodel = \"custom\"\n\
-                tau_550 = 0.5\nscale_height_km = 0.1\n[surroundings]\nkind = \"mean\"\n";
-    let scene = Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
+    let scene = rough_sea_under_air(100.0, 300.0, 0.5, 0.1, "[surroundings]\nkind = \"mean\"\n");
     let nb = scene.bands.len();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
-    let ground = {
-        let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
-        o + d * (o.z / -d.z)
-    };
+    let ground = foot(&ray);
     // Bright within 15 m of the pixel's ground point, where the paths that
     // land within the domain gather: far from the domain's mean there.
     let light = Surface(
         move |ray: &CameraRay, b| {
-            let t = ray.origin.z / -ray.direction.z;
-            let p = (ray.origin + ray.direction * t).as_dvec3();
+            let p = foot(ray);
             let near = (p - ground).truncate().length() < 15.0;
             let l = 1.0 + if near { 4.0 } else { 0.0 } + 0.8 * f64::from(-ray.direction.z);
             l * (1.0 + 0.1 * b as f64)
@@ -260,29 +237,17 @@ fn the_mean_surroundings_keep_the_mean() {
 /// whose shallows are three times as bright as the rest of the water.
 #[test]
 fn land_in_the_domain_keeps_the_mean() {
-    let text = "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
-                [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
-                [surface]\nkind = \"cox-munk\"\nwind_speed = 5.0\n\
-                [domain]\nsize_m = [100.0, 100.0]\n[water]\niop = { a = 0.1, b = 0.2 }\n\
-                [bottom]\nslope = { from_depth_m = -2.0, to_depth_m = 10.0, axis = \"x\" }\n\
-                reflectance = 0.2\n[land]\nreflectance = 0.3\n\
-                [photons]\ncount = 1000\n\
-                [sensor]\npixels = [2, 2]\ngsd_m = 1.0\naltitude_m = 300.0\n\
-                view_zenith_deg = 20.0\nview_azimuth_deg = 200.0\n\
-                [atmosphere]\nsky_photons = 1000\n[atmosphere.aerosol]\nmodel = \"custom\"\n\
-                tau_550 = 0.5\nscale_height_km = 0.1\n";
-    let scene = Scene::parse(text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap();
+    let scene = rough_sea_under_air(
+        100.0,
+        300.0,
+        0.5,
+        0.1,
+        "[bottom]\nslope = { from_depth_m = -2.0, to_depth_m = 10.0, axis = \"x\" }\n\
+         reflectance = 0.2\n[land]\nreflectance = 0.3\n",
+    );
     let nb = scene.bands.len();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
-    let ground = {
-        let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
-        o + d * (o.z / -d.z)
-    };
-    // Where the ray handed to the integrator meets z = 0.
-    let foot = |ray: &CameraRay| {
-        let t = ray.origin.z / -ray.direction.z;
-        (ray.origin + ray.direction * t).as_dvec3()
-    };
+    let ground = foot(&ray);
     let light = Surface(
         |ray: &CameraRay, b| {
             let p = foot(ray);
@@ -371,4 +336,35 @@ fn assert_same_mean(air: &AirView, a: &[(f64, f64, f64)], b: &[(f64, f64, f64)])
             pooled_se[k]
         );
     }
+}
+
+/// Two bands under a rough sea (Cox–Munk 5 m/s, sun 30 degrees) in a
+/// square domain `domain_m` across, seen from `altitude_m` 20 degrees off
+/// nadir through a custom aerosol of `tau_550` and scale height
+/// `height_km`, with the TOML `extra` added.
+fn rough_sea_under_air(
+    domain_m: f64,
+    altitude_m: f64,
+    tau_550: f64,
+    height_km: f64,
+    extra: &str,
+) -> Scene {
+    let text = format!(
+        "[spectral]\ncenters_nm = [450.0, 650.0]\nfwhm_nm = [10.0, 10.0]\n\
+         [sun]\nzenith_deg = 30.0\nspectrum = \"extraterrestrial\"\n\
+         [surface]\nkind = \"cox-munk\"\nwind_speed = 5.0\n\
+         [domain]\nsize_m = [{domain_m:?}, {domain_m:?}]\n[water]\niop = {{ a = 0.1, b = 0.2 }}\n\
+         [photons]\ncount = 1000\n\
+         [sensor]\npixels = [2, 2]\ngsd_m = 1.0\naltitude_m = {altitude_m:?}\n\
+         view_zenith_deg = 20.0\nview_azimuth_deg = 200.0\n\
+         [atmosphere]\nsky_photons = 1000\n[atmosphere.aerosol]\nmodel = \"custom\"\n\
+         tau_550 = {tau_550:?}\nscale_height_km = {height_km:?}\n{extra}"
+    );
+    Scene::parse(&text, std::path::Path::new("t.toml"), &Overrides::default()).unwrap()
+}
+
+/// Where `ray` meets the mean surface, z = 0.
+fn foot(ray: &CameraRay) -> DVec3 {
+    let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
+    o + d * (o.z / -d.z)
 }
