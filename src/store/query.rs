@@ -3,7 +3,7 @@
 //! A query walks a tree over the tiles' photon bounds (one per layer) and
 //! visits the tiles whose boxes meet its search sphere, nearest box first,
 //! searching each tile's own tree (`store::tiletree`); a kNN query keeps
-//! one heap of the k nearest across tiles and stops when the next box is
+//! one buffer of the k nearest across tiles and stops when the next box is
 //! farther than its current k-th neighbour. The results are those of one
 //! exact search over every photon of the map (up to the order of photons
 //! at exactly equal distance). Each query pins one
@@ -260,7 +260,7 @@ impl PhotonMap {
 
     /// Visit the tiles whose boxes can still hold a result, nearest box
     /// first (through the tile-box index), and search each one's tree; the
-    /// k nearest are kept in one heap across tiles, whose k-th distance
+    /// k nearest are kept in one buffer across tiles, whose k-th distance
     /// bounds the tiles still to visit. The results are left in
     /// `s.within` (a radius search, `k == usize::MAX`) or `s.nearest`.
     fn search_tiles(

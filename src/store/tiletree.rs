@@ -1,5 +1,5 @@
 //! A k-d tree over a tile's photons that builds at decode speed, and the
-//! bounded heap of a k-nearest search ([`Nearest`]).
+//! bounded buffer of a k-nearest search ([`Nearest`]).
 //!
 //! A tile stores its photons sorted by the Morton code of their 16-bit
 //! positions in the tile's box (`store::codec`). That order is already a
@@ -138,55 +138,74 @@ const CELL_PAD: usize = 3 * LEAF;
 const PENDING: u32 = 1 << 31;
 
 /// The `k` nearest photons found so far, none farther than a limit: a
-/// max-heap of (squared distance, item). One heap serves a query across
-/// all the tiles it visits; the records of the photons taken from a tile
-/// are copied out of it once the tile is searched
-/// ([`Nearest::take_records`]), so photons that enter the heap and leave
-/// it again are never read.
+/// buffer of (squared distance, item) candidates, none farther than the
+/// bound, cut back to the `k` nearest (a selection, linear in its length)
+/// whenever it reaches [`CUT_AT`] times k and after each tile. Each offer
+/// is one comparison and a push: a max-heap of k = 2000 spent most of a
+/// search in the branches of its sift, eleven levels deep. Between cuts
+/// the bound is the k-th distance of the last cut, looser than the heap's
+/// would be, which costs a few more offers and no correctness. One buffer
+/// serves a query across all the tiles it visits; the records of the
+/// photons taken from a tile are copied out of it once the tile is
+/// searched ([`Nearest::take_records`]), so photons that enter the buffer
+/// and leave it again are never read.
 #[derive(Default)]
 pub struct Nearest {
     k: usize,
-    limit_sq: f32,
-    heap: Vec<(f32, u32)>,
+    bound: f32,
+    found: Vec<(f32, u32)>,
     records: Vec<PackedPhoton>,
 }
+
+/// The buffer of [`Nearest`] is cut back to k when it holds this many
+/// times k candidates.
+const CUT_AT: usize = 2;
 
 impl Nearest {
     /// Empty, for the `k` nearest (k > 0) within `limit_sq`.
     pub fn reset(&mut self, k: usize, limit_sq: f32) {
         assert!(k > 0, "k nearest with k = 0");
         self.k = k;
-        self.limit_sq = limit_sq;
-        self.heap.clear();
+        self.bound = limit_sq;
+        self.found.clear();
         self.records.clear();
     }
 
     /// Squared distance beyond which nothing more can be taken.
     #[inline(always)]
     pub fn bound_sq(&self) -> f32 {
-        if self.heap.len() < self.k {
-            self.limit_sq
-        } else {
-            self.heap[0].0
-        }
+        self.bound
     }
 
     #[inline(always)]
     fn offer(&mut self, d: f32, item: u32) {
-        if self.heap.len() < self.k {
-            if d <= self.limit_sq {
-                self.heap.push((d, item | PENDING));
-                sift_up(&mut self.heap, |a, b| a.0 > b.0);
+        if d <= self.bound {
+            self.found.push((d, item | PENDING));
+            if self.found.len() >= CUT_AT * self.k {
+                self.cut();
             }
-        } else if d < self.heap[0].0 {
-            replace_top(&mut self.heap, (d, item | PENDING));
         }
     }
 
-    /// Copy the records of the photons taken from the tile just searched
-    /// (whose photons are `photons`).
+    /// Keep the k nearest candidates (any of equal distances at the k-th)
+    /// and bound what follows by the k-th distance.
+    fn cut(&mut self) {
+        let k = self.k;
+        if self.found.len() > k {
+            self.found
+                .select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+            self.found.truncate(k);
+        }
+        if self.found.len() == k {
+            self.bound = self.found.iter().fold(0.0f32, |m, e| m.max(e.0));
+        }
+    }
+
+    /// Cut back to the k nearest, then copy the records of the photons
+    /// taken from the tile just searched (whose photons are `photons`).
     fn take_records(&mut self, photons: &[PackedPhoton]) {
-        for e in &mut self.heap {
+        self.cut();
+        for e in &mut self.found {
             if e.1 & PENDING != 0 {
                 self.records.push(photons[(e.1 & !PENDING) as usize]);
                 e.1 = (self.records.len() - 1) as u32;
@@ -195,13 +214,13 @@ impl Nearest {
     }
 
     /// The photons found (after [`Nearest::take_records`]), nearest first
-    /// when `sorted`, else in heap order.
+    /// when `sorted`, else in the buffer's order.
     pub fn results(&mut self, sorted: bool) -> impl Iterator<Item = (f32, &PackedPhoton)> {
         if sorted {
-            self.heap.sort_by(|a, b| a.0.total_cmp(&b.0));
+            self.found.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
         let records = &self.records;
-        self.heap.iter().map(move |&(d, r)| {
+        self.found.iter().map(move |&(d, r)| {
             debug_assert!(r & PENDING == 0, "records not taken");
             (d, &records[r as usize])
         })
@@ -253,12 +272,6 @@ pub(crate) fn sift_down<T: Copy>(h: &mut [T], v: T, above: impl Fn(T, T) -> bool
         i = c;
     }
     h[i] = v;
-}
-
-/// Replace the farthest entry of the max-heap `h` by the nearer `v`.
-#[inline(always)]
-fn replace_top(h: &mut [(f32, u32)], v: (f32, u32)) {
-    sift_down(h, v, |a, b| a.0 > b.0);
 }
 
 /// The traversal state of one side not yet visited.
