@@ -28,7 +28,7 @@
 //! Not for: direct light (the renderer adds single scattering of the sun
 //! and direct sun on the floor by next-event estimation).
 
-use super::peak::TruncatedPhase;
+use super::peak::{MixedPhase, TruncatedPhase};
 use crate::error::Result;
 use crate::estimate::boundary::{self, AxialDistances, BoundaryGrid, BoundaryMode, DiscDistances};
 use crate::estimate::groups::{GroupSums, Groups, CHANNELS, GROUPS};
@@ -147,7 +147,7 @@ pub struct Estimator<'a> {
     /// (see `peak`).
     /// [water, particle] for rays looking up or sideways, for rays
     /// looking down, and for rays looking down at a target.
-    phases: [[TruncatedPhase; 2]; 3],
+    phases: [MixedPhase; 3],
     /// Precomputed axial distances, when the scene asks for them.
     grid: Option<BoundaryGrid>,
     /// Band shapes of the `grid` spectral mode.
@@ -223,10 +223,10 @@ impl<'a> Estimator<'a> {
                 scene.estimate.forward_peak_target_deg,
             ]
             .map(|deg| {
-                [
+                MixedPhase::new(
                     TruncatedPhase::new(&scene.water_phase, deg),
                     TruncatedPhase::new(&scene.particle_phase, deg),
-                ]
+                )
             }),
         };
         if spectral == SpectralMode::Grid {
@@ -260,11 +260,8 @@ impl<'a> Estimator<'a> {
         let b = iop.b();
         let fw = if b > 0.0 { iop.b_w / b } else { 0.0 };
         let cos = p.direction.dot(toward_viewer) as f64;
-        mixture(
-            self.phases_for(toward_viewer, view == VIEW_UP_TARGET),
-            fw,
-            cos,
-        )
+        self.mixed_for(toward_viewer, view == VIEW_UP_TARGET)
+            .mix(fw, cos)
     }
 
     /// Fixed viewing directions of the band-shape grid: light travelling
@@ -426,6 +423,11 @@ impl<'a> Estimator<'a> {
     /// light travelling up); `at_target`: a ray looking down at a target
     /// (`forward_peak_target_deg`).
     fn phases_for(&self, toward_viewer: Vec3, at_target: bool) -> &[TruncatedPhase; 2] {
+        self.mixed_for(toward_viewer, at_target).parts()
+    }
+
+    /// The two of [`Self::phases_for`] as one mixture.
+    fn mixed_for(&self, toward_viewer: Vec3, at_target: bool) -> &MixedPhase {
         let i = match (toward_viewer.z > 0.0, at_target) {
             (false, _) => 0,
             (true, false) => 1,
@@ -493,7 +495,7 @@ impl<'a> Estimator<'a> {
             }
         }));
         let mix = std::mem::take(&mut scratch.mix);
-        let phases = self.phases_for(toward_viewer, at_target);
+        let phases = self.mixed_for(toward_viewer, at_target);
         // Where the IOPs jump (depth layers), a photon stored at a
         // scattering event counts at x as the light field there, not as
         // its own water's scattering: weighted by b(x) / b(x_p), the
@@ -513,7 +515,7 @@ impl<'a> Estimator<'a> {
             let fw = mix[band] as f64;
             let cos = n.photon.direction.dot(toward_viewer) as f64;
             let power = n.photon.power as f64;
-            let mut w = mixture(phases, fw, cos) * power;
+            let mut w = phases.mix(fw, cos) * power;
             // Through the Raman phase function and the isotropic one.
             let mut phases = if inelastic {
                 [
@@ -702,13 +704,6 @@ impl<'a> Estimator<'a> {
             out,
         )
     }
-}
-
-/// The local phase function for a photon: the truncated [water, particle]
-/// phase functions mixed by the pure-water share `fw` of scattering,
-/// at scattering cosine `cos`.
-fn mixture([pw, pp]: &[TruncatedPhase; 2], fw: f64, cos: f64) -> f64 {
-    fw * pw.eval(cos) + (1.0 - fw) * pp.eval(cos)
 }
 
 /// Which photons an estimate searches, and at which scale.

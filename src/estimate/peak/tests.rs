@@ -139,3 +139,32 @@ fn peak_directions_follow_the_shape_of_the_delta() {
         }
     }
 }
+
+/// The interleaved mixture gives each part's own value, mixed, to the bit:
+/// tabulated parts, an exact part (no truncation) beside a tabulated one,
+/// at the ends of the table and outside [-1, 1].
+#[test]
+fn mixed_phase_is_the_parts_mixed_to_the_bit() {
+    let water = PhaseFunction::rayleigh(0.84).unwrap();
+    let particle = PhaseFunction::petzold();
+    for (dw, dp) in [(DEFAULT_FORWARD_PEAK_DEG, 20.0), (0.0, 20.0), (10.0, 0.0)] {
+        let (w, p) = (
+            TruncatedPhase::new(&water, dw),
+            TruncatedPhase::new(&particle, dp),
+        );
+        let mixed = MixedPhase::new(w.clone(), p.clone());
+        let mut rng = crate::rng::Pcg32::new(3, 5);
+        let ends = [-1.5, -1.0, -0.999_999, 0.0, 0.999_999, 1.0, 1.5];
+        let draws = (0..10_000).map(|_| 2.0 * rng.uniform_f64() - 1.0);
+        for mu in ends.into_iter().chain(draws) {
+            for fw in [0.0, 0.3, 1.0] {
+                let want = fw * w.eval(mu) + (1.0 - fw) * p.eval(mu);
+                assert_eq!(
+                    mixed.mix(fw, mu).to_bits(),
+                    want.to_bits(),
+                    "{dw} {dp} {mu} {fw}"
+                );
+            }
+        }
+    }
+}
