@@ -99,8 +99,12 @@ pub struct Scratch {
 /// A found photon's weight toward the viewer (power times the phase
 /// function), whether it travels toward the viewer's hemisphere, and its
 /// weights through the Raman and the isotropic phase functions (inelastic
-/// light; zero without it).
-pub(super) type PhotonWeight<'w> = dyn Fn(&Neighbour) -> (f64, bool, [f64; 2]) + 'w;
+/// light; zero without it). A type parameter of the estimate, not a
+/// `dyn`: inlined into its loop over the photons, the weight cost a call
+/// and a spill of that loop's state per photon.
+pub(super) trait PhotonWeight: Fn(&Neighbour) -> (f64, bool, [f64; 2]) {}
+
+impl<F: Fn(&Neighbour) -> (f64, bool, [f64; 2])> PhotonWeight for F {}
 
 /// Slots of `Scratch::inelastic` at one scale: Raman phase, isotropic,
 /// elastic; the expanded scale's follow at `+ INELASTIC_SLOTS`.

@@ -284,7 +284,7 @@ impl Estimator<'_> {
         &self,
         x: Vec3,
         classes: Classes,
-        weight: &PhotonWeight,
+        weight: &impl PhotonWeight,
         surface: Option<(Vec3, SurfaceId)>,
         view: Option<ShapeView>,
         scratch: &mut Scratch,
