@@ -242,18 +242,25 @@ impl TruncatedPhase {
         if let Some(p) = &self.exact {
             return p.eval(mu);
         }
-        let x = (mu.clamp(-1.0, 1.0) + 1.0) * 0.5 * (TABLE - 1) as f64;
-        let i = (x as usize).min(TABLE - 2);
-        let t = x - i as f64;
+        let (i, t) = table_at(mu);
         self.table[i] * (1.0 - t) + self.table[i + 1] * t
     }
+}
+
+/// The table entry at or below cos(theta) = `mu` and the fraction of the
+/// way to the next (`mu` clamped to [-1, 1]).
+#[inline]
+fn table_at(mu: f64) -> (usize, f64) {
+    let x = (mu.clamp(-1.0, 1.0) + 1.0) * 0.5 * (TABLE - 1) as f64;
+    let i = (x as usize).min(TABLE - 2);
+    (i, x - i as f64)
 }
 
 /// The truncated phase functions of pure water and of the particles,
 /// tabulated side by side as well: a photon's weight is the two mixed at
 /// one cosine, and with the rows interleaved both values come from one
-/// cache line (read from two tables of 64 KiB, the two lookups were a
-/// seventh of the default render's time, most of it waiting on memory).
+/// cache line instead of two tables of 64 KiB (the default render 2 %
+/// faster).
 #[derive(Clone, Debug)]
 pub struct MixedPhase {
     parts: [TruncatedPhase; 2],
@@ -295,9 +302,7 @@ impl MixedPhase {
             let [w, p] = &self.parts;
             return fw * w.eval(mu) + (1.0 - fw) * p.eval(mu);
         }
-        let x = (mu.clamp(-1.0, 1.0) + 1.0) * 0.5 * (TABLE - 1) as f64;
-        let i = (x as usize).min(TABLE - 2);
-        let t = x - i as f64;
+        let (i, t) = table_at(mu);
         let (a, b) = (self.pairs[i], self.pairs[i + 1]);
         fw * (a[0] * (1.0 - t) + b[0] * t) + (1.0 - fw) * (a[1] * (1.0 - t) + b[1] * t)
     }
