@@ -30,7 +30,7 @@
 #    and the time the path integrator needs to match the photon map there.
 #
 # Usage: benches/scripts/peers.sh [OUTDIR] [PATH_SPP] [MI_SPP] [BUILTIN_SPP]
-# (defaults 4096, 256, 4). Needs python3 with numpy and Mitsuba 3:
+# (defaults 4096, 256, 16). Needs python3 with numpy and Mitsuba 3:
 # `pip install numpy mitsuba==3.5.2` (its wheels' LLVM variant runs on the
 # system's LLVM 15; newer Mitsuba emits code LLVM 15 cannot compile).
 set -euo pipefail
@@ -38,7 +38,7 @@ cd "$(dirname "$0")/../.."
 out=${1:-target/bench-peers}
 pspp=${2:-4096}
 mspp=${3:-256}
-bspp=${4:-4}
+bspp=${4:-16}
 mkdir -p "$out"
 cargo build --release --quiet
 bin=target/release/littoral
