@@ -192,11 +192,12 @@ impl Nearest {
     fn cut(&mut self) {
         let k = self.k;
         if self.found.len() > k {
+            // The k-th lands at k - 1, with none farther before it.
             self.found
                 .select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
             self.found.truncate(k);
-        }
-        if self.found.len() == k {
+            self.bound = self.found[k - 1].0;
+        } else if self.found.len() == k {
             self.bound = self.found.iter().fold(0.0f32, |m, e| m.max(e.0));
         }
     }
