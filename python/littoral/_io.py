@@ -26,6 +26,8 @@ CUBES = {
     # With the sensor above the surface.
     "rho_t": (".rhot", "reflectance at the sensor pi L_t / (E_0 cos theta_s)", None, "1"),
     "L_path": (".lpath", "atmospheric path radiance at the sensor", None, "W m-2 sr-1 nm-1"),
+    "t_down": (".tdown", "total transmittance of the air from its top to the surface", None, "1"),
+    "t_up": (".tup", "total transmittance of the air from the ground to the sensor", None, "1"),
 }
 
 
@@ -34,7 +36,8 @@ class Result:
 
     - ``cube``: dims ``wavelength``, ``y``, ``x``; ``L_t``, ``L_w``,
       ``L_surface``, ``R_rs`` and ``stderr``; with the sensor above the
-      surface (``sensor.altitude_m``) also ``rho_t`` and ``L_path``.
+      surface (``sensor.altitude_m``) also ``rho_t``, ``L_path``, ``t_down``
+      and ``t_up``.
     - ``radiometers``: dims ``radiometer``, ``wavelength`` (``None``
       without radiometers).
     - ``profiles``: E_d, E_u, E_od, E_ou, L_u, L_d against ``depth`` and

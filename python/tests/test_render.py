@@ -264,10 +264,15 @@ def test_a_sensor_above_the_atmosphere_adds_rho_t_and_the_path_radiance(small):
     assert r.cube.rho_t.attrs["units"] == "1"
     want = np.asarray(a["L_path"], dtype=np.float32)[:, None, None]
     assert np.all(r.cube.L_path.values == want) and np.all(want > 0)
+    for name in ("t_down", "t_up"):
+        want = np.asarray(a[name], dtype=np.float32)[:, None, None]
+        assert np.all(r.cube[name].values == want), name
+        assert np.all((want > 0) & (want < 1)), name
+        assert r.cube[name].attrs["units"] == "1"
     assert "rho_t" not in littoral.render(small, progress=False).cube
     # From just above the surface: the same water, no air between.
     near = littoral.render(scene, no_atmosphere=True, progress=False)
-    assert "rho_t" not in near.cube and "L_path" not in near.cube
+    assert "rho_t" not in near.cube and "L_path" not in near.cube and "t_up" not in near.cube
     assert near.cube.L_w.values.tobytes() == r.cube.L_w.values.tobytes()
     assert near.cube.L_surface.values.tobytes() == r.cube.L_surface.values.tobytes()
     assert not np.array_equal(near.cube.L_t.values, r.cube.L_t.values)

@@ -401,14 +401,7 @@ impl AtmosphereReport {
             Ed_diffuse_flux: col(&|b| b.diffuse_flux),
             Ed_diffuse_flux_stderr: col(&|b| b.diffuse_flux_se),
             t_direct: col(&|b| b.direct_transmittance),
-            t_down: col(&|b| {
-                let top = b.toa_irradiance * mu0;
-                if top > 0.0 {
-                    (b.direct + b.diffuse) / top
-                } else {
-                    0.0
-                }
-            }),
+            t_down: col(&|b| b.t_down(mu0)),
             up_at_top: col(&|b| b.up_at_top),
             absorbed: col(&|b| b.absorbed),
             spherical_albedo: if coupled {

@@ -260,10 +260,16 @@ pub const PRODUCTS: [Product; 3] = [
 /// The products of a sensor above the surface, after [`PRODUCTS`]: the
 /// reflectance at the sensor rho_t = pi L_t / (E_0 mu_0), with E_0 the
 /// sun's beam-normal irradiance at the top of the atmosphere on the day
-/// (the Earth–Sun distance in it) and mu_0 the cosine of the sun's zenith,
-/// and the path radiance L_path (light scattered into the view that never
-/// reached the surface), the same for every pixel of an orthographic view.
-pub const AIR_PRODUCTS: [Product; 2] = [
+/// (the Earth–Sun distance in it) and mu_0 the cosine of the sun's zenith;
+/// the path radiance L_path (light scattered into the view that never
+/// reached the surface); the total transmittances t_down, from the top of
+/// the atmosphere to the surface (E_d(0+) / (E_0 mu_0)), and t_up, from a
+/// Lambertian ground to the sensor along its view. The last three are the
+/// air's, horizontally uniform, and so the same in every pixel of an
+/// orthographic view; they are cubes so that a pixel's L_t can be taken
+/// apart (L_t = L_path + t_up L_surface-leaving, over a uniform ground)
+/// with the same tools as the other products.
+pub const AIR_PRODUCTS: [Product; 4] = [
     Product {
         suffix: "rhot",
         layer: "rhot",
@@ -275,6 +281,18 @@ pub const AIR_PRODUCTS: [Product; 2] = [
         layer: "lpath",
         description: "atmospheric path radiance at the sensor (L_path: scattered into the view, never reached the surface)",
         units: RADIANCE_UNITS,
+    },
+    Product {
+        suffix: "tdown",
+        layer: "tdown",
+        description: "total transmittance of the air from its top to the surface, direct and diffuse (t_down = E_d(0+) / (E_0 cos theta_s))",
+        units: "1",
+    },
+    Product {
+        suffix: "tup",
+        layer: "tup",
+        description: "total transmittance of the air from a Lambertian ground to the sensor along its view, direct and scattered (t_up)",
+        units: "1",
     },
 ];
 
@@ -427,7 +445,8 @@ pub fn render_tile(
     let mut rgb = vec![0f32; tw * th * 3];
     let mut products = vec![vec![0f32; tw * th * nb]; products(scene).len()];
     // With the sensor above the surface: pi / (E_0 mu_0) per band, for
-    // rho_t, and the path radiance.
+    // rho_t, and the air's own products, the same in every pixel (L_path,
+    // t_down, t_up).
     let toa = scene.atmosphere.as_ref().and_then(|a| {
         let view = a.view.as_ref()?;
         let mu0 = scene.sun.zenith_rad.cos();
@@ -436,7 +455,15 @@ pub fn render_tile(
             .iter()
             .map(|band| reflectance_factor(band.toa_irradiance, mu0))
             .collect();
-        Some((to_rho, &view.path_radiance))
+        let t_down: Vec<f64> = a.bands.iter().map(|band| band.t_down(mu0)).collect();
+        Some((
+            to_rho,
+            [
+                view.path_radiance.clone(),
+                t_down,
+                view.transmittance_up.clone(),
+            ],
+        ))
     });
     let mut acc = Moments::new(nb, channels);
     let mut sample = vec![0f64; nb * channels];
@@ -489,9 +516,11 @@ pub fn render_tile(
                 } else {
                     0.0
                 };
-                if let Some((to_rho, path)) = &toa {
+                if let Some((to_rho, air)) = &toa {
                     products[3][base + b] = (m * to_rho[b]) as f32;
-                    products[4][base + b] = path[b] as f32;
+                    for (product, values) in products[4..].iter_mut().zip(air) {
+                        product[base + b] = values[b] as f32;
+                    }
                 }
             }
             if !errors.is_empty() {

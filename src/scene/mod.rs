@@ -188,6 +188,20 @@ pub struct BandAtmosphere {
     pub spherical_albedo_se: f64,
 }
 
+impl BandAtmosphere {
+    /// The total transmittance from the top of the atmosphere to the
+    /// surface, direct and diffuse: E_d(0+) / (E_0 mu0), with `mu0` the
+    /// cosine of the sun's zenith (0 where no sunlight arrives at the top).
+    pub fn t_down(&self, mu0: f64) -> f64 {
+        let top = self.toa_irradiance * mu0;
+        if top > 0.0 {
+            (self.direct + self.diffuse) / top
+        } else {
+            0.0
+        }
+    }
+}
+
 /// A horizontal rectangle (m) over the domain: where paths entering the
 /// water over a target split.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -416,7 +416,10 @@ fn a_sensor_above_absorbing_air_sees_the_surface_attenuated() {
             .collect()
     };
     assert_eq!(suffixes(&r0), ["lw", "surface", "rrs"]);
-    assert_eq!(suffixes(&r1), ["lw", "surface", "rrs", "rhot", "lpath"]);
+    assert_eq!(
+        suffixes(&r1),
+        ["lw", "surface", "rrs", "rhot", "lpath", "tdown", "tup"]
+    );
     let product = |r: &littoral::job::report::RunReport, name: &str| {
         open(
             &r.outputs
@@ -541,13 +544,24 @@ fn the_photon_map_and_the_path_integrator_agree_at_the_top() {
         let v = c.band(b).unwrap();
         v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64
     };
-    // The path-radiance cube holds the report's L_path in every pixel.
-    let lpath = pm.outputs.products.iter().find(|p| p.product == "lpath");
-    let lpath = open(&lpath.unwrap().hdr);
-    let reported = &pm.atmosphere.as_ref().unwrap().L_path;
-    for (b, want) in reported.iter().enumerate() {
-        assert!(*want > 0.0);
-        assert!(lpath.band(b).unwrap().iter().all(|&v| v == *want as f32));
+    // The air's cubes hold the report's L_path, t_down and t_up in every
+    // pixel.
+    let air = pm.atmosphere.as_ref().unwrap();
+    for (name, reported) in [
+        ("lpath", &air.L_path),
+        ("tdown", &air.t_down),
+        ("tup", &air.t_up),
+    ] {
+        let cube = pm.outputs.products.iter().find(|p| p.product == name);
+        let cube = open(&cube.unwrap().hdr);
+        assert_eq!(cube.bands(), reported.len(), "{name}");
+        for (b, want) in reported.iter().enumerate() {
+            assert!(*want > 0.0, "{name}, band {b}");
+            assert!(
+                cube.band(b).unwrap().iter().all(|&v| v == *want as f32),
+                "{name}, band {b}"
+            );
+        }
     }
     let l_path = open(&path.outputs.hdr);
     let se_path = open(path.outputs.stderr_hdr.as_ref().unwrap());

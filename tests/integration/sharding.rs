@@ -444,6 +444,8 @@ sensor = { altitude_m = 700000.0, view_zenith_deg = 20.0 }
     for name in [
         "shards.rhot.hdr",
         "shards.lpath.bsq",
+        "shards.tdown.hdr",
+        "shards.tup.bsq",
         "shards.atmosphere.csv",
     ] {
         assert!(whole.join(name).exists(), "{name}");
