@@ -7,7 +7,8 @@
 # Usage: benches/scripts/targets.sh [OUTDIR] [PHOTONS_PER_M2] [SPP] [GATHER_RAYS] [WIND_M_S] [SEEDS]
 # (WIND_M_S 0: a flat surface; default 5, Cox-Munk. SEEDS: the photon map's
 # seeds, e.g. "1 2 3 4"; default "1".) TARGET_SPLIT in the environment
-# sets `[photons] target_split` (default: the scene's, 16).
+# sets `[photons] target_split` (default: the scene's, 16); SIZES and
+# DEPTHS pick boxes and depths (default "0.5 1 2 4" and "1.5 3 6").
 # Prints one markdown row per box: band-mean R_rs difference with the
 # combined standard error of the band means, the worst band against its
 # 3 sigma + 2 % allowance, and the box/sand contrast of both integrators.
@@ -36,8 +37,8 @@ rad() { echo "{ depth_m = -1.0, view = \"nadir\", position_m = [$1, $2] }"; }
 radiometers="radiometer=[$(rad 20.0 20.0), $(rad 28.0 20.0), $(rad 12.0 20.0), $(rad 20.0 28.0), $(rad 20.0 12.0)]"
 echo "| box | top depth | box: photon map - path | sand: photon map - path | worst band / allowance | contrast photon map | contrast path |"
 echo "|---|---|---|---|---|---|---|"
-for size in 0.5 1 2 4; do
-  for depth in 1.5 3 6; do
+for size in ${SIZES:-0.5 1 2 4}; do
+  for depth in ${DEPTHS:-1.5 3 6}; do
     name="box-${size}m-${depth}m"
     floor=$(python3 -c "print($depth + 0.5)")
     centre=$(python3 -c "print(-($depth + 0.25))")
