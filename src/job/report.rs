@@ -273,14 +273,18 @@ pub struct AtmosphereReport {
     /// Irradiance leaving the top and absorbed in the air.
     pub up_at_top: Vec<f64>,
     pub absorbed: Vec<f64>,
-    /// Over a Lambertian ground or surroundings: the air's spherical
-    /// albedo and its
-    /// standard error (the irradiances above then hold every order of
-    /// reflection between the ground and the air).
+    /// Over a Lambertian ground or surroundings, and over the sea with
+    /// `sea_coupling`: the air's spherical albedo for the light the
+    /// surface sends up and its standard error (the irradiances above then
+    /// hold every order of reflection between the surface and the air).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spherical_albedo: Vec<f64>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spherical_albedo_stderr: Vec<f64>,
+    /// Over the sea with `sea_coupling`: the sea's albedo, the share of
+    /// E_d(0+) over a black surface that it sends up.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub surface_albedo: Vec<f64>,
     /// With the sensor above the surface: its height, the direct
     /// transmittance from the ground to it along its view, and the path
     /// radiance it sees (light scattered into the view that never reached
@@ -318,6 +322,10 @@ impl AtmosphereReport {
         if ground {
             t.push_str(",spherical_albedo,spherical_albedo_stderr");
         }
+        let sea = !self.surface_albedo.is_empty();
+        if sea {
+            t.push_str(",surface_albedo");
+        }
         if view {
             t.push_str(",t_view,t_up,t_up_stderr,L_path,L_path_stderr,rho_path,rho_path_stderr");
         }
@@ -343,6 +351,9 @@ impl AtmosphereReport {
             ];
             if ground {
                 row.extend([self.spherical_albedo[b], self.spherical_albedo_stderr[b]]);
+            }
+            if sea {
+                row.push(self.surface_albedo[b]);
             }
             if view {
                 let to_rho = crate::render::reflectance_factor(self.toa_irradiance[b], mu0);
@@ -370,12 +381,15 @@ impl AtmosphereReport {
             a.bands.iter().map(f).collect()
         };
         let mu0 = scene.sun.zenith_rad.cos();
-        // The sky exchanges light with a Lambertian ground or surroundings.
-        let coupled = scene.ground.is_some()
+        // The sky exchanges light with a Lambertian ground or surroundings,
+        // or with the sea (`render::sea_air`).
+        let land = scene.ground.is_some()
             || scene
                 .surroundings
                 .as_ref()
                 .is_some_and(|s| s.reflectance().is_some());
+        let sea = !land && a.sea_coupling;
+        let coupled = land || sea;
         Some(AtmosphereReport {
             profile: a.spec.profile.name.to_string(),
             surface_pressure_hpa: a.spec.surface_pressure_hpa,
@@ -411,6 +425,11 @@ impl AtmosphereReport {
             },
             spherical_albedo_stderr: if coupled {
                 col(&|b| b.spherical_albedo_se)
+            } else {
+                Vec::new()
+            },
+            surface_albedo: if sea {
+                col(&|b| b.surface_albedo)
             } else {
                 Vec::new()
             },

@@ -44,6 +44,7 @@ const UNITS: &[(&str, &str)] = &[
     ("atmosphere.t_up", "1"),
     ("atmosphere.spherical_albedo", "1"),
     ("atmosphere.spherical_albedo_stderr", "1"),
+    ("atmosphere.surface_albedo", "1"),
     ("atmosphere.t_up_stderr", "1"),
     ("above_surface.Ed", SPECTRAL_IRRADIANCE),
     ("above_surface.Ed_stderr", SPECTRAL_IRRADIANCE),

@@ -59,10 +59,9 @@
 //! "water"`: that sea's own table, from path-integrator calls on the
 //! scene with its water replaced, plus the glint) or the domain's mean.
 //!
-//! Not in it over the sea: light the surface sends up that the air
-//! returns down to the surface (the sky at the surface is over a black
-//! surface). Over a Lambertian ground the sky holds it
-//! (`optics::atmosphere::transport::ground_response`).
+//! The light the surface sends up that the air returns down to it is in
+//! the sky at the surface: over the sea by `render::sea_air`, over a
+//! Lambertian ground by `optics::atmosphere::transport::ground_response`.
 
 use super::camera::CameraRay;
 use super::Integrator;
@@ -76,7 +75,7 @@ use rayon::prelude::*;
 
 /// Height above the surface (or above the land's top) of the rays handed
 /// to the integrator (m).
-const RAY_HEIGHT_M: f64 = 10.0;
+pub(crate) const RAY_HEIGHT_M: f64 = 10.0;
 
 /// Points per side of the grid that measures the land's share of the
 /// domain.
@@ -282,10 +281,7 @@ impl<'s> AirView<'s> {
     /// The ray handed to the integrator for the radiance leaving the
     /// ground at `at` toward `up`: from above the land's top.
     fn ray_to(&self, at: DVec3, up: DVec3) -> CameraRay {
-        CameraRay {
-            origin: (at + up * (self.ray_height_m / up.z)).as_vec3(),
-            direction: (-up).as_vec3(),
-        }
+        ray_from_above(at, up, self.ray_height_m)
     }
 
     /// The sun glint per band leaving the ground at `at` toward `up`: none
@@ -379,43 +375,16 @@ impl<'s> AirView<'s> {
         per_cell: u64,
         key: u64,
     ) -> Result<Vec<f64>> {
-        let nb = self.columns.len();
-        let channels = light.channels();
-        let seed = crate::rng::mix64(self.scene.seed ^ key);
         let [sx, sy] = self.scene.domain.size_m;
-        let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
-            .into_par_iter()
-            .map(|c| {
-                let (mut sum, mut out, mut water, mut glint) = (
-                    vec![0.0; nb],
-                    vec![0.0; nb * channels],
-                    vec![0.0; nb],
-                    vec![0.0; nb],
-                );
-                for k in 0..per_cell {
-                    let mut rng = Pcg32::new(seed, c as u64 * per_cell.max(ENV_SAMPLES) + k);
-                    let u = [rng.uniform_f64(), rng.uniform_f64()];
-                    let (mu, phi) = point_in_cell(c / AZIMUTH_BINS, c % AZIMUTH_BINS, u);
-                    let phi = if rng.uniform_f64() < 0.5 { phi } else { -phi }
-                        + self.scene.sun.azimuth_rad;
-                    let sz = (1.0 - mu * mu).max(0.0).sqrt();
-                    let up = DVec3::new(sz * phi.cos(), sz * phi.sin(), mu.max(1e-3)).normalize();
-                    let at = self.point_of_class(&mut rng, sx, sy, land);
-                    let ray = self.ray_to(at, up);
-                    light.camera(ray, &mut rng, &mut out, &mut water)?;
-                    self.glint_at(at, up, &mut glint);
-                    for b in 0..nb {
-                        sum[b] += (out[b] - glint[b]) / per_cell as f64;
-                    }
-                }
-                Ok(sum)
-            })
-            .collect();
-        let mut env = Vec::with_capacity(CELLS * nb);
-        for c in cells {
-            env.extend(c?);
-        }
-        Ok(env)
+        leaving_table(
+            self.scene,
+            light,
+            per_cell,
+            key,
+            self.ray_height_m,
+            &|rng| self.point_of_class(rng, sx, sy, land),
+            &|at, up, glint| self.glint_at(at, up, glint),
+        )
     }
 
     /// Per band, the scattered part of the table plus the glint, from
@@ -762,6 +731,69 @@ impl<'s> AirView<'s> {
         let [sx, sy] = self.scene.domain.size_m;
         DVec3::new(p.x.rem_euclid(sx), p.y.rem_euclid(sy), 0.0)
     }
+}
+
+/// The ray that sees the radiance leaving the ground at `at` toward `up`
+/// (unit), coming down from `height_m` above it.
+fn ray_from_above(at: DVec3, up: DVec3, height_m: f64) -> CameraRay {
+    CameraRay {
+        origin: (at + up * (height_m / up.z)).as_vec3(),
+        direction: (-up).as_vec3(),
+    }
+}
+
+/// The mean radiance leaving the surface of `scene` per direction cell
+/// of the sky grid and band (cell-major), sun glint taken out:
+/// `per_cell` calls of `light` per cell, from the stream `key`, at points
+/// `point` draws and directions cosine-weighted within the cell, on
+/// either side of the sun's vertical plane, each ray handed down from
+/// `ray_height_m` above its point; `glint_at(point, up, out)` writes the
+/// glint the call's radiance holds there. Each cell's calls draw from
+/// their own streams: the same table for any number of threads.
+pub(crate) fn leaving_table(
+    scene: &Scene,
+    light: &dyn Integrator,
+    per_cell: u64,
+    key: u64,
+    ray_height_m: f64,
+    point: &(dyn Fn(&mut Pcg32) -> DVec3 + Sync),
+    glint_at: &(dyn Fn(DVec3, DVec3, &mut [f64]) + Sync),
+) -> Result<Vec<f64>> {
+    let nb = scene.bands.len();
+    let channels = light.channels();
+    let seed = crate::rng::mix64(scene.seed ^ key);
+    let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
+        .into_par_iter()
+        .map(|c| {
+            let (mut sum, mut out, mut water, mut glint) = (
+                vec![0.0; nb],
+                vec![0.0; nb * channels],
+                vec![0.0; nb],
+                vec![0.0; nb],
+            );
+            for k in 0..per_cell {
+                let mut rng = Pcg32::new(seed, c as u64 * per_cell.max(ENV_SAMPLES) + k);
+                let u = [rng.uniform_f64(), rng.uniform_f64()];
+                let (mu, phi) = point_in_cell(c / AZIMUTH_BINS, c % AZIMUTH_BINS, u);
+                let phi = if rng.uniform_f64() < 0.5 { phi } else { -phi } + scene.sun.azimuth_rad;
+                let sz = (1.0 - mu * mu).max(0.0).sqrt();
+                let up = DVec3::new(sz * phi.cos(), sz * phi.sin(), mu.max(1e-3)).normalize();
+                let at = point(&mut rng);
+                let ray = ray_from_above(at, up, ray_height_m);
+                light.camera(ray, &mut rng, &mut out, &mut water)?;
+                glint_at(at, up, &mut glint);
+                for b in 0..nb {
+                    sum[b] += (out[b] - glint[b]) / per_cell as f64;
+                }
+            }
+            Ok(sum)
+        })
+        .collect();
+    let mut env = Vec::with_capacity(CELLS * nb);
+    for c in cells {
+        env.extend(c?);
+    }
+    Ok(env)
 }
 
 /// The share of the domain that is land, on a grid of `LAND_GRID`^2

@@ -32,6 +32,7 @@ pub mod land;
 pub mod march;
 mod moments;
 pub mod path;
+pub mod sea_air;
 pub mod sun;
 pub mod targets;
 

@@ -149,6 +149,8 @@ pub struct PathTracer<'a> {
     /// Each band's smallest absorption anywhere in the water (1/m),
     /// carried by weight along every flight instead of by collisions.
     kappa: Vec<f64>,
+    /// The largest of `kappa`.
+    kappa_max: f64,
     /// Each band's smallest extinction anywhere in the water (1/m): the
     /// control of residual ratio tracking.
     c_min: Vec<f64>,
@@ -334,6 +336,7 @@ impl<'a> PathTracer<'a> {
                 .collect(),
             c_bar,
             mu_bar,
+            kappa_max: kappa.iter().copied().fold(0.0, f64::max),
             kappa,
             c_min: (0..nb).map(|b| scene.water.minorant(b)).collect(),
             sun: SunBeam::new(scene),
@@ -687,7 +690,21 @@ impl<'a> PathTracer<'a> {
                 scratch.flown += t_flight;
                 pos += dir * t_flight as f32;
                 match self.at_collision(pos, dir, &mut events, rng, scratch, out) {
-                    Collided::Null => continue,
+                    Collided::Null => {
+                        // Water that does not scatter (b = 0) meets only
+                        // null collisions, and without a floor below a
+                        // path through it never ends: the absorption
+                        // carried by weight is applied once it may have
+                        // taken a factor e, and the path plays roulette.
+                        if scratch.flown * self.kappa_max >= 1.0 {
+                            scratch.absorb(&self.kappa);
+                            let late = events.max(ROULETTE_AFTER);
+                            if !Self::survive(&mut scratch.w, late, self.importance(dir), rng) {
+                                return;
+                            }
+                        }
+                        continue;
+                    }
                     Collided::Scattered(next) => dir = next,
                     Collided::End => return,
                 }

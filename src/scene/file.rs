@@ -107,6 +107,9 @@ pub struct AtmosphereFile {
     pub gas_tau_file: Option<String>,
     /// Photons per band for the sky at the surface.
     pub sky_photons: Option<u64>,
+    /// The light the sea sends up that the air returns to it, in the sky
+    /// (default true; false: the sky over a black surface).
+    pub sea_coupling: Option<bool>,
     pub aerosol: Option<AerosolFile>,
 }
 

@@ -88,6 +88,9 @@ pub struct AtmosphereLight {
     /// Photons per band traced for the sky, and the seed of their streams.
     pub sky_photons: u64,
     pub sky_seed: u64,
+    /// `[atmosphere] sea_coupling`: the sky holds the light the sea sends
+    /// up that the air returns (`render::sea_air`).
+    pub sea_coupling: bool,
     /// Per band.
     pub bands: Vec<BandAtmosphere>,
     /// The sky's mean radiance per band and cell of the sky grid
@@ -176,16 +179,22 @@ pub struct BandAtmosphere {
     /// Leaving the top of the atmosphere, and absorbed in the air.
     pub up_at_top: f64,
     pub absorbed: f64,
-    /// Over a Lambertian ground (`Scene::ground`): the air's spherical
-    /// albedo s, the share of the ground's upward irradiance it sends back
-    /// down (from the photons that return), with its standard error. The
-    /// irradiances above then hold every order of reflection between the
-    /// ground and the air; 0 over the sea, whose light the air's sky does
-    /// not return.
+    /// Over a Lambertian ground (`Scene::ground`) or land all around, and
+    /// over the sea with `sea_coupling`: the air's spherical albedo s for
+    /// the light the surface sends up, the share of its upward irradiance
+    /// the air sends back down (from the photons that return), with its
+    /// standard error. The irradiances above then hold every order of
+    /// reflection between the surface and the air; 0 over a black
+    /// surface.
     #[serde(default)]
     pub spherical_albedo: f64,
     #[serde(default)]
     pub spherical_albedo_se: f64,
+    /// Over the sea with `sea_coupling`: the sea's albedo, the share of
+    /// E_d(0+) over a black surface that its surface sends up (sun glint,
+    /// reflected sky and water-leaving light; 0 otherwise).
+    #[serde(default)]
+    pub surface_albedo: f64,
 }
 
 impl BandAtmosphere {
@@ -649,7 +658,10 @@ impl Scene {
     /// Parse and validate scene `text`; `path` names it in errors and
     /// anchors relative file names.
     pub fn parse(text: &str, path: &Path, overrides: &Overrides) -> Result<Scene> {
-        build::build(text, path, overrides)
+        let mut scene = build::build(text, path, overrides)?;
+        // The sky over the sea: the light it sends up that the air returns.
+        crate::render::sea_air::couple(&mut scene)?;
+        Ok(scene)
     }
 
     /// Read, parse and validate the scene file at `path`.

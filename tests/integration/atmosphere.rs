@@ -57,15 +57,17 @@ pub(crate) fn disort(json: &serde_json::Value) -> Vec<serde_json::Value> {
 /// alone and 2 % with an aerosol (sigma from 16 seeds' spread); the direct
 /// beam to 1e-9. Cases: Rayleigh at sun 0, 30 and 60 degrees; Rayleigh and
 /// a maritime-like aerosol (tau 0.3, g 0.7, albedo 0.9) at 30 and 60; 6S's
-/// maritime model (its Mie phase function, tau 0.3) at 30.
+/// maritime model (its Mie phase function, tau 0.3) at 30. DISORT's ground
+/// is black, so the sky leaves out what the sea returns (`sea_coupling =
+/// false`).
 #[test]
 fn the_sky_and_the_top_match_disort() {
     if !client("nanodisort (PyPI)", &["python3", "-c", "import nanodisort"]) {
         return;
     }
-    let rayleigh = "[atmosphere]\nsky_photons = 20000";
-    let aerosol = "[atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.3\nangstrom = 1.0\nssa = 0.9\nphase = { kind = \"henyey-greenstein\", g = 0.7 }\nscale_height_km = 1.5";
-    let maritime = "[atmosphere]\nsky_photons = 20000\n[atmosphere.aerosol]\nmodel = \"maritime\"\ntau_550 = 0.3\nscale_height_km = 1.0";
+    let rayleigh = "[atmosphere]\nsky_photons = 20000\nsea_coupling = false";
+    let aerosol = "[atmosphere]\nsky_photons = 20000\nsea_coupling = false\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.3\nangstrom = 1.0\nssa = 0.9\nphase = { kind = \"henyey-greenstein\", g = 0.7 }\nscale_height_km = 1.5";
+    let maritime = "[atmosphere]\nsky_photons = 20000\nsea_coupling = false\n[atmosphere.aerosol]\nmodel = \"maritime\"\ntau_550 = 0.3\nscale_height_km = 1.0";
     let cases = [
         (rayleigh, 0.0, 0.01),
         (rayleigh, 30.0, 0.01),

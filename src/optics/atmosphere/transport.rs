@@ -148,13 +148,14 @@ fn trace(
     rng: &mut Pcg32,
     collide: impl FnMut(&mut Pcg32, f64, DVec3, f64, f64),
 ) -> Fates {
-    trace_from(column, |_| start, tau0, photons, rng, collide)
+    trace_from(column, |_| Some(start), tau0, photons, rng, collide)
 }
 
-/// [`trace`] with each photon's direction of travel drawn by `start`.
+/// [`trace`] with each photon's direction of travel drawn by `start`
+/// (none: the photon carries no light, and counts only in the number).
 fn trace_from(
     column: &Column,
-    mut start: impl FnMut(&mut Pcg32) -> DVec3,
+    mut start: impl FnMut(&mut Pcg32) -> Option<DVec3>,
     tau0: f64,
     photons: u64,
     rng: &mut Pcg32,
@@ -163,7 +164,9 @@ fn trace_from(
     let total = column.total();
     let mut f = Fates::default();
     for _ in 0..photons {
-        let mut dir = start(rng);
+        let Some(mut dir) = start(rng) else {
+            continue;
+        };
         let mut tau = tau0;
         let mut w = 1.0f64;
         let mut scattered = false;
@@ -343,13 +346,15 @@ pub fn transmittance_up(
     (direct + mean, var.sqrt())
 }
 
-/// What the air does with light a Lambertian ground sends up, per unit
-/// of the ground's radiance (an upward irradiance of pi).
+/// What the air does with light the surface sends up: per unit of a
+/// Lambertian ground's radiance (an upward irradiance of pi;
+/// [`ground_response`]) or per unit upward irradiance ([`up_response`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GroundResponse {
     /// The mean radiance of each sky cell at the surface that this light
     /// comes back as (sr^-1 per unit ground radiance, so the sky's
-    /// radiance per W m^-2 sr^-1 nm^-1 leaving the ground), zenith-major.
+    /// radiance per W m^-2 sr^-1 nm^-1 leaving the ground; or per W m^-2
+    /// nm^-1 of upward irradiance), zenith-major.
     pub sky: Vec<f64>,
     /// The share of the upward irradiance the air sends back down: the
     /// spherical albedo s, from the cells (sum of `sky` times each cell's
@@ -373,18 +378,39 @@ pub struct GroundResponse {
 /// same angular shape), and its sky gains R E / (1 - R s) / pi times
 /// `sky`.
 pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) -> GroundResponse {
+    let mut r = up_response(column, photons, seed, stream, |rng| {
+        let mu = rng.uniform_f64().sqrt();
+        let phi = 2.0 * PI * rng.uniform_f64();
+        let s = (1.0 - mu * mu).max(0.0).sqrt();
+        Some(DVec3::new(s * phi.cos(), s * phi.sin(), mu))
+    });
+    // Per unit radiance of the ground: an upward irradiance of pi.
+    r.sky.iter_mut().for_each(|v| *v *= PI);
+    r
+}
+
+/// What the air does with light leaving the surface whose directions
+/// `draw` gives (unit, up, azimuth from the sun's; none: a photon that
+/// carries no light), per unit of that light's upward irradiance: the sky
+/// it returns as (mean radiance per cell, sr^-1), the share it sends back
+/// down (from the cells and from the photons that return, with that
+/// estimate's standard error) and the shares leaving the top and absorbed.
+/// `photons` photons from stream `stream` of `seed`, each carrying 1 /
+/// `photons` of the irradiance.
+pub fn up_response(
+    column: &Column,
+    photons: u64,
+    seed: u64,
+    stream: u64,
+    draw: impl FnMut(&mut Pcg32) -> Option<DVec3>,
+) -> GroundResponse {
     let total = column.total();
     let mut rng = Pcg32::new(seed, stream);
     let mut sky = vec![0.0; CELLS];
     let mut cells = Cells::default();
     let f = trace_from(
         column,
-        |rng| {
-            let mu = rng.uniform_f64().sqrt();
-            let phi = 2.0 * PI * rng.uniform_f64();
-            let s = (1.0 - mu * mu).max(0.0).sqrt();
-            DVec3::new(s * phi.cos(), s * phi.sin(), mu)
-        },
+        draw,
         total,
         photons,
         &mut rng,
@@ -394,14 +420,13 @@ pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) ->
         },
     );
     let n = photons.max(1) as f64;
-    // Each photon carries pi / N of the upward irradiance.
-    sky.iter_mut().for_each(|v| *v *= PI / n);
+    sky.iter_mut().for_each(|v| *v /= n);
     let returned = irradiance(&sky);
     let mean = f.arrived / n;
     let var = (f.arrived_sq / n - mean * mean).max(0.0) / n;
     GroundResponse {
         sky,
-        spherical_albedo: returned / PI,
+        spherical_albedo: returned,
         spherical_albedo_flux: mean,
         spherical_albedo_se: var.sqrt(),
         to_top: f.up / n,
@@ -411,7 +436,7 @@ pub fn ground_response(column: &Column, photons: u64, seed: u64, stream: u64) ->
 
 /// The irradiance on a horizontal plane of the cells' mean radiances
 /// `cells` (zenith-major): each times its projected solid angle.
-fn irradiance(cells: &[f64]) -> f64 {
+pub fn irradiance(cells: &[f64]) -> f64 {
     (0..CELLS)
         .map(|c| cells[c] * projected_solid_angle(c / AZIMUTH_BINS))
         .sum()

@@ -281,6 +281,7 @@ pub(super) fn light(
             absorbed: f0 * l.absorbed,
             spherical_albedo: 0.0,
             spherical_albedo_se: 0.0,
+            surface_albedo: 0.0,
         };
         if let (Some(g), Some(r)) = (g, ground) {
             // E = E_black / (1 - R s): the ground's radiance R E / pi
@@ -322,6 +323,7 @@ pub(super) fn light(
         day_of_year,
         sky_photons: photons,
         sky_seed: seed,
+        sea_coupling: a.sea_coupling.unwrap_or(true),
         bands,
         sky_radiance: radiance,
         columns,
