@@ -168,6 +168,121 @@ pub struct ReportInputs {
     /// Power per photon of each band (W nm^-1).
     #[serde(deserialize_with = "crate::nan_json::f64s")]
     pub photon_power: Vec<f64>,
+    /// The air's side of the budget, with an atmosphere whose sky returns
+    /// the domain's own sea's light or none (see [`AirInputs::of`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub air: Option<AirInputs>,
+}
+
+/// What the air did with the sun's light, per band (W m^-2 nm^-1 on a
+/// horizontal plane): the sun at the top, what leaves the top and what
+/// the air absorbs (the sea's light it was sent included), and the
+/// standard error of what these leave for the surface.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AirInputs {
+    pub top: Vec<f64>,
+    pub to_space: Vec<f64>,
+    pub absorbed: Vec<f64>,
+    pub stderr: Vec<f64>,
+    /// The sky holds what the air returns of the sea's light
+    /// (`sea_coupling`); otherwise that light is taken to leave.
+    pub coupled: bool,
+}
+
+impl AirInputs {
+    /// The air of `scene`: none without an atmosphere, and none where the
+    /// air above the domain sees other ground than the domain's own sea
+    /// (land or another sea all around, whose light its sky returns).
+    pub fn of(scene: &Scene) -> Option<AirInputs> {
+        let a = scene.atmosphere.as_deref()?;
+        match &scene.surroundings {
+            Some(crate::scene::Surroundings::Lambertian(_)) => return None,
+            Some(crate::scene::Surroundings::Water(_)) if a.sea_coupling => return None,
+            _ => {}
+        }
+        let mu0 = scene.sun.zenith_rad.cos();
+        let n = a.sky_photons.max(1) as f64;
+        Some(AirInputs {
+            top: a.bands.iter().map(|b| b.toa_irradiance * mu0).collect(),
+            to_space: a.bands.iter().map(|b| b.up_at_top).collect(),
+            absorbed: a.bands.iter().map(|b| b.absorbed).collect(),
+            stderr: a
+                .bands
+                .iter()
+                .map(|b| {
+                    // The photons' own direct share against the exact one
+                    // (binomial), the sky's flux against its cells, and
+                    // the sea's upward irradiance the air was sent.
+                    let t = b.direct_transmittance;
+                    let direct = b.toa_irradiance * mu0 * (t * (1.0 - t) / n).sqrt();
+                    direct.hypot(b.diffuse_flux_se).hypot(b.surface_up_se)
+                })
+                .collect(),
+            coupled: a.sea_coupling,
+        })
+    }
+}
+
+/// The budget of the air over the domain, per band (W nm^-1): the sun's
+/// power at the top and the power the surface sends up (the photons'
+/// E_u(0+)) go into it; what reaches the surface (the emitted power),
+/// leaves the top and is absorbed come out. Without `sea_coupling` the
+/// surface's light is taken to leave the top.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AirBudget {
+    pub units: String,
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub top: Vec<f64>,
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub surface_up: Vec<f64>,
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub to_surface: Vec<f64>,
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub to_space: Vec<f64>,
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub absorbed_air: Vec<f64>,
+    /// top + surface_up - (to_surface + to_space + absorbed_air).
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub residual: Vec<f64>,
+    /// residual / its standard error (the photons' E_u(0+) and the air's
+    /// own, [`AirInputs::stderr`]), per band, and the largest |.|.
+    #[serde(deserialize_with = "crate::nan_json::f64s")]
+    pub closure_sigma_per_band: Vec<f64>,
+    #[serde(deserialize_with = "crate::nan_json::f64_or_nan")]
+    pub closure_sigma: f64,
+}
+
+impl AirBudget {
+    fn new(air: &AirInputs, area: f64, emitted: &[f64], eu: &[f64], eu_se: &[f64]) -> AirBudget {
+        let nb = emitted.len();
+        let per = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x * area).collect() };
+        let top = per(&air.top);
+        let surface_up = per(eu);
+        let to_space: Vec<f64> = (0..nb)
+            .map(|b| air.to_space[b] * area + if air.coupled { 0.0 } else { surface_up[b] })
+            .collect();
+        let absorbed_air = per(&air.absorbed);
+        let mut residual = Vec::with_capacity(nb);
+        let mut sigma = Vec::with_capacity(nb);
+        for b in 0..nb {
+            let r = top[b] + surface_up[b] - emitted[b] - to_space[b] - absorbed_air[b];
+            let up_se = if air.coupled { eu_se[b] * area } else { 0.0 };
+            let sd = up_se.hypot(air.stderr[b] * area);
+            residual.push(r);
+            sigma.push(if sd > 0.0 { r / sd } else { 0.0 });
+        }
+        AirBudget {
+            units: "W nm^-1".into(),
+            closure_sigma: sigma.iter().fold(0.0f64, |m, s| m.max(s.abs())),
+            top,
+            surface_up,
+            to_surface: emitted.to_vec(),
+            to_space,
+            absorbed_air,
+            residual,
+            closure_sigma_per_band: sigma,
+        }
+    }
 }
 
 impl ReportInputs {
@@ -187,6 +302,7 @@ impl ReportInputs {
                 .map(|b| scene.incident_irradiance(b))
                 .collect(),
             photon_power: photon_power.to_vec(),
+            air: AirInputs::of(scene),
         }
     }
 }
@@ -201,6 +317,9 @@ pub struct EmissionReport {
     pub above_surface: AboveSurface,
     pub kd: Vec<KdLayer>,
     pub energy: Energy,
+    /// With an atmosphere: the air's budget (see [`AirBudget`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub air: Option<AirBudget>,
     pub photons: PhotonCounts,
     /// Power carried by one photon of each band (W nm^-1).
     #[serde(deserialize_with = "crate::nan_json::f64s")]
@@ -332,6 +451,10 @@ impl EmissionReport {
         let (eu, eu_se) = series(uu);
 
         let energy = energy(inputs, totals);
+        let air = inputs
+            .air
+            .as_ref()
+            .map(|a| AirBudget::new(a, area, &energy.emitted, &eu, &eu_se));
         EmissionReport {
             scene: inputs.scene.clone(),
             bands_nm: inputs.bands_nm.clone(),
@@ -345,6 +468,7 @@ impl EmissionReport {
             },
             kd,
             energy,
+            air,
             photons: PhotonCounts {
                 traced: totals.traced,
                 stored_volume: totals.stored_volume,

@@ -385,6 +385,7 @@ impl<'s> AirView<'s> {
             &|rng| self.point_of_class(rng, sx, sy, land),
             &|at, up, glint| self.glint_at(at, up, glint),
         )
+        .map(|(table, _)| table)
     }
 
     /// Per band, the scattered part of the table plus the glint, from
@@ -749,7 +750,9 @@ fn ray_from_above(at: DVec3, up: DVec3, height_m: f64) -> CameraRay {
 /// either side of the sun's vertical plane, each ray handed down from
 /// `ray_height_m` above its point; `glint_at(point, up, out)` writes the
 /// glint the call's radiance holds there. Each cell's calls draw from
-/// their own streams: the same table for any number of threads.
+/// their own streams: the same table for any number of threads. Returns
+/// the table and the variance of each of its means (from the calls'
+/// spread; 0 for a single call).
 pub(crate) fn leaving_table(
     scene: &Scene,
     light: &dyn Integrator,
@@ -758,14 +761,15 @@ pub(crate) fn leaving_table(
     ray_height_m: f64,
     point: &(dyn Fn(&mut Pcg32) -> DVec3 + Sync),
     glint_at: &(dyn Fn(DVec3, DVec3, &mut [f64]) + Sync),
-) -> Result<Vec<f64>> {
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let nb = scene.bands.len();
     let channels = light.channels();
     let seed = crate::rng::mix64(scene.seed ^ key);
-    let cells: Vec<Result<Vec<f64>>> = (0..CELLS)
+    let cells: Vec<Result<(Vec<f64>, Vec<f64>)>> = (0..CELLS)
         .into_par_iter()
         .map(|c| {
-            let (mut sum, mut out, mut water, mut glint) = (
+            let (mut sum, mut sum_sq, mut out, mut water, mut glint) = (
+                vec![0.0; nb],
                 vec![0.0; nb],
                 vec![0.0; nb * channels],
                 vec![0.0; nb],
@@ -783,17 +787,30 @@ pub(crate) fn leaving_table(
                 light.camera(ray, &mut rng, &mut out, &mut water)?;
                 glint_at(at, up, &mut glint);
                 for b in 0..nb {
-                    sum[b] += (out[b] - glint[b]) / per_cell as f64;
+                    let x = out[b] - glint[b];
+                    sum[b] += x / per_cell as f64;
+                    sum_sq[b] += x * x;
                 }
             }
-            Ok(sum)
+            let n = per_cell as f64;
+            let var: Vec<f64> = if per_cell > 1 {
+                (0..nb)
+                    .map(|b| ((sum_sq[b] / n - sum[b] * sum[b]) / (n - 1.0)).max(0.0))
+                    .collect()
+            } else {
+                vec![0.0; nb]
+            };
+            Ok((sum, var))
         })
         .collect();
     let mut env = Vec::with_capacity(CELLS * nb);
+    let mut var = Vec::with_capacity(CELLS * nb);
     for c in cells {
-        env.extend(c?);
+        let (m, v) = c?;
+        env.extend(m);
+        var.extend(v);
     }
-    Ok(env)
+    Ok((env, var))
 }
 
 /// The share of the domain that is land, on a grid of `LAND_GRID`^2

@@ -95,8 +95,8 @@ pub fn couple(scene: &mut Scene) -> Result<()> {
         }
         Some(Surroundings::Mean) | None => {}
     }
-    let table = upward_table(scene)?;
-    let responses = responses(scene, &table);
+    let (table, variance) = upward_table(scene)?;
+    let responses = responses(scene, &table, &variance);
     let air = Arc::make_mut(scene.atmosphere.as_mut().expect("checked above"));
     for (b, r) in responses.into_iter().enumerate() {
         let band = &mut air.bands[b];
@@ -108,6 +108,8 @@ pub fn couple(scene: &mut Scene) -> Result<()> {
         let s = r.returned.spherical_albedo / r.up * r.source;
         // Every order, each in the first one's shape.
         let orders = r.source / (1.0 - a * s);
+        band.surface_up = r.up / (1.0 - a * s);
+        band.surface_up_se = r.up_se / (1.0 - a * s);
         for (v, k) in air.sky_radiance[b].iter_mut().zip(&r.returned.sky) {
             *v += orders * k;
         }
@@ -138,7 +140,7 @@ pub fn couple(scene: &mut Scene) -> Result<()> {
 /// The sea's mean radiance leaving the surface per direction cell and band
 /// (cell-major), glint taken out, under the sky over a black surface: at
 /// points anywhere in the domain, land included.
-fn upward_table(scene: &Scene) -> Result<Vec<f64>> {
+fn upward_table(scene: &Scene) -> Result<(Vec<f64>, Vec<f64>)> {
     let tracer = PathTracer::new(scene);
     let [sx, sy] = scene.domain.size_m;
     let height = RAY_HEIGHT_M
@@ -169,14 +171,17 @@ struct Returned {
     /// irradiance plus the sun's horizontal irradiance (of which the
     /// surface reflects its share as glint).
     source: f64,
-    /// The upward irradiance, glint included (W m^-2 nm^-1).
+    /// The upward irradiance, glint included (W m^-2 nm^-1), and its
+    /// standard error (the table's calls and the glint's draws).
     up: f64,
+    up_se: f64,
     returned: GroundResponse,
 }
 
 /// Per band, the air's answer to the sea's upward light: the table's
-/// cells and the glint, drawn in proportion to their power.
-fn responses(scene: &Scene, table: &[f64]) -> Vec<Returned> {
+/// cells (whose means have the variances `variance`) and the glint, drawn
+/// in proportion to their power.
+fn responses(scene: &Scene, table: &[f64], variance: &[f64]) -> Vec<Returned> {
     let air = scene
         .atmosphere
         .as_deref()
@@ -189,9 +194,11 @@ fn responses(scene: &Scene, table: &[f64]) -> Vec<Returned> {
             // The table's cells by their upward irradiance (both mirror
             // halves of a cell: its projected solid angle).
             let mut cdf = Vec::with_capacity(CELLS);
-            let mut sum = 0.0;
+            let (mut sum, mut var) = (0.0, 0.0);
             for c in 0..CELLS {
-                sum += table[c * nb + b].max(0.0) * projected_solid_angle(c / AZIMUTH_BINS);
+                let omega = projected_solid_angle(c / AZIMUTH_BINS);
+                sum += table[c * nb + b].max(0.0) * omega;
+                var += variance[c * nb + b] * omega * omega;
                 cdf.push(sum);
             }
             let sun = scene.sun.horizontal_irradiance(b);
@@ -200,6 +207,7 @@ fn responses(scene: &Scene, table: &[f64]) -> Vec<Returned> {
                 return Returned {
                     source: 0.0,
                     up: 0.0,
+                    up_se: 0.0,
                     returned: up_response(&air.columns[b], 0, seed, b as u64, |_| None),
                 };
             }
@@ -226,14 +234,16 @@ fn responses(scene: &Scene, table: &[f64]) -> Vec<Returned> {
                 let s = (1.0 - mu * mu).max(0.0).sqrt();
                 Some(DVec3::new(s * phi.cos(), s * phi.sin(), mu))
             });
-            let glint_share = if glints > 0 {
-                reflected as f64 / glints as f64
+            let (glint_share, glint_var) = if glints > 0 {
+                let p = reflected as f64 / glints as f64;
+                (p, p * (1.0 - p) / glints as f64)
             } else {
-                0.0
+                (0.0, 0.0)
             };
             Returned {
                 source,
                 up: sum + sun * glint_share,
+                up_se: (var + sun * sun * glint_var).sqrt(),
                 returned,
             }
         })

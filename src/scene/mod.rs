@@ -195,6 +195,12 @@ pub struct BandAtmosphere {
     /// reflected sky and water-leaving light; 0 otherwise).
     #[serde(default)]
     pub surface_albedo: f64,
+    /// Over the sea with `sea_coupling`: the irradiance the sea sends up
+    /// into the air, every order (A E_d(0+)), and its standard error.
+    #[serde(default)]
+    pub surface_up: f64,
+    #[serde(default)]
+    pub surface_up_se: f64,
 }
 
 impl BandAtmosphere {

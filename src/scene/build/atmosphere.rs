@@ -282,6 +282,8 @@ pub(super) fn light(
             spherical_albedo: 0.0,
             spherical_albedo_se: 0.0,
             surface_albedo: 0.0,
+            surface_up: 0.0,
+            surface_up_se: 0.0,
         };
         if let (Some(g), Some(r)) = (g, ground) {
             // E = E_black / (1 - R s): the ground's radiance R E / pi
