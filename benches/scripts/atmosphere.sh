@@ -6,7 +6,8 @@
 #    scale height; sun 30 degrees; 412, 490, 560 and 670 nm): the sky's and
 #    the top's radiance per cell and the irradiances against DISORT
 #    (nanodisort from PyPI, tests/clients/disort_atmosphere.py), and the
-#    path radiance seen from 3 km and from 700 km, 30 degrees off nadir.
+#    path radiance seen from 3 km and from 700 km, 30 degrees off nadir
+#    (over a black surface, as DISORT: sea_coupling = false).
 # 2. The built-in scene under a maritime-like aerosol (tau(550) 0.1,
 #    Angstrom 0.5, albedo 0.98, g 0.75, 1 km) rendered from just above the
 #    surface and from 700 km: times, and the deep-water pixel noise of L_t
@@ -22,7 +23,7 @@ bin=target/release/littoral
 py=${PYTHON:-python3}
 aerosol='atmosphere.aerosol={model="custom", tau_550=0.3, angstrom=1.0, ssa=0.9, phase={kind="henyey-greenstein", g=0.7}, scale_height_km=1.5}'
 "$bin" scene set tests/scenes/minimal.toml 'spectral={centers_nm=[412.0, 490.0, 560.0, 670.0], fwhm_nm=[10.0, 10.0, 10.0, 10.0]}' \
-  'sun={zenith_deg=30.0, spectrum="extraterrestrial"}' "atmosphere.sky_photons=$photons" "$aerosol" > "$out/column.toml"
+  'sun={zenith_deg=30.0, spectrum="extraterrestrial"}' "atmosphere.sky_photons=$photons" atmosphere.sea_coupling=false "$aerosol" > "$out/column.toml"
 for view in "3000.0 30.0" "700000.0 30.0"; do
   set -- $view
   "$bin" scene set "$out/column.toml" "sensor={pixels=[4, 4], gsd_m=1.0, altitude_m=$1, view_zenith_deg=$2, view_azimuth_deg=120.0}" > "$out/view-$1.toml"
