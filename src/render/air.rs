@@ -434,6 +434,20 @@ impl<'s> AirView<'s> {
         (&self.pooled, &self.pooled_se)
     }
 
+    /// The part of a sample's radiance at the sensor `l_t` that its paths
+    /// through the air drew, per band: `l_t` less the radiance leaving
+    /// the ground point `at_surface` times the direct transmittance, the
+    /// path radiance and the pooled part (what [`AirView::camera`] adds
+    /// the same way for every sample). Its spread is the air paths' noise.
+    pub fn drawn_part(&self, l_t: &[f64], at_surface: &[f64], out: &mut [f64]) {
+        for (b, o) in out.iter_mut().enumerate() {
+            *o = l_t[b]
+                - self.view.transmittance[b] * at_surface[b]
+                - self.view.path_radiance[b]
+                - self.pooled[b];
+        }
+    }
+
     /// The radiance at the sensor along camera ray `ray` (which meets the
     /// ground at its pixel's ground point) into `out` (every channel run of
     /// `light`), the water-leaving radiance at that ground point into

@@ -18,7 +18,10 @@
 //! groups carried along every ray (`estimate::groups`), plus, with two or
 //! more samples per pixel, the sampling error given the map (the samples'
 //! spread over their count); at one sample per pixel the renderer's own
-//! sampling noise (march jitter, rough-surface facets) is not in it.
+//! sampling noise (march jitter, rough-surface facets) is not in it. With
+//! the sensor above the surface at one sample per pixel it also holds the
+//! noise of the paths through the air: the variance of their part
+//! (`air::AirView::drawn_part`) over the pixel's tile.
 //!
 //! Not for: emission (see `emit`), writing files (the sinks live in
 //! `job::outputs` and `job::distributed::tile_file`) or file formats (see
@@ -411,7 +414,7 @@ pub fn stderr_description(scene: &Scene) -> Option<String> {
     match scene.render.integrator {
         crate::scene::IntegratorMode::PhotonMap if spp == 1 && scene.sensor.altitude_m.is_some() => {
             Some(format!(
-                "photon noise from {GROUPS} photon groups, 1 sample per pixel: the noise of the paths through the air is not in it (give samples_per_pixel 2 or more)"
+                "photon noise from {GROUPS} photon groups, 1 sample per pixel, and the noise of the paths through the air: the variance of their part pooled over each {TILE_PX} x {TILE_PX} tile"
             ))
         }
         crate::scene::IntegratorMode::PhotonMap => Some(format!(
@@ -466,6 +469,13 @@ pub fn render_tile(
             ],
         ))
     });
+    // Above the surface at one sample per pixel the samples' spread is not
+    // known: each pixel's draw of the air paths' part (`AirView::
+    // drawn_part`) is kept, and its variance over the tile is added to
+    // every pixel's (each draws its paths from nearly the same
+    // distribution; the adjacency changes over hundreds of metres).
+    let air_noise = air.filter(|_| spp == 1 && with_errors);
+    let mut drawn = vec![0f64; if air_noise.is_some() { tw * th * nb } else { 0 }];
     let mut acc = Moments::new(nb, channels);
     let mut sample = vec![0f64; nb * channels];
     let (mut water, mut water_sum) = (vec![0f64; nb], vec![0f64; nb]);
@@ -499,6 +509,10 @@ pub fn render_tile(
                     }
                 }
                 acc.add(&sample);
+                if let Some(a) = air_noise {
+                    let at = (py * tw + px) * nb;
+                    a.drawn_part(&sample[..nb], &surface, &mut drawn[at..at + nb]);
+                }
                 water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
                 surface_sum
                     .iter_mut()
@@ -532,6 +546,20 @@ pub fn render_tile(
             }
             let c = quicklook.rgb(&values[base..base + nb]);
             rgb[(py * tw + px) * 3..(py * tw + px) * 3 + 3].copy_from_slice(&c);
+        }
+    }
+    let pixels = tw * th;
+    if air_noise.is_some() && pixels > 1 {
+        for b in 0..nb {
+            let mean = (0..pixels).map(|p| drawn[p * nb + b]).sum::<f64>() / pixels as f64;
+            let var = (0..pixels)
+                .map(|p| (drawn[p * nb + b] - mean).powi(2))
+                .sum::<f64>()
+                / (pixels - 1) as f64;
+            for p in 0..pixels {
+                let e = &mut errors[p * nb + b];
+                *e = (f64::from(*e).powi(2) + var).sqrt() as f32;
+            }
         }
     }
     Ok(TileResult {
