@@ -269,11 +269,11 @@ impl AirBudget {
             let up_se = if air.coupled { eu_se[b] * area } else { 0.0 };
             let sd = up_se.hypot(air.stderr[b] * area);
             residual.push(r);
-            sigma.push(if sd > 0.0 { r / sd } else { 0.0 });
+            sigma.push(in_sigmas(r, sd));
         }
         AirBudget {
             units: "W nm^-1".into(),
-            closure_sigma: sigma.iter().fold(0.0f64, |m, s| m.max(s.abs())),
+            closure_sigma: largest(&sigma),
             top,
             surface_up,
             to_surface: emitted.to_vec(),
@@ -554,15 +554,9 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
         let p = emitted[b] / (photon_power[b] * n).max(f64::MIN_POSITIVE);
         let sd = photon_power[b] * (n * p * (1.0 - p)).max(0.0).sqrt();
         residual.push(res);
-        sigma.push(if sd > 0.0 {
-            res / sd
-        } else if res == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        });
+        sigma.push(in_sigmas(res, sd));
     }
-    let closure_sigma = sigma.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+    let closure_sigma = largest(&sigma);
     Energy {
         units: "W nm^-1".into(),
         emitted,
@@ -580,6 +574,23 @@ fn energy(inputs: &ReportInputs, totals: &Totals) -> Energy {
         closure_sigma_per_band: sigma,
         closure_sigma,
     }
+}
+
+/// A budget's residual `res` in standard errors `sd` (infinite when the
+/// budget should close exactly and does not).
+fn in_sigmas(res: f64, sd: f64) -> f64 {
+    if sd > 0.0 {
+        res / sd
+    } else if res == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The largest |x| of `xs` (0 for none).
+fn largest(xs: &[f64]) -> f64 {
+    xs.iter().fold(0.0f64, |m, s| m.max(s.abs()))
 }
 
 fn one() -> f64 {
