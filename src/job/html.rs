@@ -296,6 +296,9 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
         "<p>Energy closure: largest |residual| over the bands {:.2} standard errors.</p>",
         en.closure_sigma
     );
+    if let Some(air) = &e.air {
+        air_budget(h, air, nm)?;
+    }
     if en.water_leaving_inelastic.iter().any(|&p| p > 0.0) {
         let share = Curve {
             label: "inelastic share".into(),
@@ -318,6 +321,45 @@ fn emission(h: &mut String, e: &EmissionReport, nm: &[f64]) -> Result<()> {
             &[share],
         )?);
     }
+    Ok(())
+}
+
+/// The air's budget over the domain, as fractions of the sun's power at
+/// the top.
+fn air_budget(h: &mut String, air: &crate::emit::report::AirBudget, nm: &[f64]) -> Result<()> {
+    let parts: [(&str, &[f64]); 5] = [
+        ("reached the surface", &air.to_surface),
+        ("sent up by the surface", &air.surface_up),
+        ("left the top", &air.to_space),
+        ("absorbed in the air", &air.absorbed_air),
+        ("residual", &air.residual),
+    ];
+    let curves: Vec<Curve> = parts
+        .iter()
+        .map(|(label, v)| Curve {
+            label: (*label).into(),
+            x: nm.to_vec(),
+            y: v.iter()
+                .zip(&air.top)
+                .map(|(p, t)| if *t > 0.0 { p / t } else { 0.0 })
+                .collect(),
+            err: None,
+        })
+        .collect();
+    h.push_str(&plot(
+        &Axes {
+            title: "The air over the domain: the sun's power at the top of the atmosphere and what became of it, per band",
+            x_label: "wavelength (nm)",
+            y_label: "fraction of the power at the top",
+            depth: false,
+        },
+        &curves,
+    )?);
+    let _ = writeln!(
+        h,
+        "<p>The air's closure (the top and the surface's upward light against the surface, the top and the air's absorption): largest |residual| over the bands {:.2} standard errors.</p>",
+        air.closure_sigma
+    );
     Ok(())
 }
 

@@ -478,6 +478,11 @@ fn a_sensor_above_absorbing_air_sees_the_surface_attenuated() {
     ] {
         assert!(page(&r1).contains(section), "{section}");
     }
+    // Under an atmosphere, seen from above or not, the emission's budget of
+    // the air.
+    for r in [&r0, &r1] {
+        assert!(page(r).contains("The air over the domain"));
+    }
 }
 
 /// The sensor above the surface is refused without an atmosphere and for
