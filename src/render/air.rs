@@ -54,6 +54,13 @@
 //! the land's share of the view is averaged over the paths instead of
 //! carried by one.
 //!
+//! **Water by the depth of its floor.** Over a sloping floor the water
+//! itself is far from one class: in the red, water over sand half a
+//! metre down leaves ten times the radiance of water 4 m deep. So the
+//! water is split into classes by the depth of its floor (`air::classes`),
+//! each with its own table; the water's table is their mean weighted by
+//! area, and the land is one more class.
+//!
 //! **Surroundings.** Beyond the domain a path sees Lambertian land
 //! (`kind = "lambertian"`), deep water of its own IOPs (`kind =
 //! "water"`: that sea's own table, from path-integrator calls on the
@@ -76,10 +83,6 @@ use rayon::prelude::*;
 /// Height above the surface (or above the land's top) of the rays handed
 /// to the integrator (m).
 pub(crate) const RAY_HEIGHT_M: f64 = 10.0;
-
-/// Points per side of the grid that measures the land's share of the
-/// domain.
-const LAND_GRID: usize = 256;
 
 /// Draws of a point of one class (land or water) before the table takes
 /// whatever point it has: the table's values do not bias the pixel.
@@ -138,8 +141,12 @@ pub struct AirView<'s> {
     altitude_km: f64,
     /// Per direction cell and band (cell-major): the mean radiance leaving
     /// the surface, sun glint taken out (with land in the domain: the
-    /// water's).
+    /// water's); the water classes' tables weighted by their area.
     env: Vec<f64>,
+    /// The ground's classes within the domain.
+    classes: Classes,
+    /// Per water class: its table as `env`.
+    water_env: Vec<Vec<f64>>,
     /// The same for the land in the domain; empty without land.
     land_env: Vec<f64>,
     /// The land's share of the domain (0 without land).
@@ -152,6 +159,31 @@ pub struct AirView<'s> {
     pooled_se: Vec<f64>,
     /// The ground beyond the domain; none for a periodic domain.
     surround: Option<Surround>,
+    /// With surroundings: the adjoint paths shared by every sample.
+    shared: Option<Shared>,
+}
+
+/// A sample's parts of the radiance at the sensor, per band.
+pub struct AirSample {
+    /// The radiance leaving the surface at the ground point, before the
+    /// air.
+    pub at_surface: Vec<f64>,
+    /// What every sample at its ground point adds alike: the path
+    /// radiance, the pooled part and the shared paths' mean lookup.
+    pub known: Vec<f64>,
+    /// The variance of the known part's estimate.
+    pub known_var: Vec<f64>,
+}
+
+impl AirSample {
+    /// Parts for `nb` bands.
+    pub fn new(nb: usize) -> AirSample {
+        AirSample {
+            at_surface: vec![0.0; nb],
+            known: vec![0.0; nb],
+            known_var: vec![0.0; nb],
+        }
+    }
 }
 
 /// An adjoint path that met the ground within the domain: where, its
@@ -179,18 +211,35 @@ impl<'s> AirView<'s> {
         let Some(mut air) = Self::air(scene) else {
             return Ok(None);
         };
-        air.env = air.environment(light, false)?;
+        let shares = air.classes.water_share.clone();
+        let water: f64 = shares.iter().sum();
+        let nb = air.columns.len();
+        let mut env = vec![0.0; CELLS * nb];
+        for (k, share) in shares.iter().enumerate() {
+            let table = air.environment(light, Class::Water(k))?;
+            let weight = if water > 0.0 {
+                share / water
+            } else {
+                1.0 / shares.len() as f64
+            };
+            env.iter_mut()
+                .zip(&table)
+                .for_each(|(e, t)| *e += weight * t);
+            air.water_env[k] = table;
+        }
+        air.env = env;
         if air.land_share > 0.0 {
-            air.land_env = air.environment(light, true)?;
+            air.land_env = air.environment(light, Class::Land)?;
         }
         if let Some(crate::scene::Surroundings::Water(sea)) = &scene.surroundings {
             let beyond = super::path::PathTracer::new(sea);
-            let table = air.table(&beyond, false, SEA_SAMPLES, SEA_KEY)?;
+            let table = air.table(&beyond, None, SEA_SAMPLES, SEA_KEY)?;
             air.surround = Some(Surround::Water(table));
         }
         if !matches!(air.surround, Some(Surround::Land(_) | Surround::Water(_))) {
             (air.pooled, air.pooled_se) = air.pooled();
         }
+        air.shared = air.surround.as_ref().map(|s| air.shared(s, scene.seed));
         Ok(Some(air))
     }
 
@@ -200,6 +249,7 @@ impl<'s> AirView<'s> {
         let view = a.view.as_ref()?;
         let columns = &a.columns[..];
         let pilot = Column::mean(columns);
+        let classes = Classes::new(scene);
         let nl = pilot.layers.len();
         let nb = columns.len();
         let mut scatter_ratio = vec![0.0; nl * nb];
@@ -227,8 +277,10 @@ impl<'s> AirView<'s> {
             toward: scene.sensor.toward.as_dvec3().normalize(),
             altitude_km: view.altitude_m * 1e-3,
             env: vec![0.0; CELLS * nb],
+            water_env: vec![vec![0.0; CELLS * nb]; classes.waters()],
             land_env: Vec::new(),
-            land_share: land_share(scene),
+            land_share: classes.land_share,
+            classes,
             ray_height_m: RAY_HEIGHT_M
                 + scene
                     .land
@@ -241,6 +293,7 @@ impl<'s> AirView<'s> {
                 Some(r) => Surround::Land(super::ground::lambertian_radiance(scene, r)),
                 None => Surround::Mean,
             }),
+            shared: None,
         })
     }
 
@@ -259,23 +312,33 @@ impl<'s> AirView<'s> {
         cell_of(up.z, phi)
     }
 
-    /// A point of the domain at random: with land in the domain, one of
-    /// the land (`land`) or of the water, by rejection.
-    fn point_of_class(&self, rng: &mut Pcg32, sx: f64, sy: f64, land: bool) -> DVec3 {
+    /// A point of the domain at random of class `class` (`None`: of the
+    /// water), by rejection.
+    fn point_of_class(&self, rng: &mut Pcg32, sx: f64, sy: f64, class: Option<Class>) -> DVec3 {
         let mut tries = 0;
         loop {
             let at = DVec3::new(rng.uniform_f64() * sx, rng.uniform_f64() * sy, 0.0);
             tries += 1;
-            if self.land_share == 0.0 || self.on_land(at) == land || tries >= CLASS_TRIES {
+            let of = match class {
+                Some(class) => self.class_of(at) == class,
+                None => !self.on_land(at),
+            };
+            if of || tries >= CLASS_TRIES {
                 return at;
             }
         }
     }
 
+    /// The class of the ground at `meet` within the domain: the land, or
+    /// the water's class by the depth of its floor.
+    fn class_of(&self, meet: DVec3) -> Class {
+        self.classes.of(meet)
+    }
+
     /// True where a path meeting the ground at `meet` takes the land's
     /// table.
     fn on_land(&self, meet: DVec3) -> bool {
-        self.land_share > 0.0 && self.scene.is_land(meet.x as f32, meet.y as f32)
+        self.land_share > 0.0 && self.class_of(meet) == Class::Land
     }
 
     /// The ray handed to the integrator for the radiance leaving the
@@ -300,12 +363,13 @@ impl<'s> AirView<'s> {
     fn control(&self, meet: DVec3, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
         let nb = self.columns.len();
         let c = self.cell(up);
-        if self.on_land(meet) {
-            out.copy_from_slice(&self.land_env[c * nb..(c + 1) * nb]);
-        } else {
-            self.glint(up, glint);
-            for b in 0..nb {
-                out[b] = self.env[c * nb + b] + glint[b];
+        match self.class_of(meet) {
+            Class::Land => out.copy_from_slice(&self.land_env[c * nb..(c + 1) * nb]),
+            Class::Water(k) => {
+                self.glint(up, glint);
+                for b in 0..nb {
+                    out[b] = self.water_env[k][c * nb + b] + glint[b];
+                }
             }
         }
     }
@@ -332,38 +396,54 @@ impl<'s> AirView<'s> {
 
     /// The control's excess over the pooled part's (the water's table
     /// plus the glint) for a path meeting the ground at `meet` toward
-    /// `up`, per band: within the domain, the land's table less the
-    /// water's over the land (zero over the water); beyond it, for mean
+    /// `up`, per band: within the domain, its class's table less the
+    /// water's (with the glint over the land); beyond it, for mean
     /// surroundings, the land's share of that.
     fn excess(&self, meet: DVec3, up: DVec3, inside: bool, glint: &mut [f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
-        let share = match (inside, self.on_land(meet)) {
-            (false, _) => self.land_share,
-            (true, true) => 1.0,
-            (true, false) => 0.0,
+        let nb = self.columns.len();
+        let c = self.cell(up);
+        let (share, table) = match (inside, inside.then(|| self.class_of(meet))) {
+            (false, _) => (self.land_share, &self.land_env),
+            (true, Some(Class::Water(k))) => {
+                if self.water_env.len() > 1 {
+                    let (t, e) = (&self.water_env[k], &self.env);
+                    for b in 0..nb {
+                        out[b] = t[c * nb + b] - e[c * nb + b];
+                    }
+                }
+                return;
+            }
+            (true, _) => (1.0, &self.land_env),
         };
         if share == 0.0 {
             return;
         }
-        let nb = self.columns.len();
-        let c = self.cell(up);
         self.glint(up, glint);
         for b in 0..nb {
-            out[b] = share * (self.land_env[c * nb + b] - self.env[c * nb + b] - glint[b]);
+            out[b] = share * (table[c * nb + b] - self.env[c * nb + b] - glint[b]);
         }
     }
 
     /// The mean radiance leaving the surface per direction cell and band,
-    /// glint taken out: `ENV_SAMPLES` integrator calls per cell, at random
-    /// points of the domain and directions cosine-weighted within the
-    /// cell, on either side of the sun's vertical plane. With land in the
-    /// domain, at points of the land (`land`) or of the water only.
-    fn environment(&self, light: &dyn Integrator, land: bool) -> Result<Vec<f64>> {
+    /// glint taken out, at points of the class `class`: up to
+    /// `ENV_SAMPLES` integrator calls per cell (the water's classes share
+    /// twice that), at random points of the class and directions
+    /// cosine-weighted within the cell, on either side of the sun's
+    /// vertical plane.
+    fn environment(&self, light: &dyn Integrator, class: Class) -> Result<Vec<f64>> {
         let [w, h] = self.scene.sensor.pixels;
         let samples = (w * h) as f64 * f64::from(self.scene.sensor.samples_per_pixel);
         let per_cell = ((samples * ENV_SHARE / CELLS as f64) as u64).clamp(1, ENV_SAMPLES);
-        let key = if land { LAND_KEY } else { ENV_KEY };
-        self.table(light, land, per_cell, key)
+        let (per_cell, key) = match class {
+            Class::Land => (per_cell, LAND_KEY),
+            Class::Water(k) => {
+                let waters = self.classes.waters() as u64;
+                let per_class = (2 * per_cell).div_ceil(waters).clamp(1, per_cell);
+                (per_class, ENV_KEY.wrapping_add(k as u64))
+            }
+        };
+        self.table(light, Some(class), per_cell, key)
     }
 
     /// The table of [`AirView::environment`] from `per_cell` calls of
@@ -371,7 +451,7 @@ impl<'s> AirView<'s> {
     fn table(
         &self,
         light: &dyn Integrator,
-        land: bool,
+        class: Option<Class>,
         per_cell: u64,
         key: u64,
     ) -> Result<Vec<f64>> {
@@ -382,7 +462,7 @@ impl<'s> AirView<'s> {
             per_cell,
             key,
             self.ray_height_m,
-            &|rng| self.point_of_class(rng, sx, sy, land),
+            &|rng| self.point_of_class(rng, sx, sy, class),
             &|at, up, glint| self.glint_at(at, up, glint),
         )
         .map(|(table, _)| table)
@@ -436,23 +516,19 @@ impl<'s> AirView<'s> {
 
     /// The part of a sample's radiance at the sensor `l_t` that its paths
     /// through the air drew, per band: `l_t` less the radiance leaving
-    /// the ground point `at_surface` times the direct transmittance, the
-    /// path radiance and the pooled part (what [`AirView::camera`] adds
-    /// the same way for every sample). Its spread is the air paths' noise.
-    pub fn drawn_part(&self, l_t: &[f64], at_surface: &[f64], out: &mut [f64]) {
+    /// the ground point times the direct transmittance and the part known
+    /// alike for every sample there (`sample`, from [`AirView::camera`]).
+    /// Its spread is the air paths' noise.
+    pub fn drawn_part(&self, l_t: &[f64], sample: &AirSample, out: &mut [f64]) {
         for (b, o) in out.iter_mut().enumerate() {
-            *o = l_t[b]
-                - self.view.transmittance[b] * at_surface[b]
-                - self.view.path_radiance[b]
-                - self.pooled[b];
+            *o = l_t[b] - self.view.transmittance[b] * sample.at_surface[b] - sample.known[b];
         }
     }
 
     /// The radiance at the sensor along camera ray `ray` (which meets the
     /// ground at its pixel's ground point) into `out` (every channel run of
     /// `light`), the water-leaving radiance at that ground point into
-    /// `water`, and the radiance leaving the surface there (before the air)
-    /// into `at_surface`.
+    /// `water`, and its parts into `sample`.
     pub fn camera(
         &self,
         light: &dyn Integrator,
@@ -460,31 +536,55 @@ impl<'s> AirView<'s> {
         rng: &mut Pcg32,
         out: &mut [f64],
         water: &mut [f64],
-        at_surface: &mut [f64],
+        sample: &mut AirSample,
     ) -> Result<()> {
         let nb = self.columns.len();
         light.camera(ray, rng, out, water)?;
-        at_surface.copy_from_slice(&out[..nb]);
+        sample.at_surface.copy_from_slice(&out[..nb]);
         for (k, o) in out.iter_mut().enumerate() {
             *o *= self.view.transmittance[k % nb];
         }
-        for (o, p) in out.iter_mut().zip(&self.view.path_radiance) {
-            *o += p;
-        }
-        for (o, p) in out.iter_mut().zip(&self.pooled) {
-            *o += p;
+        sample.known_var.iter_mut().for_each(|v| *v = 0.0);
+        for (b, k) in sample.known.iter_mut().enumerate() {
+            *k = self.view.path_radiance[b] + self.pooled[b];
         }
         let ground = ray.origin.as_dvec3()
             + ray.direction.as_dvec3() * (f64::from(ray.origin.z) / -f64::from(ray.direction.z));
-        match &self.surround {
-            Some(s @ (Surround::Land(_) | Surround::Water(_))) => {
-                return self.surrounded(light, ground, s, rng, out)
+        if let Some(shared) = &self.shared {
+            // The shared paths' mean lookup, and one of the sample's own
+            // paths within the domain for the integrator call.
+            let mut mean = vec![0.0; nb];
+            self.lookup(
+                shared,
+                ground,
+                Lookup {
+                    mean: &mut mean,
+                    var: &mut sample.known_var,
+                },
+            );
+            sample
+                .known
+                .iter_mut()
+                .zip(&mean)
+                .for_each(|(k, m)| *k += m);
+            for (o, k) in out.iter_mut().zip(&sample.known) {
+                *o += k;
             }
-            Some(Surround::Mean) => return self.by_class(light, ground, rng, out),
-            None if self.land_share > 0.0 => return self.by_class(light, ground, rng, out),
-            None => {}
+            let within = self.landings(ground, rng, |_, _, _, _| {})?;
+            return self.add_one_within(light, &within, rng, out);
         }
+        for (o, k) in out.iter_mut().zip(&sample.known) {
+            *o += k;
+        }
+        if self.land_share > 0.0 {
+            return self.by_class(light, ground, rng, out);
+        }
+        let (mut glint, mut excess) = (vec![0.0; nb], vec![0.0; nb]);
         self.adjoint(ground, rng, |rng, meet, dir, w| {
+            self.excess(meet, -dir, true, &mut glint, &mut excess);
+            for b in 0..nb {
+                out[b] += w[b] * excess[b];
+            }
             self.add_difference(light, meet, dir, w, 1.0, rng, out)
         })
     }
@@ -518,39 +618,6 @@ impl<'s> AirView<'s> {
             *o += scale * w[b] * (t - mean);
         }
         Ok(())
-    }
-
-    /// The scattered part with Lambertian surroundings, added to `out`:
-    /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
-    /// `ground`, each counting 1 / N. One that meets the ground beyond the
-    /// domain sees the surroundings' radiance `surround`. One that meets it
-    /// within sees the control there (its class's table plus the glint),
-    /// and one of those
-    /// (drawn uniformly, counting as many as there are) adds its own
-    /// difference from that, by an integrator call: unbiased, at most one
-    /// call per sample.
-    fn surrounded(
-        &self,
-        light: &dyn Integrator,
-        ground: DVec3,
-        surround: &Surround,
-        rng: &mut Pcg32,
-        out: &mut [f64],
-    ) -> Result<()> {
-        let nb = self.columns.len();
-        let share = 1.0 / SURROUND_PATHS as f64;
-        let (mut glint, mut control) = (vec![0.0; nb], vec![0.0; nb]);
-        let within = self.landings(ground, rng, |meet, dir, w, inside| {
-            if inside {
-                self.control(meet, -dir, &mut glint, &mut control);
-            } else {
-                self.beyond(surround, -dir, &mut glint, &mut control);
-            }
-            for b in 0..nb {
-                out[b] += share * w[b] * control[b];
-            }
-        })?;
-        self.add_one_within(light, &within, rng, out)
     }
 
     /// [`SURROUND_PATHS`] adjoint paths from the sensor to the ground point
@@ -596,9 +663,9 @@ impl<'s> AirView<'s> {
         self.add_difference(light, *meet, *dir, w, scale, rng, out)
     }
 
-    /// The scattered part with the domain in its own mean, or over a
-    /// periodic domain with land in it (`out` already holds the pooled
-    /// part, the water's table and the glint over every path):
+    /// The scattered part over a periodic domain with land in it (`out`
+    /// already holds the pooled part, the water's table and the glint over
+    /// every path):
     /// [`SURROUND_PATHS`] adjoint paths, each counting 1 / N, of which
     /// those that meet the land add its table's excess over the water's
     /// (beyond the domain, the land's share of it), and one of those
@@ -748,25 +815,19 @@ impl<'s> AirView<'s> {
     }
 }
 
-/// The share of the domain that is land, on a grid of `LAND_GRID`^2
-/// points at cell centres (0 without land).
-fn land_share(scene: &Scene) -> f64 {
-    if scene.land.is_none() {
-        return 0.0;
-    }
-    let [sx, sy] = scene.domain.size_m;
-    let n = LAND_GRID;
-    let land = (0..n * n)
-        .filter(|k| {
-            let x = (k % n) as f64 + 0.5;
-            let y = (k / n) as f64 + 0.5;
-            scene.is_land((x * sx / n as f64) as f32, (y * sy / n as f64) as f32)
-        })
-        .count();
-    land as f64 / (n * n) as f64
+/// The ground's class within the domain.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Class {
+    Land,
+    /// The water's class by the depth of its floor, shallowest first.
+    Water(usize),
 }
 
+mod classes;
+mod shared;
 mod table;
+use classes::Classes;
+use shared::{Lookup, Shared};
 pub(crate) use table::leaving_table;
 use table::ray_from_above;
 

@@ -482,7 +482,10 @@ pub fn render_tile(
     // With the sensor above the surface: the radiance leaving the surface
     // at each ground point, before the air.
 
-    let (mut surface, mut surface_sum) = (vec![0f64; nb], vec![0f64; nb]);
+    let (mut parts, mut surface_sum) = (air::AirSample::new(nb), vec![0f64; nb]);
+    // The variance of the part every sample at its ground point adds alike
+    // (the shared air paths' mean lookup), summed over the samples.
+    let mut known_var = vec![0f64; nb];
     let mut se = vec![0f64; nb];
     for py in 0..th {
         for px in 0..tw {
@@ -491,6 +494,7 @@ pub fn render_tile(
             acc.clear();
             water_sum.iter_mut().for_each(|v| *v = 0.0);
             surface_sum.iter_mut().for_each(|v| *v = 0.0);
+            known_var.iter_mut().for_each(|v| *v = 0.0);
             for s in 0..spp {
                 let mut rng = Pcg32::new(scene.seed ^ PIXEL_STREAM, pixel * spp + s);
                 let (u, v) = if spp == 1 {
@@ -501,22 +505,26 @@ pub fn render_tile(
                 let ray = camera::ray(&scene.sensor, gx, gy, u, v);
                 match air {
                     Some(a) => {
-                        a.camera(light, ray, &mut rng, &mut sample, &mut water, &mut surface)?
+                        a.camera(light, ray, &mut rng, &mut sample, &mut water, &mut parts)?
                     }
                     None => {
                         light.camera(ray, &mut rng, &mut sample, &mut water)?;
-                        surface.copy_from_slice(&sample[..nb]);
+                        parts.at_surface.copy_from_slice(&sample[..nb]);
                     }
                 }
                 acc.add(&sample);
                 if let Some(a) = air_noise {
                     let at = (py * tw + px) * nb;
-                    a.drawn_part(&sample[..nb], &surface, &mut drawn[at..at + nb]);
+                    a.drawn_part(&sample[..nb], &parts, &mut drawn[at..at + nb]);
                 }
                 water_sum.iter_mut().zip(&water).for_each(|(a, v)| *a += v);
                 surface_sum
                     .iter_mut()
-                    .zip(&surface)
+                    .zip(&parts.at_surface)
+                    .for_each(|(a, v)| *a += v);
+                known_var
+                    .iter_mut()
+                    .zip(&parts.known_var)
                     .for_each(|(a, v)| *a += v);
             }
             let base = (py * tw + px) * nb;
@@ -540,8 +548,9 @@ pub fn render_tile(
             }
             if !errors.is_empty() {
                 acc.standard_error(&mut se);
-                for (e, s) in errors[base..base + nb].iter_mut().zip(&se) {
-                    *e = *s as f32;
+                // The shared paths' error is common to a pixel's samples.
+                for ((e, s), v) in errors[base..base + nb].iter_mut().zip(&se).zip(&known_var) {
+                    *e = (s * s + v / spp as f64).sqrt() as f32;
                 }
             }
             let c = quicklook.rgb(&values[base..base + nb]);

@@ -1,0 +1,205 @@
+//! The expected lookups of the air view's control variate, from adjoint
+//! paths shared by every sample.
+//!
+//! With surroundings, each sample's paths that meet the ground add its
+//! class's table (or the surroundings' radiance) by a lookup, and one of
+//! those within the domain its difference from that by an integrator
+//! call. The lookups alone were most of the noise from 3 km: a path from a
+//! deep-water pixel that met the beach added its class's excess, ten
+//! times the water's radiance in the red, to that one pixel (7 % per pixel
+//! band at 671 nm from 16 paths). What the lookups add has the same mean
+//! at every ground point g, a known function of g, because the air is the
+//! same everywhere: the paths from g meet the ground at g plus offsets
+//! drawn the same way for every g. So [`SHARED_PATHS`] adjoint paths are
+//! drawn once, and each sample adds their mean lookup at its own ground
+//! point:
+//!
+//! ```text
+//! A(g) = 1/M sum_i w_i V(class(g + d_i), up_i)
+//! ```
+//!
+//! unbiased at every g, with a standard error from the paths' spread that
+//! the standard-error cube holds. Most offsets leave the domain, where V is
+//! the same for every g: their sum is kept once, and a sample visits only
+//! the paths whose offset from it lands within the domain (sorted by
+//! offset in x). The sample's own paths then serve only to draw the one
+//! that makes the integrator call.
+
+use super::{AirView, Class, Surround};
+use crate::rng::Pcg32;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Adjoint paths shared by every sample for the lookups' mean.
+pub const SHARED_PATHS: u64 = 1 << 13;
+
+/// Stream of the shared paths' randoms.
+const SHARED_KEY: u64 = 0x7368_6172_6564_5f70;
+
+/// The shared adjoint paths that met the ground, sorted by their offset in
+/// x, and what their lookups add beyond the domain.
+pub(super) struct Shared {
+    /// Paths drawn (those that met the ground and those that did not).
+    drawn: f64,
+    /// Per path that met the ground: where, from the ground point it left.
+    dx: Vec<f64>,
+    dy: Vec<f64>,
+    /// Its direction cell.
+    cell: Vec<u32>,
+    /// Per path and band (path-major): its band weight, that times the
+    /// glint along it, and that times what it sees beyond the domain.
+    w: Vec<f32>,
+    wg: Vec<f32>,
+    x: Vec<f32>,
+    /// Per band: the sums over the paths of x and x^2.
+    x_sum: Vec<f64>,
+    x2_sum: Vec<f64>,
+    /// Per class (the water's by depth, then the land) and direction cell
+    /// and band (cell-major): what a path meeting it within the domain
+    /// sees, less the glint term (`glint`: its weight in the class).
+    within: Vec<Vec<f64>>,
+    glint: Vec<f64>,
+}
+
+/// A sample's mean lookup and the variance of that mean, per band.
+pub(super) struct Lookup<'a> {
+    pub mean: &'a mut [f64],
+    pub var: &'a mut [f64],
+}
+
+impl AirView<'_> {
+    /// The shared paths for surroundings `surround`: beyond the domain a
+    /// path sees the surroundings (for mean surroundings: the land's
+    /// share of its excess over the water's table); within, its class's
+    /// table (for mean surroundings: that less the water's, the glint
+    /// taken out over the land). Drawn from the stream of `seed`.
+    pub(super) fn shared(&self, surround: &Surround, seed: u64) -> Shared {
+        let nb = self.columns.len();
+        let mean = matches!(surround, Surround::Mean);
+        let seed = crate::rng::mix64(seed ^ SHARED_KEY);
+        let chunks = 64u64;
+        let per = SHARED_PATHS / chunks;
+        type Met = (DVec3, u32, Vec<f64>, Vec<f64>, Vec<f64>);
+        let met: Vec<Vec<Met>> = (0..chunks)
+            .into_par_iter()
+            .map(|k| {
+                let mut met = Vec::new();
+                let (mut glint, mut beyond) = (vec![0.0; nb], vec![0.0; nb]);
+                for i in 0..per {
+                    let mut rng = Pcg32::new(seed, k * per + i);
+                    self.adjoint(DVec3::ZERO, &mut rng, |_, at, dir, w| {
+                        let up = -dir;
+                        if mean {
+                            self.excess(at, up, false, &mut glint, &mut beyond);
+                        } else {
+                            self.beyond(surround, up, &mut glint, &mut beyond);
+                        }
+                        self.glint(up, &mut glint);
+                        let wg = (0..nb).map(|b| w[b] * glint[b]).collect();
+                        let x = (0..nb).map(|b| w[b] * beyond[b]).collect();
+                        met.push((at, self.cell(up) as u32, w.to_vec(), wg, x));
+                        Ok(())
+                    })
+                    .expect("the shared paths call no integrator");
+                }
+                met
+            })
+            .collect();
+        let mut met: Vec<Met> = met.into_iter().flatten().collect();
+        met.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
+        let (mut x_sum, mut x2_sum) = (vec![0.0; nb], vec![0.0; nb]);
+        for (_, _, _, _, x) in &met {
+            for b in 0..nb {
+                x_sum[b] += x[b];
+                x2_sum[b] += x[b] * x[b];
+            }
+        }
+        let narrow = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        // Within the domain, per class: the water's by depth, then the land.
+        let mut within = Vec::new();
+        let mut glint = Vec::new();
+        for table in &self.water_env {
+            within.push(if mean {
+                table.iter().zip(&self.env).map(|(t, e)| t - e).collect()
+            } else {
+                table.clone()
+            });
+            glint.push(if mean { 0.0 } else { 1.0 });
+        }
+        if self.land_share > 0.0 {
+            within.push(if mean {
+                self.land_env
+                    .iter()
+                    .zip(&self.env)
+                    .map(|(t, e)| t - e)
+                    .collect()
+            } else {
+                self.land_env.clone()
+            });
+            glint.push(if mean { -1.0 } else { 0.0 });
+        }
+        Shared {
+            drawn: SHARED_PATHS as f64,
+            dx: met.iter().map(|m| m.0.x).collect(),
+            dy: met.iter().map(|m| m.0.y).collect(),
+            cell: met.iter().map(|m| m.1).collect(),
+            w: met.iter().flat_map(|m| narrow(&m.2)).collect(),
+            wg: met.iter().flat_map(|m| narrow(&m.3)).collect(),
+            x: met.iter().flat_map(|m| narrow(&m.4)).collect(),
+            x_sum,
+            x2_sum,
+            within,
+            glint,
+        }
+    }
+
+    /// The shared paths' mean lookup at the ground point `ground`, and the
+    /// variance of that mean (from the paths' spread), per band.
+    pub(super) fn lookup(&self, shared: &Shared, ground: DVec3, out: Lookup<'_>) {
+        let nb = self.columns.len();
+        let [sx, sy] = self.scene.domain.size_m;
+        let (mean, var) = (out.mean, out.var);
+        // y_b = w (within - beyond) summed over the paths within, with its
+        // square and its product with x.
+        let mut y = vec![0.0; nb];
+        let mut yy = vec![0.0; nb];
+        let mut xy = vec![0.0; nb];
+        // The offsets whose x lands within [0, sx), with a margin for
+        // rounding: each is tested again below.
+        let lo = shared.dx.partition_point(|&d| d < -ground.x - 1e-6);
+        let hi = shared.dx.partition_point(|&d| d < sx - ground.x + 1e-6);
+        for i in lo..hi {
+            let at = DVec3::new(ground.x + shared.dx[i], ground.y + shared.dy[i], 0.0);
+            if !((0.0..sx).contains(&at.x) && (0.0..sy).contains(&at.y)) {
+                continue;
+            }
+            let k = match self.class_of(at) {
+                Class::Water(k) => k,
+                Class::Land => shared.within.len() - 1,
+            };
+            let table = &shared.within[k];
+            let g = shared.glint[k];
+            let c = shared.cell[i] as usize;
+            let row = i * nb..(i + 1) * nb;
+            let (w, wg, x) = (
+                &shared.w[row.clone()],
+                &shared.wg[row.clone()],
+                &shared.x[row],
+            );
+            for b in 0..nb {
+                let (w, wg, x) = (f64::from(w[b]), f64::from(wg[b]), f64::from(x[b]));
+                let v = w * table[c * nb + b] + g * wg - x;
+                y[b] += v;
+                yy[b] += v * v;
+                xy[b] += x * v;
+            }
+        }
+        let m = shared.drawn;
+        for b in 0..nb {
+            let a = (shared.x_sum[b] + y[b]) / m;
+            let second = (shared.x2_sum[b] + 2.0 * xy[b] + yy[b]) / m;
+            mean[b] = a;
+            var[b] = ((second - a * a) / (m - 1.0)).max(0.0);
+        }
+    }
+}
