@@ -8,10 +8,12 @@
 #    (nanodisort from PyPI, tests/clients/disort_atmosphere.py), and the
 #    path radiance seen from 3 km and from 700 km, 30 degrees off nadir
 #    (over a black surface, as DISORT: sea_coupling = false).
-# 2. The built-in scene under a maritime-like aerosol (tau(550) 0.1,
-#    Angstrom 0.5, albedo 0.98, g 0.75, 1 km) rendered from just above the
-#    surface and from 700 km: times, and the deep-water pixel noise of L_t
-#    and L_w (pixel against its 7 x 7 mean, 160-185 m by 40-100 m).
+# 2. The built-in scene (maritime aerosol tau(550) 0.1, seen from 3 km
+#    with the domain's mean around it) rendered as it is, with
+#    --no-atmosphere (from just above the surface), from 700 km, and
+#    without its air (the G173 sun and sky): times, and the deep-water
+#    pixel noise of L_t and L_w (pixel against its 7 x 7 mean, 160-185 m
+#    by 92-152 m) and the standard-error cube's median there.
 # Needs python3 with numpy and nanodisort (tools/test.sh installs them in .venv).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -46,35 +48,45 @@ for b, x in zip(a["bands"], d):
           f" (se {v['path_radiance_se'][a['bands'].index(b)] / x['path_radiance']:.2%})")
 PY
 done
-"$bin" scene default | "$py" -c '
-import sys
-t = sys.stdin.read()
-t = t.replace("spectrum = \"astm-g173-direct\"", "spectrum = \"extraterrestrial\"")
-t = t.replace("[sky]\nspectrum = \"astm-g173-diffuse\"\n", "[atmosphere]\nprofile = \"midlatitude-summer\"\n\n[atmosphere.aerosol]\nmodel = \"custom\"\ntau_550 = 0.1\nangstrom = 0.5\nssa = 0.98\nphase = { kind = \"henyey-greenstein\", g = 0.75 }\nscale_height_km = 1.0\n")
-sys.stdout.write(t)' > "$out/surface.toml"
-"$bin" scene set "$out/surface.toml" sensor.altitude_m=700000.0 > "$out/satellite.toml"
-for v in surface satellite; do
-  "$bin" render "$out/$v.toml" --out "$out/$v" --quiet 2>/dev/null
-done
+"$bin" scene default > "$out/airborne.toml"
+"$bin" scene set "$out/airborne.toml" sensor.altitude_m=700000.0 > "$out/satellite.toml"
+# The built-in scene without air: the G173 sun and sky, seen from just above the surface.
+"$py" - "$out/airborne.toml" > "$out/no-air.toml" <<'PY'
+import re, sys
+t = open(sys.argv[1]).read()
+t = t.replace('spectrum = "extraterrestrial"', 'spectrum = "astm-g173-direct"\n\n[sky]\nspectrum = "astm-g173-diffuse"')
+t = re.sub(r"\[atmosphere\]\n(?:[^\[\n][^\n]*\n|\n)*?(?=\[)", "", t)
+t = re.sub(r"\[surroundings\]\n[^\[]*", "", t)
+t = re.sub(r"altitude_m = [0-9.]+\n", "", t)
+sys.stdout.write(t)
+PY
+"$bin" render "$out/airborne.toml" --out "$out/airborne" --quiet 2>/dev/null
+"$bin" render "$out/airborne.toml" --no-atmosphere --out "$out/surface" --quiet 2>/dev/null
+"$bin" render "$out/satellite.toml" --out "$out/satellite" --quiet 2>/dev/null
+"$bin" render "$out/no-air.toml" --out "$out/no-air" --quiet 2>/dev/null
 "$py" - "$out" <<'PY'
-import json, re, sys
+import json, os, re, sys
 import numpy as np
 out = sys.argv[1]
 def cube(p):
     return np.fromfile(p, dtype="<f4").reshape(128, 256, 256).astype(float)
-hdr = open(f"{out}/satellite/coastal.hdr").read()
+hdr = open(f"{out}/airborne/coastal.hdr").read()
 wl = np.array([float(x) for x in re.search(r"wavelength = \{([^}]*)\}", hdr).group(1).split(",")])
+# Deep water, 160-185 m by 92-152 m: each pixel against its 7 x 7 mean,
+# and the median of the standard-error cube.
 x0, x1, y0, y1 = int(160 / 0.75), int(185 / 0.75), int(92 / 0.75), int(152 / 0.75)
 def noise(w):
     from numpy.lib.stride_tricks import sliding_window_view
     m = sliding_window_view(w, (7, 7)).mean(axis=(2, 3))
     return (w[3:-3, 3:-3] - m).std() * np.sqrt(49 / 48) / w.mean()
-for v in ["surface", "satellite"]:
+for v in ["no-air", "surface", "airborne", "satellite"]:
     r = json.load(open(f"{out}/{v}/coastal.json"))
     print(v, "timings", r["timings_s"])
-    for nm in [412, 526, 670]:
+    for nm in [413, 526, 671]:
         b = int(np.argmin(abs(wl - nm)))
         lt = cube(f"{out}/{v}/coastal.bsq")[b][y0:y1, x0:x1]
         lw = cube(f"{out}/{v}/coastal.lw.bsq")[b][y0:y1, x0:x1]
-        print(f"  {wl[b]:.0f} nm: L_t {lt.mean():.5f} noise {noise(lt):.2%}; L_w {lw.mean():.5f} noise {noise(lw):.2%}")
+        se = cube(f"{out}/{v}/coastal.stderr.bsq")[b][y0:y1, x0:x1]
+        print(f"  {wl[b]:.0f} nm: L_t {lt.mean():.5f} noise {noise(lt):.2%} (standard error, median {np.median(se / lt):.2%});"
+              f" L_w {lw.mean():.5f} noise {noise(lw):.2%}")
 PY

@@ -114,7 +114,8 @@ impl MemoryBudget {
     }
 
     /// The renderer's own needs for `scene` with `threads` workers (0 = one
-    /// per core), in bytes.
+    /// per core), in bytes: with a sensor above the surface, the air
+    /// view's tables and shared paths among them.
     pub fn render_reserve(scene: &Scene, threads: usize) -> u64 {
         let nb = scene.bands.len() as u64;
         let [w, h] = scene.sensor.pixels.map(|p| p as u64);
@@ -135,6 +136,7 @@ impl MemoryBudget {
         let exr = exr_tiles * layers * exr_px * nb * 4;
         RUNTIME_RESERVE
             + scene.geometry.heap_bytes()
+            + crate::render::air::AirView::reserve_bytes(scene)
             + image
             + exr
             + workers * (tile + neighbours + sums)

@@ -243,6 +243,25 @@ impl<'s> AirView<'s> {
         Ok(Some(air))
     }
 
+    /// The bytes the air view of `scene` holds (0 without one): its
+    /// tables, the grid of classes and the shared paths it keeps.
+    pub fn reserve_bytes(scene: &'s Scene) -> u64 {
+        let Some(air) = Self::air(scene) else {
+            return 0;
+        };
+        let nb = air.columns.len() as u64;
+        let table = CELLS as u64 * nb * 8;
+        // The water's classes, the land's and their copies in the shared
+        // paths; the water's mean, the sea's and what lies beyond.
+        let tables = 2 * (air.classes.waters() as u64 + 1) + 3;
+        let shared = if air.surround.is_some() {
+            air.shared_kept() * (8 * nb + 20)
+        } else {
+            0
+        };
+        tables * table + air.classes.bytes() + shared
+    }
+
     /// The air alone, before its tables.
     fn air(scene: &'s Scene) -> Option<AirView<'s>> {
         let a = scene.atmosphere.as_deref()?;
@@ -371,26 +390,6 @@ impl<'s> AirView<'s> {
                     out[b] = self.water_env[k][c * nb + b] + glint[b];
                 }
             }
-        }
-    }
-
-    /// What a path meeting the ground beyond the domain toward `up` sees
-    /// there, per band: the land's radiance, or a table (the sea's, or the
-    /// domain's mean) plus the glint (`glint` is scratch).
-    fn beyond(&self, surround: &Surround, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
-        let nb = self.columns.len();
-        let table = match surround {
-            Surround::Land(land) => {
-                out.copy_from_slice(land);
-                return;
-            }
-            Surround::Water(sea) => sea,
-            Surround::Mean => &self.env,
-        };
-        let c = self.cell(up);
-        self.glint(up, glint);
-        for b in 0..nb {
-            out[b] = table[c * nb + b] + glint[b];
         }
     }
 

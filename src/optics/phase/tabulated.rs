@@ -142,10 +142,23 @@ fn parse_petzold(text: &str) -> Result<TabulatedPhase> {
     })
 }
 
+/// Buckets of equal angle over [0, pi] indexing the pieces.
+const BUCKETS: usize = 4096;
+
+/// The first angle of bucket `k` (rad), a little below it so that it is
+/// never above an angle the bucket takes after rounding.
+fn bucket_start(k: usize) -> f64 {
+    k as f64 * (PI / BUCKETS as f64) - 1e-9
+}
+
 /// Pieces covering [0, pi] in order, each with its exact mass.
 #[derive(Debug)]
 struct Table {
     pieces: Vec<Piece>,
+    /// Per bucket of `BUCKETS` equal angles over [0, pi]: the first piece
+    /// whose end is at or beyond the bucket's start, where the search for
+    /// an angle in it begins.
+    first: Vec<u32>,
     /// The factor the input values were divided by: their integral over the sphere.
     raw_integral: f64,
     backscatter: f64,
@@ -251,8 +264,12 @@ impl Table {
             })
             .sum();
         let mean_cos = pieces.iter().map(Piece::cos_moment).sum();
+        let first = (0..BUCKETS)
+            .map(|k| pieces.partition_point(|p| p.hi < bucket_start(k)) as u32)
+            .collect();
         Ok(Table {
             pieces,
+            first,
             raw_integral,
             backscatter,
             mean_cos,
@@ -260,11 +277,22 @@ impl Table {
     }
 
     fn density(&self, psi: f64) -> f64 {
-        let i = self
-            .pieces
-            .partition_point(|p| p.hi < psi)
-            .min(self.pieces.len() - 1);
-        self.pieces[i].density(psi)
+        // The first piece whose end is at or beyond psi (the last for psi
+        // beyond pi or NaN), found from its bucket's first: the phase
+        // function is evaluated toward every sky cell at every collision.
+        let last = self.pieces.len() - 1;
+        let k = (psi * (BUCKETS as f64 / PI)) as usize;
+        let mut i = if psi >= 0.0 && k < BUCKETS {
+            self.first[k] as usize
+        } else if psi >= 0.0 {
+            self.first[BUCKETS - 1] as usize
+        } else {
+            0
+        };
+        while i < last && self.pieces[i].hi < psi {
+            i += 1;
+        }
+        self.pieces[i.min(last)].density(psi)
     }
 
     /// P(<psi) = 1 - u, so that u -> 1 is forward and cos is non-decreasing in u.

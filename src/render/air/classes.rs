@@ -115,6 +115,11 @@ impl Classes {
         }
     }
 
+    /// The bytes of the grid.
+    pub fn bytes(&self) -> u64 {
+        self.grid.len() as u64
+    }
+
     /// The number of water classes.
     pub fn waters(&self) -> usize {
         self.water_share.len()

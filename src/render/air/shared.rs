@@ -46,11 +46,16 @@ pub(super) struct Shared {
     dy: Vec<f64>,
     /// Its direction cell.
     cell: Vec<u32>,
-    /// Per path and band (path-major): its band weight, that times the
-    /// glint along it, and that times what it sees beyond the domain.
+    /// Per path and band (path-major): its band weight w, and that times
+    /// the glint along it, wg.
     w: Vec<f32>,
     wg: Vec<f32>,
-    x: Vec<f32>,
+    /// What a path sees beyond the domain, times its weight: x =
+    /// `beyond_w` w `beyond[cell]` + `beyond_g` wg (per direction cell
+    /// and band, cell-major).
+    beyond: Vec<f64>,
+    beyond_w: f64,
+    beyond_g: f64,
     /// Per band: the sums over the paths of x and x^2.
     x_sum: Vec<f64>,
     x2_sum: Vec<f64>,
@@ -79,42 +84,64 @@ impl AirView<'_> {
         let seed = crate::rng::mix64(seed ^ SHARED_KEY);
         let chunks = 64u64;
         let per = SHARED_PATHS / chunks;
-        type Met = (DVec3, u32, Vec<f64>, Vec<f64>, Vec<f64>);
-        let met: Vec<Vec<Met>> = (0..chunks)
+        // Beyond the domain, as x = beyond_w w beyond[cell] + beyond_g wg:
+        // for mean surroundings the land's share of its table's excess over
+        // the water's, less the glint; the surroundings' land radiance (the
+        // same in every cell); or the sea's table plus the glint.
+        let cells = crate::optics::atmosphere::transport::CELLS;
+        let ls = self.land_share;
+        let (beyond, beyond_w, beyond_g) = match surround {
+            Surround::Mean if ls > 0.0 => (
+                self.land_env
+                    .iter()
+                    .zip(&self.env)
+                    .map(|(l, e)| l - e)
+                    .collect(),
+                ls,
+                -ls,
+            ),
+            Surround::Mean => (vec![0.0; cells * nb], 0.0, 0.0),
+            Surround::Land(r) => (r.repeat(cells), 1.0, 0.0),
+            Surround::Water(sea) => (sea.clone(), 1.0, 1.0),
+        };
+        // Per path that met the ground within reach of the domain (an
+        // offset beyond its size lands outside it from every ground point):
+        // where, its cell, w and wg (f32); the sums of x over them all.
+        type Met = (DVec3, u32, Vec<f32>, Vec<f32>);
+        let chunked: Vec<(Vec<Met>, Vec<f64>, Vec<f64>)> = (0..chunks)
             .into_par_iter()
             .map(|k| {
                 let mut met = Vec::new();
-                let (mut glint, mut beyond) = (vec![0.0; nb], vec![0.0; nb]);
-                for i in 0..per {
-                    let mut rng = Pcg32::new(seed, k * per + i);
-                    self.adjoint(DVec3::ZERO, &mut rng, |_, at, dir, w| {
-                        let up = -dir;
-                        if mean {
-                            self.excess(at, up, false, &mut glint, &mut beyond);
-                        } else {
-                            self.beyond(surround, up, &mut glint, &mut beyond);
-                        }
-                        self.glint(up, &mut glint);
-                        let wg = (0..nb).map(|b| w[b] * glint[b]).collect();
-                        let x = (0..nb).map(|b| w[b] * beyond[b]).collect();
-                        met.push((at, self.cell(up) as u32, w.to_vec(), wg, x));
-                        Ok(())
-                    })
-                    .expect("the shared paths call no integrator");
-                }
-                met
+                let (mut x_sum, mut x2_sum) = (vec![0.0; nb], vec![0.0; nb]);
+                let mut glint = vec![0.0; nb];
+                self.shared_paths(seed, k * per..(k + 1) * per, |at, up, w| {
+                    self.glint(up, &mut glint);
+                    let c = self.cell(up);
+                    let row = &beyond[c * nb..(c + 1) * nb];
+                    let wg: Vec<f32> = (0..nb).map(|b| (w[b] * glint[b]) as f32).collect();
+                    let w: Vec<f32> = w.iter().map(|&v| v as f32).collect();
+                    for b in 0..nb {
+                        let x = beyond_w * f64::from(w[b]) * row[b] + beyond_g * f64::from(wg[b]);
+                        x_sum[b] += x;
+                        x2_sum[b] += x * x;
+                    }
+                    if self.within_reach(at) {
+                        met.push((at, c as u32, w, wg));
+                    }
+                });
+                (met, x_sum, x2_sum)
             })
             .collect();
-        let mut met: Vec<Met> = met.into_iter().flatten().collect();
-        met.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
         let (mut x_sum, mut x2_sum) = (vec![0.0; nb], vec![0.0; nb]);
-        for (_, _, _, _, x) in &met {
+        let mut met: Vec<Met> = Vec::new();
+        for (m, xs, x2s) in chunked {
+            met.extend(m);
             for b in 0..nb {
-                x_sum[b] += x[b];
-                x2_sum[b] += x[b] * x[b];
+                x_sum[b] += xs[b];
+                x2_sum[b] += x2s[b];
             }
         }
-        let narrow = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        met.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
         // Within the domain, per class: the water's by depth, then the land.
         let mut within = Vec::new();
         let mut glint = Vec::new();
@@ -143,14 +170,60 @@ impl AirView<'_> {
             dx: met.iter().map(|m| m.0.x).collect(),
             dy: met.iter().map(|m| m.0.y).collect(),
             cell: met.iter().map(|m| m.1).collect(),
-            w: met.iter().flat_map(|m| narrow(&m.2)).collect(),
-            wg: met.iter().flat_map(|m| narrow(&m.3)).collect(),
-            x: met.iter().flat_map(|m| narrow(&m.4)).collect(),
+            w: met.iter().flat_map(|m| m.2.iter().copied()).collect(),
+            wg: met.iter().flat_map(|m| m.3.iter().copied()).collect(),
+            beyond,
+            beyond_w,
+            beyond_g,
             x_sum,
             x2_sum,
             within,
             glint,
         }
+    }
+
+    /// The shared adjoint paths `range` of the stream `seed` (mixed with
+    /// the shared paths' key) from the ground point at the origin: for
+    /// each that meets the ground, `at(where, up, band weights)`.
+    fn shared_paths(
+        &self,
+        seed: u64,
+        range: std::ops::Range<u64>,
+        mut at: impl FnMut(DVec3, DVec3, &[f64]),
+    ) {
+        for i in range {
+            let mut rng = Pcg32::new(seed, i);
+            self.adjoint(DVec3::ZERO, &mut rng, |_, meet, dir, w| {
+                at(meet, -dir, w);
+                Ok(())
+            })
+            .expect("the shared paths call no integrator");
+        }
+    }
+
+    /// True for an offset that lands within the domain from some ground
+    /// point in it.
+    fn within_reach(&self, at: DVec3) -> bool {
+        let [sx, sy] = self.scene.domain.size_m;
+        at.x.abs() < sx && at.y.abs() < sy
+    }
+
+    /// How many shared paths of `scene`'s seed the air view keeps: those
+    /// that meet the ground within reach of the domain.
+    pub(super) fn shared_kept(&self) -> u64 {
+        let seed = crate::rng::mix64(self.scene.seed ^ SHARED_KEY);
+        let chunks = 64u64;
+        let per = SHARED_PATHS / chunks;
+        (0..chunks)
+            .into_par_iter()
+            .map(|k| {
+                let mut kept = 0;
+                self.shared_paths(seed, k * per..(k + 1) * per, |at, _, _| {
+                    kept += u64::from(self.within_reach(at));
+                });
+                kept
+            })
+            .sum()
     }
 
     /// The shared paths' mean lookup at the ground point `ground`, and the
@@ -181,13 +254,11 @@ impl AirView<'_> {
             let g = shared.glint[k];
             let c = shared.cell[i] as usize;
             let row = i * nb..(i + 1) * nb;
-            let (w, wg, x) = (
-                &shared.w[row.clone()],
-                &shared.wg[row.clone()],
-                &shared.x[row],
-            );
+            let (w, wg) = (&shared.w[row.clone()], &shared.wg[row]);
+            let beyond = &shared.beyond[c * nb..(c + 1) * nb];
             for b in 0..nb {
-                let (w, wg, x) = (f64::from(w[b]), f64::from(wg[b]), f64::from(x[b]));
+                let (w, wg) = (f64::from(w[b]), f64::from(wg[b]));
+                let x = shared.beyond_w * w * beyond[b] + shared.beyond_g * wg;
                 let v = w * table[c * nb + b] + g * wg - x;
                 y[b] += v;
                 yy[b] += v * v;
