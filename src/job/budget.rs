@@ -114,8 +114,9 @@ impl MemoryBudget {
     }
 
     /// The renderer's own needs for `scene` with `threads` workers (0 = one
-    /// per core), in bytes: with a sensor above the surface, the air
-    /// view's tables and shared paths among them.
+    /// per core), in bytes: under an atmosphere its sky and columns, and
+    /// with a sensor above the surface the air view's tables and shared
+    /// paths, among them.
     pub fn render_reserve(scene: &Scene, threads: usize) -> u64 {
         let nb = scene.bands.len() as u64;
         let [w, h] = scene.sensor.pixels.map(|p| p as u64);
@@ -137,6 +138,7 @@ impl MemoryBudget {
         RUNTIME_RESERVE
             + scene.geometry.heap_bytes()
             + crate::render::air::AirView::reserve_bytes(scene)
+            + scene.atmosphere.as_ref().map_or(0, |a| a.heap_bytes())
             + image
             + exr
             + workers * (tile + neighbours + sums)

@@ -134,6 +134,14 @@ impl PhaseFunction {
         TabulatedPhase::new(angles_deg, values, field).map(PhaseFunction::Tabulated)
     }
 
+    /// The bytes it holds on the heap (a table's).
+    pub fn heap_bytes(&self) -> u64 {
+        match self {
+            PhaseFunction::Tabulated(t) => t.heap_bytes(),
+            _ => 0,
+        }
+    }
+
     /// p(cos_theta) in sr^-1; `cos_theta` is clamped to [-1, 1].
     pub fn eval(&self, cos_theta: f64) -> f64 {
         // Exact for cos_theta >= 1/2 (Sterbenz), so no forward precision is lost here.

@@ -21,7 +21,9 @@
 //! sampling noise (march jitter, rough-surface facets) is not in it. With
 //! the sensor above the surface at one sample per pixel it also holds the
 //! noise of the paths through the air: the variance of their part
-//! (`air::AirView::drawn_part`) over the pixel's tile.
+//! (`air::AirView::drawn_part`) over the pixel's tile. With surroundings
+//! it holds, at any number of samples, the error of the mean lookup of
+//! the adjoint paths shared by every sample (`air::shared`).
 //!
 //! Not for: emission (see `emit`), writing files (the sinks live in
 //! `job::outputs` and `job::distributed::tile_file`) or file formats (see
@@ -414,7 +416,7 @@ pub fn stderr_description(scene: &Scene) -> Option<String> {
     match scene.render.integrator {
         crate::scene::IntegratorMode::PhotonMap if spp == 1 && scene.sensor.altitude_m.is_some() => {
             Some(format!(
-                "photon noise from {GROUPS} photon groups, 1 sample per pixel, and the noise of the paths through the air: the variance of their part pooled over each {TILE_PX} x {TILE_PX} tile"
+                "photon noise from {GROUPS} photon groups, 1 sample per pixel, and the noise of the paths through the air: the variance of their part pooled over each {TILE_PX} x {TILE_PX} tile, and the error of the air paths' lookups shared by every sample"
             ))
         }
         crate::scene::IntegratorMode::PhotonMap => Some(format!(

@@ -103,6 +103,27 @@ pub struct AtmosphereLight {
     pub view: Option<ViewLight>,
 }
 
+impl AtmosphereLight {
+    /// The bytes it holds on the heap: the sky per band, and each band's
+    /// column with its phase functions' tables.
+    pub fn heap_bytes(&self) -> u64 {
+        let f = std::mem::size_of::<f64>() as u64;
+        let sky: u64 = self.sky_radiance.iter().map(|s| s.len() as u64 * f).sum();
+        let columns: u64 = self
+            .columns
+            .iter()
+            .map(|c| {
+                (c.layers.len() * std::mem::size_of::<crate::optics::atmosphere::Layer>()) as u64
+                    + c.depth.len() as u64 * f
+                    + c.rayleigh_phase.heap_bytes()
+                    + c.aerosol_phase.heap_bytes()
+            })
+            .sum();
+        let bands = (self.bands.len() * std::mem::size_of::<BandAtmosphere>()) as u64;
+        sky + columns + bands
+    }
+}
+
 /// What the air between the ground and a sensor above it does, per band,
 /// along the sensor's view.
 #[derive(Clone, Debug, PartialEq)]

@@ -101,6 +101,11 @@ impl TabulatedPhase {
         self.table.mean_cos
     }
 
+    /// The bytes of its table.
+    pub fn heap_bytes(&self) -> u64 {
+        (self.table.pieces.len() * std::mem::size_of::<Piece>() + self.table.first.len() * 4) as u64
+    }
+
     /// p [sr^-1] at scattering angle `psi` (rad).
     pub(super) fn density(&self, psi: f64) -> f64 {
         self.table.density(psi)
@@ -143,7 +148,7 @@ fn parse_petzold(text: &str) -> Result<TabulatedPhase> {
 }
 
 /// Buckets of equal angle over [0, pi] indexing the pieces.
-const BUCKETS: usize = 4096;
+const BUCKETS: usize = 1024;
 
 /// The first angle of bucket `k` (rad), a little below it so that it is
 /// never above an angle the bucket takes after rounding.

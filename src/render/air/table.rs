@@ -4,13 +4,98 @@
 
 use super::super::camera::CameraRay;
 use super::super::Integrator;
-use super::ENV_SAMPLES;
+use super::{AirView, Class, ENV_KEY, ENV_SAMPLES, ENV_SHARE, LAND_KEY, POOLED_KEY, POOLED_PATHS};
 use crate::error::Result;
 use crate::optics::atmosphere::transport::{point_in_cell, AZIMUTH_BINS, CELLS};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 use glam::DVec3;
 use rayon::prelude::*;
+
+impl AirView<'_> {
+    /// The mean radiance leaving the surface per direction cell and band,
+    /// glint taken out, at points of the class `class`: up to
+    /// `ENV_SAMPLES` integrator calls per cell (the water's classes share
+    /// twice that), at random points of the class and directions
+    /// cosine-weighted within the cell, on either side of the sun's
+    /// vertical plane.
+    pub(super) fn environment(&self, light: &dyn Integrator, class: Class) -> Result<Vec<f64>> {
+        let [w, h] = self.scene.sensor.pixels;
+        let samples = (w * h) as f64 * f64::from(self.scene.sensor.samples_per_pixel);
+        let per_cell = ((samples * ENV_SHARE / CELLS as f64) as u64).clamp(1, ENV_SAMPLES);
+        let (per_cell, key) = match class {
+            Class::Land => (per_cell, LAND_KEY),
+            Class::Water(k) => {
+                let waters = self.classes.waters() as u64;
+                let per_class = (2 * per_cell).div_ceil(waters).clamp(1, per_cell);
+                (per_class, ENV_KEY.wrapping_add(k as u64))
+            }
+        };
+        self.table(light, Some(class), per_cell, key)
+    }
+
+    /// The table of [`AirView::environment`] from `per_cell` calls of
+    /// `light` per cell, drawn from the stream `key`.
+    pub(super) fn table(
+        &self,
+        light: &dyn Integrator,
+        class: Option<Class>,
+        per_cell: u64,
+        key: u64,
+    ) -> Result<Vec<f64>> {
+        let [sx, sy] = self.scene.domain.size_m;
+        leaving_table(
+            self.scene,
+            light,
+            per_cell,
+            key,
+            self.ray_height_m,
+            &|rng| self.point_of_class(rng, sx, sy, class),
+            &|at, up, glint| self.glint_at(at, up, glint),
+        )
+        .map(|(table, _)| table)
+    }
+
+    /// Per band, the scattered part of the table plus the glint, from
+    /// `POOLED_PATHS` adjoint paths (in chunks of their own streams, summed
+    /// in order), and its standard error from the chunks' spread.
+    pub(super) fn pooled(&self) -> (Vec<f64>, Vec<f64>) {
+        let nb = self.columns.len();
+        let chunks = 64u64;
+        let per = POOLED_PATHS / chunks;
+        let seed = crate::rng::mix64(self.scene.seed ^ POOLED_KEY);
+        let sums: Vec<Vec<f64>> = (0..chunks)
+            .into_par_iter()
+            .map(|k| {
+                let mut sum = vec![0.0; nb];
+                let mut glint = vec![0.0; nb];
+                for i in 0..per {
+                    let mut rng = Pcg32::new(seed, k * per + i);
+                    self.adjoint(DVec3::ZERO, &mut rng, |_, _, dir, w| {
+                        let up = -dir;
+                        self.glint(up, &mut glint);
+                        let c = self.cell(up);
+                        for b in 0..nb {
+                            sum[b] += w[b] * (self.env[c * nb + b] + glint[b]);
+                        }
+                        Ok(())
+                    })
+                    .expect("the pooled paths call no integrator");
+                }
+                sum
+            })
+            .collect();
+        let k = chunks as f64;
+        (0..nb)
+            .map(|b| {
+                let means = sums.iter().map(|s| s[b] / per as f64);
+                let m = means.clone().sum::<f64>() / k;
+                let var = means.map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
+                (m, (var / k).sqrt())
+            })
+            .unzip()
+    }
+}
 
 /// The ray that sees the radiance leaving the ground at `at` toward `up`
 /// (unit), coming down from `height_m` above it.
