@@ -237,30 +237,11 @@ fn the_mean_surroundings_keep_the_mean() {
 /// whose shallows are three times as bright as the rest of the water.
 #[test]
 fn land_in_the_domain_keeps_the_mean() {
-    let scene = rough_sea_under_air(
-        100.0,
-        300.0,
-        0.5,
-        0.1,
-        "[bottom]\nslope = { from_depth_m = -2.0, to_depth_m = 10.0, axis = \"x\" }\n\
-         reflectance = 0.2\n[land]\nreflectance = 0.3\n",
-    );
+    let scene = beach(false);
     let nb = scene.bands.len();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
     let ground = foot(&ray);
-    let light = Surface(
-        |ray: &CameraRay, b| {
-            let p = foot(ray);
-            let l = if scene.is_land(p.x as f32, p.y as f32) {
-                10.0
-            } else {
-                let shallows = if p.x < 40.0 { 2.0 } else { 0.0 };
-                1.0 + shallows + 0.8 * f64::from(-ray.direction.z)
-            };
-            l * (1.0 + 0.1 * b as f64)
-        },
-        nb,
-    );
+    let light = beach_light(&scene);
     let air = AirView::new(&scene, &light).unwrap().unwrap();
     assert!(
         (air.land_share - 1.0 / 6.0).abs() < 0.01,
@@ -268,22 +249,11 @@ fn land_in_the_domain_keeps_the_mean() {
         air.land_share
     );
     let n = 200_000u64;
-    let mut plain = crate::render::BandSums::new(nb);
-    for i in 0..n {
-        let mut rng = Pcg32::new(3, i);
-        let mut one = vec![0.0; nb];
-        air.adjoint(ground, &mut rng, |rng, meet, dir, w| {
-            let (mut l, mut water) = (vec![0.0; nb], vec![0.0; nb]);
-            light.camera(air.ray_to(meet, -dir), rng, &mut l, &mut water)?;
-            for b in 0..nb {
-                one[b] = w[b] * l[b];
-            }
-            Ok(())
-        })
-        .unwrap();
-        plain.add(one);
-    }
-    let (a, b) = (plain.stats(), scattered_part(&air, &light, ray, n / 4, 4));
+    let mut water = vec![0.0; nb];
+    let a = plain_paths(&air, ground, n, |rng, meet, up, l| {
+        light.camera(air.ray_to(meet, up), rng, l, &mut water)
+    });
+    let b = scattered_part(&air, &light, ray, n / 4, 4);
     assert_same_mean(&air, &a, &b);
     for k in 0..nb {
         assert!(
@@ -371,21 +341,29 @@ fn foot(ray: &CameraRay) -> DVec3 {
     o + d * (o.z / -d.z)
 }
 
-/// A domain with a beach (a sixth of it, ten times the water's radiance)
-/// and shallows three times as bright as the rest of the water, in its own
-/// mean: from 300 m under an aerosol 100 m high.
-fn beach_in_its_mean() -> Scene {
+/// A 100 m domain with a beach (a sixth of it; ten times the water's
+/// radiance in [`beach_light`]) and shallows (three times as bright as the
+/// rest of the water), repeating or in its own mean (`mean`): from 300 m
+/// under an aerosol 100 m high.
+fn beach(mean: bool) -> Scene {
+    let around = if mean {
+        "[surroundings]\nkind = \"mean\"\n"
+    } else {
+        ""
+    };
     rough_sea_under_air(
         100.0,
         300.0,
         0.5,
         0.1,
-        "[bottom]\nslope = { from_depth_m = -2.0, to_depth_m = 10.0, axis = \"x\" }\n\
-         reflectance = 0.2\n[land]\nreflectance = 0.3\n[surroundings]\nkind = \"mean\"\n",
+        &format!(
+            "[bottom]\nslope = {{ from_depth_m = -2.0, to_depth_m = 10.0, axis = \"x\" }}\n\
+             reflectance = 0.2\n[land]\nreflectance = 0.3\n{around}"
+        ),
     )
 }
 
-/// The beach's radiance field of [`beach_in_its_mean`].
+/// The radiance leaving the ground of [`beach`].
 fn beach_light(scene: &Scene) -> Surface<impl Fn(&CameraRay, usize) -> f64 + Sync + '_> {
     Surface(
         |ray: &CameraRay, b| {
@@ -411,7 +389,7 @@ fn beach_light(scene: &Scene) -> Surface<impl Fn(&CameraRay, usize) -> f64 + Syn
 /// combined standard errors, the shared paths' own included.
 #[test]
 fn land_and_shallows_in_their_mean_keep_the_mean() {
-    let scene = beach_in_its_mean();
+    let scene = beach(true);
     let nb = scene.bands.len();
     let ray = crate::render::camera::ray(&scene.sensor, 1, 0, 0.3, 0.7);
     let ground = foot(&ray);
@@ -419,24 +397,41 @@ fn land_and_shallows_in_their_mean_keep_the_mean() {
     let air = AirView::new(&scene, &light).unwrap().unwrap();
     assert!(air.classes.waters() >= 3, "{}", air.classes.waters());
     let n = 200_000u64;
+    let (mut glint, mut excess, mut water) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
+    let a = plain_paths(&air, ground, n, |rng, meet, up, l| {
+        if (0.0..100.0).contains(&meet.x) && (0.0..100.0).contains(&meet.y) {
+            return light.camera(air.ray_to(meet, up), rng, l, &mut water);
+        }
+        air.excess(meet, up, false, &mut glint, &mut excess);
+        air.glint(up, &mut glint);
+        let c = air.cell(up);
+        for b in 0..nb {
+            l[b] = air.env[c * nb + b] + glint[b] + excess[b];
+        }
+        Ok(())
+    });
+    let b = scattered_part(&air, &light, ray, n / 4, 4);
+    assert_same_mean(&air, &a, &b);
+}
+
+/// Per band mean, standard error and spread of `n` plain adjoint paths
+/// from the sensor to the ground point `ground` (streams of seed 3), each
+/// adding its band weights times what `seen(rng, where, up, out)` writes
+/// for where it met the ground.
+fn plain_paths(
+    air: &AirView,
+    ground: DVec3,
+    n: u64,
+    mut seen: impl FnMut(&mut Pcg32, DVec3, DVec3, &mut [f64]) -> Result<()>,
+) -> Vec<(f64, f64, f64)> {
+    let nb = air.columns.len();
     let mut plain = crate::render::BandSums::new(nb);
-    let (mut glint, mut excess) = (vec![0.0; nb], vec![0.0; nb]);
+    let mut l = vec![0.0; nb];
     for i in 0..n {
         let mut rng = Pcg32::new(3, i);
         let mut one = vec![0.0; nb];
         air.adjoint(ground, &mut rng, |rng, meet, dir, w| {
-            let up = -dir;
-            let (mut l, mut water) = (vec![0.0; nb], vec![0.0; nb]);
-            if (0.0..100.0).contains(&meet.x) && (0.0..100.0).contains(&meet.y) {
-                light.camera(air.ray_to(meet, up), rng, &mut l, &mut water)?;
-            } else {
-                air.excess(meet, up, false, &mut glint, &mut excess);
-                air.glint(up, &mut glint);
-                let c = air.cell(up);
-                for b in 0..nb {
-                    l[b] = air.env[c * nb + b] + glint[b] + excess[b];
-                }
-            }
+            seen(rng, meet, -dir, &mut l)?;
             for b in 0..nb {
                 one[b] = w[b] * l[b];
             }
@@ -445,18 +440,17 @@ fn land_and_shallows_in_their_mean_keep_the_mean() {
         .unwrap();
         plain.add(one);
     }
-    let (a, b) = (plain.stats(), scattered_part(&air, &light, ray, n / 4, 4));
-    assert_same_mean(&air, &a, &b);
+    plain.stats()
 }
 
 /// The variance the shared paths give for their mean lookup is that
 /// mean's spread between independent sets of them: over 48 sets, at a
-/// ground point by the beach of [`beach_in_its_mean`], per band, the
+/// ground point by the beach of [`beach`], per band, the
 /// spread over the predicted standard error within 0.7-1.3 (about 3.4
 /// standard errors of a spread from 48 draws).
 #[test]
 fn the_shared_paths_know_their_error() {
-    let scene = beach_in_its_mean();
+    let scene = beach(true);
     let nb = scene.bands.len();
     let light = beach_light(&scene);
     let air = AirView::new(&scene, &light).unwrap().unwrap();
