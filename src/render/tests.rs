@@ -135,7 +135,7 @@ fn field_of_view_is_cosine_weighted() {
     let mut side = 0.0;
     for i in 0..n {
         let mut rng = Pcg32::new(9, i);
-        let d = super::within_field_of_view(axis, h, &mut rng).as_dvec3();
+        let d = super::radiometer::within_field_of_view(axis, h, &mut rng).as_dvec3();
         let cos = d.dot(axis.as_dvec3());
         assert!(cos >= h.to_radians().cos() - 1e-6, "{cos}");
         let s2 = (1.0 - cos * cos).max(0.0) / s2_max;
