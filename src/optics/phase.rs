@@ -56,9 +56,11 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 
 mod fournier_forand;
+mod lookup;
 mod tabulated;
 
 pub use fournier_forand::{FournierForand, FF_BB_RATIO_RANGE};
+pub use lookup::{PhaseLookup, LOOKUP_STEPS};
 pub use tabulated::TabulatedPhase;
 
 /// q of the Rayleigh-like pure-water phase function: depolarisation ratio 0.09.

@@ -662,7 +662,7 @@ impl<'s> AirView<'s> {
                 // Each band's own Rayleigh phase (its q) and share.
                 let c = &self.columns[b];
                 let pa = if self.aerosol_varies {
-                    c.aerosol_phase.eval(cos)
+                    c.aerosol_density(cos)
                 } else {
                     pa
                 };

@@ -115,8 +115,7 @@ impl AtmosphereLight {
             .map(|c| {
                 (c.layers.len() * std::mem::size_of::<crate::optics::atmosphere::Layer>()) as u64
                     + c.depth.len() as u64 * f
-                    + c.rayleigh_phase.heap_bytes()
-                    + c.aerosol_phase.heap_bytes()
+                    + c.phase_bytes()
             })
             .sum();
         let bands = (self.bands.len() * std::mem::size_of::<BandAtmosphere>()) as u64;

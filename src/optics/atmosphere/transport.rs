@@ -38,7 +38,7 @@
 //! fixed seed, whatever the number of threads.
 
 use super::Column;
-use crate::optics::phase::{scatter, PhaseFunction};
+use crate::optics::phase::scatter;
 use crate::rng::Pcg32;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -518,6 +518,5 @@ impl Cells {
 }
 
 fn mixture(column: &Column, share: f64, cos: f64) -> f64 {
-    let r = |p: &PhaseFunction| p.eval(cos);
-    share * r(&column.rayleigh_phase) + (1.0 - share) * r(&column.aerosol_phase)
+    share * column.rayleigh_phase.eval(cos) + (1.0 - share) * column.aerosol_density(cos)
 }
