@@ -38,7 +38,7 @@
 //! fixed seed, whatever the number of threads.
 
 use super::Column;
-use crate::optics::phase::scatter;
+use crate::optics::phase::{scatter, PhaseFunction};
 use crate::rng::Pcg32;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -517,6 +517,17 @@ impl Cells {
     }
 }
 
+/// The layer's phase mixture at `cos`: called toward every sky cell at
+/// every collision, so Rayleigh's closed form is written out here for the
+/// loop to inline.
+#[inline]
 fn mixture(column: &Column, share: f64, cos: f64) -> f64 {
-    share * column.rayleigh_phase.eval(cos) + (1.0 - share) * column.aerosol_density(cos)
+    let rayleigh = match column.rayleigh_phase {
+        PhaseFunction::Rayleigh { q } => {
+            let mu = cos.clamp(-1.0, 1.0);
+            3.0 / (4.0 * PI * (3.0 + q)) * (1.0 + q * mu * mu)
+        }
+        ref p => p.eval(cos),
+    };
+    share * rayleigh + (1.0 - share) * column.aerosol_density(cos)
 }
