@@ -108,6 +108,17 @@ pub const POOLED_PATHS: u64 = 400_000;
 /// it an integrator call.
 pub const SURROUND_PATHS: usize = 16;
 
+/// The integrator calls of the air view (its tables, and a sample's call
+/// for a path landing within the domain) march with steps this many
+/// times the scene's (`Integrator::camera_coarse`): their results are
+/// corrections weighted by the light the air scatters, averaged over
+/// many; the camera's own rays keep the scene's step. The built-in scene
+/// from 3 km, whole run: 68.3 s against 78.2 s with the scene's step
+/// (two pairs), band means within 5e-5 of each other, deep-water pixel
+/// noise within 0.02 points; 8 times the step saved 1.4 s more for more
+/// noise in the blue.
+pub const CALL_STEPS: f32 = 4.0;
+
 /// Streams of the table's and the pooled paths' randoms.
 const ENV_KEY: u64 = 0x656e_765f_7461_626c;
 const POOLED_KEY: u64 = 0x706f_6f6c_6564_5f70;
@@ -524,7 +535,7 @@ impl<'s> AirView<'s> {
         let up = -dir;
         let ray = self.ray_to(meet, up);
         let (mut tmp, mut water, mut glint) = (vec![0.0; out.len()], vec![0.0; nb], vec![0.0; nb]);
-        light.camera(ray, rng, &mut tmp, &mut water)?;
+        light.camera_coarse(ray, CALL_STEPS, rng, &mut tmp, &mut water)?;
         let mut control = vec![0.0; nb];
         self.control(meet, up, &mut glint, &mut control);
         for (k, (o, t)) in out.iter_mut().zip(&tmp).enumerate() {

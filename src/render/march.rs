@@ -65,6 +65,16 @@ struct MarchBuffers {
     /// Turns into the particles' forward peak drawn for every band at once
     /// (rays looking down at a target): see [`PeakTurns`].
     turns: Option<PeakTurns>,
+    /// The march's step (m).
+    step_m: f32,
+}
+
+/// How a march goes: its step (m), and whether it gathers at a target it
+/// meets (see [`RayMarcher::gather`]; gather rays do not gather again).
+#[derive(Clone, Copy, Debug)]
+struct Course {
+    step_m: f32,
+    gather: bool,
 }
 
 /// Turns into the particles' forward peak drawn at one band's rate for
@@ -290,11 +300,50 @@ impl<'a> RayMarcher<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
-        self.march_with(p0, dir, rng, scratch, out, true)
+        let step_m = self.scene.estimate.step_m as f32;
+        self.march_with(
+            p0,
+            dir,
+            rng,
+            scratch,
+            out,
+            Course {
+                step_m,
+                gather: true,
+            },
+        )
     }
 
-    /// [`march`](Self::march), gathering at a target it meets when `gather`
-    /// (see [`gather`](Self::gather); gather rays do not gather again).
+    /// [`march`](Self::march) with steps `factor` times the scene's: the
+    /// same expectation (one jittered sample per step is unbiased for the
+    /// step's integral at any length; the turns into the peak are drawn
+    /// at their own rate), fewer estimates, more noise. For calls whose
+    /// result is a small correction averaged over many (the air's control
+    /// variates, `render::air`).
+    pub fn march_coarse(
+        &self,
+        p0: Vec3,
+        dir: Vec3,
+        factor: f32,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let step_m = self.scene.estimate.step_m as f32 * factor;
+        self.march_with(
+            p0,
+            dir,
+            rng,
+            scratch,
+            out,
+            Course {
+                step_m,
+                gather: true,
+            },
+        )
+    }
+
+    /// [`march`](Self::march) on its `course`.
     ///
     /// **The particles' forward peak is scattered into explicitly.** The
     /// photon estimates weigh photons by the truncated phase functions
@@ -329,7 +378,7 @@ impl<'a> RayMarcher<'a> {
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         out: &mut [f64],
-        gather: bool,
+        course: Course,
     ) -> Result<()> {
         let nb = self.bands();
         let channels = out.len() / nb;
@@ -344,6 +393,7 @@ impl<'a> RayMarcher<'a> {
             iops: vec![Iop::default(); nb],
             tmp: vec![Iop::default(); nb],
             turns: None,
+            step_m: course.step_m,
         };
         let (mut p, mut dir) = (p0, dir);
         let mut travelled = 0.0f32;
@@ -353,7 +403,16 @@ impl<'a> RayMarcher<'a> {
         }
         loop {
             match self.segment(
-                p, dir, travelled, at_target, rng, scratch, out, &mut tr, &mut buf, gather,
+                p,
+                dir,
+                travelled,
+                at_target,
+                rng,
+                scratch,
+                out,
+                &mut tr,
+                &mut buf,
+                course.gather,
             )? {
                 Segment::Turned { at, to, weight } => {
                     travelled += (at - p).length();
@@ -412,7 +471,7 @@ impl<'a> RayMarcher<'a> {
         // An instrument may sit closer to the floor than the self-intersection epsilon.
         let hit = scene.geometry.intersect_from_point(p0, dir, limit);
         let t_end = hit.map_or(limit.max(0.0), |h| h.t);
-        let step = scene.estimate.step_m as f32;
+        let step = buf.step_m;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
         let (fw, fp) = self.est.forward_fractions(dir, at_target);
         // 1 - cos of the single-scattering angle from |sun_w + dir|^2 / 2: a
@@ -673,7 +732,12 @@ impl<'a> RayMarcher<'a> {
             }
             // L cos / pdf over the rays is the irradiance; times R / pi.
             let k = lambert / pdf / rays as f64;
-            self.march_with(start, w, rng, scratch, &mut l, false)?;
+            let step_m = self.scene.estimate.step_m as f32;
+            let course = Course {
+                step_m,
+                gather: false,
+            };
+            self.march_with(start, w, rng, scratch, &mut l, course)?;
             for (o, v) in out.iter_mut().zip(&l) {
                 *o += k * v;
             }

@@ -90,6 +90,22 @@ pub trait Integrator: Sync {
         out: &mut [f64],
         water: &mut [f64],
     ) -> Result<()>;
+    /// [`camera`](Self::camera) for a call whose result is a small
+    /// correction averaged with many (the air's control variates): the
+    /// same expectation, taken cheaper where the integrator can — the
+    /// photon map marches with steps `step_factor` times longer. The
+    /// path integrator takes it as `camera`.
+    fn camera_coarse(
+        &self,
+        ray: camera::CameraRay,
+        step_factor: f32,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        water: &mut [f64],
+    ) -> Result<()> {
+        let _ = step_factor;
+        self.camera(ray, rng, out, water)
+    }
     /// Radiance per band arriving at `p` (in water) along `-dir`.
     fn in_water(&self, p: Vec3, dir: Vec3, rng: &mut Pcg32, out: &mut [f64]) -> Result<()>;
     /// Samples (jittered positions, each one path or march) per radiometer
@@ -123,6 +139,26 @@ impl Integrator for RayMarcher<'_> {
                 out,
                 water,
                 &mut |p, d, rng, out| self.march(p, d, rng, s, out),
+            )
+        })
+    }
+    fn camera_coarse(
+        &self,
+        ray: camera::CameraRay,
+        step_factor: f32,
+        rng: &mut Pcg32,
+        out: &mut [f64],
+        water: &mut [f64],
+    ) -> Result<()> {
+        with_scratch(self.bands(), |s| {
+            from_air_parts(
+                self.scene,
+                &self.sky_l,
+                ray,
+                rng,
+                out,
+                water,
+                &mut |p, d, rng, out| self.march_coarse(p, d, step_factor, rng, s, out),
             )
         })
     }

@@ -151,6 +151,7 @@ fn upward_table(scene: &Scene) -> Result<(Vec<f64>, Vec<f64>)> {
     leaving_table(
         scene,
         &tracer,
+        1.0,
         COUPLING_SAMPLES,
         TABLE_KEY,
         height,

@@ -159,9 +159,10 @@ fn render_builtin_scene_within_64mib() {
 }
 
 /// A render whose tile cache keeps evicting and decoding (32 x 32 pixels
-/// from a 300 k-photon map under `--mem-budget 24MiB`: about 6 MiB of cache
-/// for 15 MiB of decoded tiles, beside 15 MiB of the renderer's own, the
-/// air view's tables among them) stays inside the budget plus the fixed overhead. Tile
+/// from a 300 k-photon map under `--mem-budget 28MiB`: about 5.5 MiB of
+/// cache for 15 MiB of decoded tiles, beside 17 MiB of the renderer's
+/// own, the air view's tables and the aerosol's phase lookups among
+/// them) stays inside the budget plus the fixed overhead. Tile
 /// buffers freed by eviction go back to the system
 /// (`mem::tune_allocator`); with glibc's sliding threshold they
 /// fragmented the heap (47 M photons under 256 MiB peaked at 333 MiB
@@ -188,7 +189,7 @@ fn render_with_a_churning_cache_within_its_budget() {
         ])
     };
     let _: RunReport = report_of(&render("64MiB"), &out.join("coastal.json"));
-    let r: RunReport = report_of(&render("24MiB"), &out.join("coastal.json"));
+    let r: RunReport = report_of(&render("28MiB"), &out.join("coastal.json"));
     assert!(r.reused_map);
     assert!(r.cache.evictions > 50, "{:?}", r.cache);
     let m = |b: u64| b as f64 / MIB as f64;
@@ -199,7 +200,7 @@ fn render_with_a_churning_cache_within_its_budget() {
         r.cache.evictions
     );
     assert!(
-        r.peak_memory.anon_bytes <= 24 * MIB + OVERHEAD,
+        r.peak_memory.anon_bytes <= 28 * MIB + OVERHEAD,
         "{:?}",
         r.peak_memory
     );

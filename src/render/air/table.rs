@@ -4,7 +4,9 @@
 
 use super::super::camera::CameraRay;
 use super::super::Integrator;
-use super::{AirView, Class, ENV_KEY, ENV_SAMPLES, ENV_SHARE, LAND_KEY, POOLED_KEY, POOLED_PATHS};
+use super::{
+    AirView, Class, CALL_STEPS, ENV_KEY, ENV_SAMPLES, ENV_SHARE, LAND_KEY, POOLED_KEY, POOLED_PATHS,
+};
 use crate::error::Result;
 use crate::optics::atmosphere::transport::{point_in_cell, AZIMUTH_BINS, CELLS};
 use crate::rng::Pcg32;
@@ -47,6 +49,7 @@ impl AirView<'_> {
         leaving_table(
             self.scene,
             light,
+            CALL_STEPS,
             per_cell,
             key,
             self.ray_height_m,
@@ -108,7 +111,8 @@ pub(super) fn ray_from_above(at: DVec3, up: DVec3, height_m: f64) -> CameraRay {
 
 /// The mean radiance leaving the surface of `scene` per direction cell
 /// of the sky grid and band (cell-major), sun glint taken out:
-/// `per_cell` calls of `light` per cell, from the stream `key`, at points
+/// `per_cell` calls of `light` per cell (marching with steps
+/// `step_factor` times the scene's), from the stream `key`, at points
 /// `point` draws and directions cosine-weighted within the cell, on
 /// either side of the sun's vertical plane, each ray handed down from
 /// `ray_height_m` above its point; `glint_at(point, up, out)` writes the
@@ -116,9 +120,11 @@ pub(super) fn ray_from_above(at: DVec3, up: DVec3, height_m: f64) -> CameraRay {
 /// their own streams: the same table for any number of threads. Returns
 /// the table and the variance of each of its means (from the calls'
 /// spread; 0 for a single call).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn leaving_table(
     scene: &Scene,
     light: &dyn Integrator,
+    step_factor: f32,
     per_cell: u64,
     key: u64,
     ray_height_m: f64,
@@ -147,7 +153,7 @@ pub(crate) fn leaving_table(
                 let up = DVec3::new(sz * phi.cos(), sz * phi.sin(), mu.max(1e-3)).normalize();
                 let at = point(&mut rng);
                 let ray = ray_from_above(at, up, ray_height_m);
-                light.camera(ray, &mut rng, &mut out, &mut water)?;
+                light.camera_coarse(ray, step_factor, &mut rng, &mut out, &mut water)?;
                 glint_at(at, up, &mut glint);
                 for b in 0..nb {
                     let x = out[b] - glint[b];
