@@ -300,18 +300,7 @@ impl<'a> RayMarcher<'a> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
-        let step_m = self.scene.estimate.step_m as f32;
-        self.march_with(
-            p0,
-            dir,
-            rng,
-            scratch,
-            out,
-            Course {
-                step_m,
-                gather: true,
-            },
-        )
+        self.march_coarse(p0, dir, 1.0, rng, scratch, out)
     }
 
     /// [`march`](Self::march) with steps `factor` times the scene's: the

@@ -130,17 +130,7 @@ impl Integrator for RayMarcher<'_> {
         out: &mut [f64],
         water: &mut [f64],
     ) -> Result<()> {
-        with_scratch(self.bands(), |s| {
-            from_air_parts(
-                self.scene,
-                &self.sky_l,
-                ray,
-                rng,
-                out,
-                water,
-                &mut |p, d, rng, out| self.march(p, d, rng, s, out),
-            )
-        })
+        self.camera_coarse(ray, 1.0, rng, out, water)
     }
     fn camera_coarse(
         &self,
