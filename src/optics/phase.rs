@@ -60,7 +60,7 @@ mod lookup;
 mod tabulated;
 
 pub use fournier_forand::{FournierForand, FF_BB_RATIO_RANGE};
-pub use lookup::{PhaseLookup, LOOKUP_STEPS};
+pub use lookup::PhaseLookup;
 pub use tabulated::TabulatedPhase;
 
 /// q of the Rayleigh-like pure-water phase function: depolarisation ratio 0.09.
@@ -164,10 +164,7 @@ impl PhaseFunction {
                 let d = (1.0 - g) * (1.0 - g) + 2.0 * g * x;
                 (1.0 - g) * (1.0 + g) / (FOUR_PI * d * d.sqrt())
             }
-            PhaseFunction::Rayleigh { q } => {
-                let mu = 1.0 - x;
-                3.0 / (FOUR_PI * (3.0 + q)) * (1.0 + q * mu * mu)
-            }
+            PhaseFunction::Rayleigh { q } => rayleigh_density(*q, 1.0 - x),
             PhaseFunction::FournierForand(ff) => ff.density(0.5 * x),
             PhaseFunction::Tabulated(t) => {
                 // asin keeps small angles; acos of the (exact) cosine is better backward.
@@ -367,6 +364,14 @@ fn solve_increasing_quadratic(
         x = next;
     }
     x
+}
+
+/// The Rayleigh-like phase function 3 (1 + q mu^2) / (4 pi (3 + q)) at
+/// cosine `mu` (sr^-1); written out for loops that inline it (the sky's
+/// local estimates).
+#[inline]
+pub fn rayleigh_density(q: f64, mu: f64) -> f64 {
+    3.0 / (FOUR_PI * (3.0 + q)) * (1.0 + q * mu * mu)
 }
 
 #[cfg(test)]

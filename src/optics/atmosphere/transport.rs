@@ -38,7 +38,7 @@
 //! fixed seed, whatever the number of threads.
 
 use super::Column;
-use crate::optics::phase::{scatter, PhaseFunction};
+use crate::optics::phase::{rayleigh_density, scatter, PhaseFunction};
 use crate::rng::Pcg32;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -523,10 +523,7 @@ impl Cells {
 #[inline]
 fn mixture(column: &Column, share: f64, cos: f64) -> f64 {
     let rayleigh = match column.rayleigh_phase {
-        PhaseFunction::Rayleigh { q } => {
-            let mu = cos.clamp(-1.0, 1.0);
-            3.0 / (4.0 * PI * (3.0 + q)) * (1.0 + q * mu * mu)
-        }
+        PhaseFunction::Rayleigh { q } => rayleigh_density(q, cos.clamp(-1.0, 1.0)),
         ref p => p.eval(cos),
     };
     share * rayleigh + (1.0 - share) * column.aerosol_density(cos)

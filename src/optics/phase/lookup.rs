@@ -73,8 +73,8 @@ mod tests {
     /// angle (the largest, 0.25 %, where the table's forward peak turns
     /// at its nodes 0.05 degrees apart: the lookup rounds each corner
     /// over one step), and the lookup's mean over the sphere is 1 / (4 pi)
-    /// within 1e-4. Reading at the wrong entry (an index off by one)
-    /// fails both.
+    /// within 1e-4. Reading the entry below without interpolating fails
+    /// the first (7.2 %).
     #[test]
     fn the_aerosol_tables_are_read_within_their_bound() {
         for name in MODELS {
