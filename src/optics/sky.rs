@@ -34,7 +34,7 @@
 //! Not for: the sun's disc (the sun is its own source), or polarisation.
 
 use crate::optics::atmosphere::transport::{
-    cell_of, point_in_cell, projected_solid_angle, AZIMUTH_BINS, CELLS,
+    cell_of, point_in_cell, projected_solid_angle, zenith_cosines, AZIMUTH_BINS, CELLS,
 };
 use crate::optics::phase::cosine_hemisphere;
 use crate::rng::Pcg32;
@@ -55,6 +55,8 @@ pub enum SkyModel {
         sun: DVec3,
         /// 1 / (the hemisphere integral of f phi cos Z / pi).
         scale: f64,
+        /// The hemisphere integral of g s (see [`SkyModel::moment`]).
+        moment: DVec3,
     },
     /// A sky computed through an atmosphere: per band, constant over each
     /// cell of [`crate::optics::atmosphere::transport`]'s grid.
@@ -73,6 +75,9 @@ pub struct SkyTable {
     g: Vec<f64>,
     /// Per band, the cumulative share of the irradiance over the cells.
     cdf: Vec<f64>,
+    /// Per band, the hemisphere integral of g s ([`SkyModel::moment`]):
+    /// its part along the sun's azimuth and its vertical part (pi).
+    moment: Vec<[f64; 2]>,
 }
 
 impl SkyTable {
@@ -82,6 +87,8 @@ impl SkyTable {
     pub fn new(sun_azimuth: f64, radiance: &[Vec<f64>]) -> SkyTable {
         let mut g = Vec::with_capacity(radiance.len() * CELLS);
         let mut cdf = Vec::with_capacity(radiance.len() * CELLS);
+        let mut moment = Vec::with_capacity(radiance.len());
+        let cells = cell_moments();
         for l in radiance {
             let e: f64 = (0..CELLS)
                 .map(|c| l[c].max(0.0) * projected_solid_angle(c / AZIMUTH_BINS))
@@ -93,11 +100,19 @@ impl SkyTable {
                 acc += v * projected_solid_angle(c / AZIMUTH_BINS) / PI;
                 cdf.push(acc);
             }
+            let band = &g[g.len() - CELLS..];
+            moment.push(
+                cells
+                    .iter()
+                    .zip(band)
+                    .fold([0.0; 2], |[h, z], (m, &v)| [h + v * m[0], z + v * m[1]]),
+            );
         }
         SkyTable {
             sun_azimuth,
             g,
             cdf,
+            moment,
         }
     }
 
@@ -117,19 +132,23 @@ impl SkyModel {
             std::f64::consts::FRAC_PI_2 / nz as f64,
             std::f64::consts::TAU / na as f64,
         );
-        let mut sum = 0.0;
+        let (mut sum, mut first) = (0.0, DVec3::ZERO);
         for i in 0..nz {
             let z = (i as f64 + 0.5) * dz;
             let (sz, cz) = z.sin_cos();
             for j in 0..na {
                 let a = (j as f64 + 0.5) * da;
                 let s = DVec3::new(sz * a.cos(), sz * a.sin(), cz);
-                sum += cie_relative(s, sun) * cz * sz * dz * da;
+                let f = cie_relative(s, sun) * sz * dz * da;
+                sum += f * cz;
+                first += f * s;
             }
         }
+        let scale = std::f64::consts::PI / sum;
         SkyModel::CieClear {
             sun,
-            scale: std::f64::consts::PI / sum,
+            scale,
+            moment: first * scale,
         }
     }
 
@@ -138,7 +157,7 @@ impl SkyModel {
     pub fn relative(&self, band: usize, s: Vec3) -> f64 {
         match self {
             SkyModel::Isotropic => 1.0,
-            SkyModel::CieClear { sun, scale } => {
+            SkyModel::CieClear { sun, scale, .. } => {
                 if s.z <= 0.0 {
                     return 0.0;
                 }
@@ -159,6 +178,23 @@ impl SkyModel {
         match self {
             SkyModel::Table(t) if s.z > 0.0 => SkyAt::Cell(t, t.cell(s)),
             _ => SkyAt::Same(self.relative(0, s)),
+        }
+    }
+
+    /// The integral of g(s) s over the sky above the horizon in `band`
+    /// (d omega; its vertical part is pi): for a face of normal n,
+    /// n . moment is the signed integral of g(s) n.s over the sky, so
+    /// E_sky / pi times it is the sky's irradiance on a tilted face, less
+    /// what the sky behind the face's plane would take away.
+    pub fn moment(&self, band: usize) -> DVec3 {
+        match self {
+            SkyModel::Isotropic => DVec3::new(0.0, 0.0, PI),
+            SkyModel::CieClear { moment, .. } => *moment,
+            SkyModel::Table(t) => {
+                let [h, z] = t.moment[band];
+                let (sin, cos) = t.sun_azimuth.sin_cos();
+                DVec3::new(h * cos, h * sin, z)
+            }
         }
     }
 
@@ -224,6 +260,27 @@ impl SkyAt<'_> {
             SkyAt::Cell(t, c) => t.g[band * CELLS + c],
         }
     }
+}
+
+/// Each cell's integral of s d(omega) over both its mirror halves, in
+/// the sun's frame: [along the sun's azimuth, vertical] (the part across
+/// it cancels between the halves). Over zenith Z0-Z1 and azimuth a0-a1:
+/// (integral of sin^2 Z dZ) 2 (sin a1 - sin a0) and the cell's projected
+/// solid angle.
+fn cell_moments() -> Vec<[f64; 2]> {
+    let step = PI / AZIMUTH_BINS as f64;
+    let sin_sq = |z: f64| z / 2.0 - (2.0 * z).sin() / 4.0;
+    (0..CELLS)
+        .map(|c| {
+            let (iz, ia) = (c / AZIMUTH_BINS, c % AZIMUTH_BINS);
+            let [top, bottom] = zenith_cosines(iz).map(f64::acos);
+            let (a0, a1) = (ia as f64 * step, (ia + 1) as f64 * step);
+            [
+                (sin_sq(bottom) - sin_sq(top)) * 2.0 * (a1.sin() - a0.sin()),
+                projected_solid_angle(iz),
+            ]
+        })
+        .collect()
 }
 
 /// The CIE relative radiance f(chi) phi(Z) of the sky element toward `s`

@@ -10,14 +10,31 @@
 //!
 //! is estimated by both integrators alike: the sun's part exactly (a
 //! shadow ray against the land), the diffuse part by one direction w drawn
-//! cosine-weighted around the normal n, E_diffuse = pi L_in(w), where
-//! L_in is the sky (unoccluded and above the horizon), the land again
-//! (met along w; Russian roulette on the reflectance after two bounces),
-//! or the sea (what a ray from the air meets there: `air_sea`, the water
-//! below it through the integrator's own `in_water`). On a level face the
-//! sky's own part is taken out as a control variate: E_diffuse = E_sky +
-//! pi (L_in(w) - L_sky(w)), exact where nothing hides the sky, since the
-//! cosine-weighted hemisphere around the vertical is the sky's.
+//! cosine-weighted around the normal n, where L_in(w) is the sky
+//! (unoccluded and above the horizon), the land again (met along w;
+//! Russian roulette on the reflectance after two bounces), or the sea
+//! (what a ray from the air meets there: `air_sea`, the water below it
+//! through the integrator's own `in_water`).
+//!
+//! The sky's own part is taken out as a control variate, on a tilted face
+//! as on a level one. With S(w) the sky's radiance above the horizon (0
+//! below) and R the mirror image across the face's plane,
+//!
+//! ```text
+//! E_diffuse = E_sky/pi (n . M) + pi (L_in(w) - S(w) + S(R w))
+//! ```
+//!
+//! where M is the sky's first moment, the integral of g(s) s over it
+//! (`SkyModel::moment`): n . M counts the sky behind the face's plane
+//! negatively, and S(R w) adds it back (R maps the directions in front
+//! of the plane onto those behind it and keeps n . w's size). Unbiased;
+//! exact wherever w sees the sky and R w is below the horizon, which on
+//! a level face is always. One direction of the sky alone (pi L_in(w))
+//! was the land's noise under an atmosphere's sky: on the built-in
+//! scene's beach (a slope of 1 in 12.5) its pixels spread by 9 % (1.4826
+//! x median absolute deviation) with one in a thousand 200 % bright where
+//! w met the aureole, and the paths from the air that land on the beach
+//! carried that into deep water's pixels.
 //!
 //! Not in it: land casting shadows on the water or hiding the sky from
 //! it, and light reflected off the land into the water (the water sees the
@@ -34,6 +51,9 @@ use crate::optics::phase::cosine_hemisphere;
 use crate::rng::Pcg32;
 use crate::scene::{Scene, FLOOR};
 use glam::Vec3;
+
+#[cfg(test)]
+mod tests;
 
 /// How far above the land's highest point (m) rays from the air start
 /// looking for it.
@@ -100,7 +120,6 @@ pub fn radiance(
     // The diffuse light: one cosine-weighted direction around the normal.
     let w = cosine_hemisphere(n, rng);
     let from = scene.geometry.spawn_origin(p, n, w);
-    let level = n.z > 1.0 - 1e-6;
     let mut incoming = vec![0.0; out.len()];
     let mut sky_seen = false;
     match scene.geometry.intersect(from, w, reach(from, w)) {
@@ -139,14 +158,13 @@ pub fn radiance(
             )?;
         }
     }
-    if level && !sky_seen {
-        // The control variate's difference: minus the sky hidden along w.
-        let mut hidden = vec![0.0; nb];
-        sky(scene, sky_l, w, &mut hidden);
-        for (i, h) in incoming.iter_mut().zip(&hidden) {
-            *i -= h;
-        }
+    // The control variate's difference (first run): pi (S(R w) - S(w)),
+    // S(w) being what w saw when it saw the sky.
+    let mut control = vec![0.0; nb];
+    if !sky_seen {
+        add_sky(scene, sky_l, w, -1.0, &mut control);
     }
+    add_sky(scene, sky_l, w - n * (2.0 * n.dot(w)), 1.0, &mut control);
 
     // The sun: exact, with a shadow ray against the land.
     let s = -scene.sun.direction;
@@ -165,11 +183,11 @@ pub fn radiance(
             } else {
                 0.0
             };
-            // Level: E_sky + pi (L_in - L_sky); sloping: pi L_in.
-            let diffuse = if level {
-                scene.sky.irradiance[b] + if sky_seen { 0.0 } else { pi * incoming[k] }
+            let sky_part = sky_l[b] * n.as_dvec3().dot(scene.sky.model.moment(b));
+            let diffuse = if sky_seen {
+                sky_part + pi * control[b]
             } else {
-                pi * incoming[k]
+                sky_part + pi * (incoming[k] + control[b])
             };
             r / pi * (direct + diffuse)
         } else {
@@ -177,4 +195,16 @@ pub fn radiance(
         };
     }
     Ok(())
+}
+
+/// Add `sign` times the sky's radiance per band toward `s` (up) to `out`,
+/// none below the horizon.
+fn add_sky(scene: &Scene, sky_l: &[f64], s: Vec3, sign: f64, out: &mut [f64]) {
+    if s.z <= 0.0 {
+        return;
+    }
+    let g = scene.sky.model.at(s.normalize());
+    for (b, (o, l)) in out.iter_mut().zip(sky_l).enumerate() {
+        *o += sign * l * g.band(b);
+    }
 }
