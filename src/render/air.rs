@@ -59,7 +59,17 @@
 //! metre down leaves ten times the radiance of water 4 m deep. So the
 //! water is split into classes by the depth of its floor (`air::classes`),
 //! each with its own table; the water's table is their mean weighted by
-//! area, and the land is one more class.
+//! area, and the land is one more class. Within a class the radiance still
+//! changes tenfold over the shallowest (floors 0–0.5 m at 750 nm), so each
+//! class is cut into [`classes::BINS`] bins of depth, and the control at
+//! a point is its class's table times its bin's factor per band, both
+//! fitted to the table's calls (`table::fit_bins`). Any control is
+//! unbiased as long as the lookups and the call use the same one; this
+//! one cut the built-in scene's deep-water L_t noise from 3 km from 0.51
+//! to 0.23 % at 750 nm and from 0.56 to 0.36 % at 649 nm: a path from
+//! deep water that met the shallows added up to a third of the pixel's
+//! L_t at 750 nm through its difference from a table of the whole
+//! class.
 //!
 //! **Surroundings.** Beyond the domain a path sees Lambertian land
 //! (`kind = "lambertian"`), deep water of its own IOPs (`kind =
@@ -157,6 +167,9 @@ pub struct AirView<'s> {
     classes: Classes,
     /// Per water class: its table as `env`.
     water_env: Vec<Vec<f64>>,
+    /// Per water class: its depth bins' factors per band (bin-major,
+    /// `classes::BINS` bins), by which a point's table is scaled.
+    water_bins: Vec<Vec<f64>>,
     /// The same for the land in the domain; empty without land.
     land_env: Vec<f64>,
     /// The land's share of the domain (0 without land).
@@ -226,7 +239,7 @@ impl<'s> AirView<'s> {
         let nb = air.columns.len();
         let mut env = vec![0.0; CELLS * nb];
         for (k, share) in shares.iter().enumerate() {
-            let table = air.environment(light, Class::Water(k))?;
+            let (table, factors) = air.environment(light, Class::Water(k))?;
             let weight = if water > 0.0 {
                 share / water
             } else {
@@ -236,10 +249,11 @@ impl<'s> AirView<'s> {
                 .zip(&table)
                 .for_each(|(e, t)| *e += weight * t);
             air.water_env[k] = table;
+            air.water_bins[k] = factors;
         }
         air.env = env;
         if air.land_share > 0.0 {
-            air.land_env = air.environment(light, Class::Land)?;
+            air.land_env = air.environment(light, Class::Land)?.0;
         }
         if let Some(crate::scene::Surroundings::Water(sea)) = &scene.surroundings {
             let beyond = super::path::PathTracer::new(sea);
@@ -264,12 +278,14 @@ impl<'s> AirView<'s> {
         // The water's classes, the land's and their copies in the shared
         // paths; the water's mean, the sea's and what lies beyond.
         let tables = 2 * (air.classes.waters() as u64 + 1) + 3;
+        // Each water class's depth factors, and their copies.
+        let factors = 2 * air.classes.waters() as u64 * BINS as u64 * nb * 8;
         let shared = if air.surround.is_some() {
             air.shared_kept() * (8 * nb + 20)
         } else {
             0
         };
-        tables * table + air.classes.bytes() + shared
+        tables * table + factors + air.classes.bytes() + shared
     }
 
     /// The air alone, before its tables.
@@ -307,6 +323,7 @@ impl<'s> AirView<'s> {
             altitude_km: view.altitude_m * 1e-3,
             env: vec![0.0; CELLS * nb],
             water_env: vec![vec![0.0; CELLS * nb]; classes.waters()],
+            water_bins: vec![vec![1.0; BINS * nb]; classes.waters()],
             land_env: Vec::new(),
             land_share: classes.land_share,
             classes,
@@ -392,12 +409,13 @@ impl<'s> AirView<'s> {
     fn control(&self, meet: DVec3, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
         let nb = self.columns.len();
         let c = self.cell(up);
-        match self.class_of(meet) {
-            Class::Land => out.copy_from_slice(&self.land_env[c * nb..(c + 1) * nb]),
-            Class::Water(k) => {
+        match self.classes.at(meet) {
+            (Class::Land, _) => out.copy_from_slice(&self.land_env[c * nb..(c + 1) * nb]),
+            (Class::Water(k), j) => {
                 self.glint(up, glint);
+                let (t, h) = (&self.water_env[k], &self.water_bins[k]);
                 for b in 0..nb {
-                    out[b] = self.water_env[k][c * nb + b] + glint[b];
+                    out[b] = t[c * nb + b] * h[j * nb + b] + glint[b];
                 }
             }
         }
@@ -412,14 +430,12 @@ impl<'s> AirView<'s> {
         out.iter_mut().for_each(|o| *o = 0.0);
         let nb = self.columns.len();
         let c = self.cell(up);
-        let (share, table) = match (inside, inside.then(|| self.class_of(meet))) {
+        let (share, table) = match (inside, inside.then(|| self.classes.at(meet))) {
             (false, _) => (self.land_share, &self.land_env),
-            (true, Some(Class::Water(k))) => {
-                if self.water_env.len() > 1 {
-                    let (t, e) = (&self.water_env[k], &self.env);
-                    for b in 0..nb {
-                        out[b] = t[c * nb + b] - e[c * nb + b];
-                    }
+            (true, Some((Class::Water(k), j))) => {
+                let (t, h, e) = (&self.water_env[k], &self.water_bins[k], &self.env);
+                for b in 0..nb {
+                    out[b] = t[c * nb + b] * h[j * nb + b] - e[c * nb + b];
                 }
                 return;
             }
@@ -752,7 +768,7 @@ enum Class {
 mod classes;
 mod shared;
 mod table;
-use classes::Classes;
+use classes::{Classes, BINS};
 use shared::{Lookup, Shared};
 pub(crate) use table::leaving_table;
 use table::ray_from_above;

@@ -162,7 +162,9 @@ fn upward_table(scene: &Scene) -> Result<(Vec<f64>, Vec<f64>)> {
                 super::air_sea::add_glint(scene, up.as_vec3(), glint);
             }
         },
+        None,
     )
+    .map(|l| (l.table, l.var))
 }
 
 /// One band's first order: what the air did with the light the sea sends

@@ -30,12 +30,20 @@ const MIN_SHARE: f64 = 0.02;
 /// The code of the land in the grid.
 const LAND: u8 = u8::MAX;
 
+/// Bins of floor depth within each water class, of equal shares of it:
+/// the control's table for a class is scaled per bin and band by what the
+/// table's calls met there (`render::air`, "Water by the depth of its
+/// floor").
+pub(super) const BINS: usize = 8;
+
 /// The classes of the ground within the domain, on a grid of `GRID`^2
 /// cells: the class of a point is its cell's, taken at the cell's centre.
 pub(super) struct Classes {
     size_m: [f64; 2],
     /// Per cell (rows of increasing y): the water's class, or `LAND`.
     grid: Vec<u8>,
+    /// Per cell: its depth bin within its water class (0 on land).
+    bins: Vec<u8>,
     /// Per water class: its share of the domain.
     pub water_share: Vec<f64>,
     /// The land's share of the domain (0 without land).
@@ -86,6 +94,30 @@ impl Classes {
             }
         };
         let grid: Vec<u8> = depths.iter().map(|&d| cell(d)).collect();
+        // Each class's depths at the quantiles that split it into `BINS`.
+        let mut by_class: Vec<Vec<f32>> = vec![Vec::new(); edges.len() + 1];
+        for (&c, &d) in grid.iter().zip(&depths) {
+            if c != LAND {
+                by_class[usize::from(c)].push(d);
+            }
+        }
+        let quantiles: Vec<Vec<f32>> = by_class
+            .into_iter()
+            .map(|mut v| {
+                v.sort_by(f32::total_cmp);
+                (1..BINS)
+                    .map(|j| v.get(j * v.len() / BINS).copied().unwrap_or(f32::INFINITY))
+                    .collect()
+            })
+            .collect();
+        let bins: Vec<u8> = grid
+            .iter()
+            .zip(&depths)
+            .map(|(&c, &d)| match c {
+                LAND => 0,
+                k => quantiles[usize::from(k)].partition_point(|&e| e <= d) as u8,
+            })
+            .collect();
         let unit = 1.0 / (n * n) as f64;
         let mut water_share = vec![0.0; edges.len() + 1];
         let mut land_share = 0.0;
@@ -98,6 +130,7 @@ impl Classes {
         Classes {
             size_m: [sx, sy],
             grid,
+            bins,
             water_share,
             land_share,
         }
@@ -106,18 +139,25 @@ impl Classes {
     /// The class of the ground at `p` (within the domain; outside it, the
     /// nearest cell's).
     pub fn of(&self, p: DVec3) -> Class {
+        self.at(p).0
+    }
+
+    /// The class of the ground at `p` as [`Classes::of`] gives it, and its
+    /// depth bin within a water class (0 on land).
+    pub fn at(&self, p: DVec3) -> (Class, usize) {
         let n = GRID;
         let i = ((p.x / self.size_m[0] * n as f64) as isize).clamp(0, n as isize - 1) as usize;
         let j = ((p.y / self.size_m[1] * n as f64) as isize).clamp(0, n as isize - 1) as usize;
+        let bin = usize::from(self.bins[j * n + i]);
         match self.grid[j * n + i] {
-            LAND => Class::Land,
-            k => Class::Water(usize::from(k)),
+            LAND => (Class::Land, 0),
+            k => (Class::Water(usize::from(k)), bin),
         }
     }
 
-    /// The bytes of the grid.
+    /// The bytes of the grids.
     pub fn bytes(&self) -> u64 {
-        self.grid.len() as u64
+        (self.grid.len() + self.bins.len()) as u64
     }
 
     /// The number of water classes.

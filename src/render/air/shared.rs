@@ -60,9 +60,14 @@ pub(super) struct Shared {
     x_sum: Vec<f64>,
     x2_sum: Vec<f64>,
     /// Per class (the water's by depth, then the land) and direction cell
-    /// and band (cell-major): what a path meeting it within the domain
-    /// sees, less the glint term (`glint`: its weight in the class).
+    /// and band (cell-major): its table, which times its depth bin's
+    /// factor (`factors`, per bin and band; the land's are 1) less `base`
+    /// (per cell and band: the water's table for mean surroundings, else
+    /// 0) is what a path meeting it within the domain sees, less the
+    /// glint term (`glint`: its weight in the class).
     within: Vec<Vec<f64>>,
+    factors: Vec<Vec<f64>>,
+    base: Vec<f64>,
     glint: Vec<f64>,
 }
 
@@ -143,28 +148,19 @@ impl AirView<'_> {
         }
         met.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
         // Within the domain, per class: the water's by depth, then the land.
-        let mut within = Vec::new();
-        let mut glint = Vec::new();
-        for table in &self.water_env {
-            within.push(if mean {
-                table.iter().zip(&self.env).map(|(t, e)| t - e).collect()
-            } else {
-                table.clone()
-            });
-            glint.push(if mean { 0.0 } else { 1.0 });
-        }
+        let mut within = self.water_env.clone();
+        let mut factors = self.water_bins.clone();
+        let mut glint = vec![if mean { 0.0 } else { 1.0 }; within.len()];
         if self.land_share > 0.0 {
-            within.push(if mean {
-                self.land_env
-                    .iter()
-                    .zip(&self.env)
-                    .map(|(t, e)| t - e)
-                    .collect()
-            } else {
-                self.land_env.clone()
-            });
+            within.push(self.land_env.clone());
+            factors.push(vec![1.0; super::BINS * nb]);
             glint.push(if mean { -1.0 } else { 0.0 });
         }
+        let base = if mean {
+            self.env.clone()
+        } else {
+            vec![0.0; self.env.len()]
+        };
         Shared {
             drawn: SHARED_PATHS as f64,
             dx: met.iter().map(|m| m.0.x).collect(),
@@ -178,6 +174,8 @@ impl AirView<'_> {
             x_sum,
             x2_sum,
             within,
+            factors,
+            base,
             glint,
         }
     }
@@ -246,20 +244,25 @@ impl AirView<'_> {
             if !((0.0..sx).contains(&at.x) && (0.0..sy).contains(&at.y)) {
                 continue;
             }
-            let k = match self.class_of(at) {
-                Class::Water(k) => k,
-                Class::Land => shared.within.len() - 1,
+            let (k, j) = match self.classes.at(at) {
+                (Class::Water(k), j) => (k, j),
+                (Class::Land, _) => (shared.within.len() - 1, 0),
             };
             let table = &shared.within[k];
+            let factor = &shared.factors[k][j * nb..(j + 1) * nb];
             let g = shared.glint[k];
             let c = shared.cell[i] as usize;
             let row = i * nb..(i + 1) * nb;
             let (w, wg) = (&shared.w[row.clone()], &shared.wg[row]);
             let beyond = &shared.beyond[c * nb..(c + 1) * nb];
+            let (table, base) = (
+                &table[c * nb..(c + 1) * nb],
+                &shared.base[c * nb..(c + 1) * nb],
+            );
             for b in 0..nb {
                 let (w, wg) = (f64::from(w[b]), f64::from(wg[b]));
                 let x = shared.beyond_w * w * beyond[b] + shared.beyond_g * wg;
-                let v = w * table[c * nb + b] + g * wg - x;
+                let v = w * (table[b] * factor[b] - base[b]) + g * wg - x;
                 y[b] += v;
                 yy[b] += v * v;
                 xy[b] += x * v;

@@ -487,3 +487,58 @@ fn the_shared_paths_know_their_error() {
         );
     }
 }
+
+/// Over water whose radiance falls with the depth of its floor, the
+/// control a path's call is measured against (its class's table times its
+/// depth bin's factor, plus the glint) follows the radiance: over random
+/// points of the water of [`beach`] and directions, the control's RMS
+/// relative error is below 5 % for a radiance (1 + 0.8 mu) exp(-0.3 depth)
+/// of the floor, plus the glint.
+/// Bins are eighths of a class by area; the widest spans 0.5 m of floor
+/// (the class of 4–8 m), where exp(-0.3 depth) changes by 14 %, a spread of
+/// ±7 % about its middle (RMS 4 %); the cells' 5-degree rows add little
+/// (3.5 % measured). With one table per class (every factor 1) it is 30 %.
+#[test]
+fn the_control_follows_the_depth_of_the_floor() {
+    // As many calls per cell as a 256 x 256 image gets.
+    let mut scene = beach(true);
+    scene.sensor.pixels = [256, 256];
+    let nb = scene.bands.len();
+    let depth = |p: DVec3| -2.0 + 0.12 * p.x;
+    // With the glint, as an integrator's radiance has it.
+    let light = Surface(
+        |ray: &CameraRay, b| {
+            let p = foot(ray);
+            let mut glint = vec![0.0; nb];
+            crate::render::air_sea::add_glint(&scene, -ray.direction, &mut glint);
+            (1.0 + 0.8 * f64::from(-ray.direction.z)) * (-0.3 * depth(p)).exp() + glint[b]
+        },
+        nb,
+    );
+    let air = AirView::new(&scene, &light).unwrap().unwrap();
+    let mut rng = Pcg32::new(11, 0);
+    let (mut glint, mut control, mut l, mut water) =
+        (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
+    let (mut sq, mut n) = (0.0, 0);
+    while n < 20_000 {
+        let meet = DVec3::new(rng.uniform_f64() * 100.0, rng.uniform_f64() * 100.0, 0.0);
+        if depth(meet) <= 0.05 {
+            continue;
+        }
+        let up = crate::optics::phase::cosine_hemisphere(Vec3::Z, &mut rng).as_dvec3();
+        if up.z < 0.05 {
+            continue;
+        }
+        air.control(meet, up, &mut glint, &mut control);
+        light
+            .camera(air.ray_to(meet, up), &mut rng, &mut l, &mut water)
+            .unwrap();
+        for b in 0..nb {
+            let e = control[b] / l[b] - 1.0;
+            sq += e * e;
+            n += 1;
+        }
+    }
+    let rms = (sq / n as f64).sqrt();
+    assert!(rms < 0.05, "RMS {rms}");
+}
