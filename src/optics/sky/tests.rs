@@ -109,7 +109,8 @@ fn sampled_sky_photons_follow_the_distribution() {
 /// The sky's first moment: n . moment is the integral of g(s) n.s over the
 /// sky above the horizon for any n (tilted, level, facing away), by the
 /// midpoint rule on 1200 x 2400 steps, for the CIE sky and for a table
-/// whose cells differ band by band.
+/// whose cells differ band by band (a table cell's horizontal part halved
+/// reads 3.09 against 3.33 at a normal 25 degrees from the zenith).
 #[test]
 fn the_moment_integrates_the_sky_against_any_normal() {
     let cie = SkyModel::cie_clear(toward(50.0, 70.0));
