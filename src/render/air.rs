@@ -257,7 +257,7 @@ impl<'s> AirView<'s> {
         }
         if let Some(crate::scene::Surroundings::Water(sea)) = &scene.surroundings {
             let beyond = super::path::PathTracer::new(sea);
-            let table = air.table(&beyond, None, SEA_SAMPLES, SEA_KEY)?;
+            let table = air.table(&beyond, None, SEA_SAMPLES, SEA_KEY)?.table;
             air.surround = Some(Surround::Water(table));
         }
         if !matches!(air.surround, Some(Surround::Land(_) | Surround::Water(_))) {

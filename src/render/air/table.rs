@@ -41,32 +41,23 @@ impl AirView<'_> {
                 (per_class, ENV_KEY.wrapping_add(k as u64))
             }
         };
-        let [sx, sy] = self.scene.domain.size_m;
-        let bin = |at: DVec3| self.classes.at(at).1;
-        let leaving = leaving_table(
-            self.scene,
-            light,
-            CALL_STEPS,
-            per_cell,
-            key,
-            self.ray_height_m,
-            &|rng| self.point_of_class(rng, sx, sy, Some(class)),
-            &|at, up, glint| self.glint_at(at, up, glint),
-            matches!(class, Class::Water(_)).then_some(&bin as &(dyn Fn(DVec3) -> usize + Sync)),
-        )?;
+        let leaving = self.table(light, Some(class), per_cell, key)?;
         Ok((leaving.table, leaving.factors))
     }
 
     /// The table of [`AirView::environment`] from `per_cell` calls of
-    /// `light` per cell, drawn from the stream `key`.
+    /// `light` per cell at points of `class` (`None`: of the water), drawn
+    /// from the stream `key`; for a water class, with its depth bins'
+    /// factors.
     pub(super) fn table(
         &self,
         light: &dyn Integrator,
         class: Option<Class>,
         per_cell: u64,
         key: u64,
-    ) -> Result<Vec<f64>> {
+    ) -> Result<Leaving> {
         let [sx, sy] = self.scene.domain.size_m;
+        let bin = |at: DVec3| self.classes.at(at).1;
         leaving_table(
             self.scene,
             light,
@@ -76,9 +67,9 @@ impl AirView<'_> {
             self.ray_height_m,
             &|rng| self.point_of_class(rng, sx, sy, class),
             &|at, up, glint| self.glint_at(at, up, glint),
-            None,
+            matches!(class, Some(Class::Water(_)))
+                .then_some(&bin as &(dyn Fn(DVec3) -> usize + Sync)),
         )
-        .map(|l| l.table)
     }
 
     /// Per band, the scattered part of the table plus the glint, from
