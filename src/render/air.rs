@@ -404,8 +404,9 @@ impl<'s> AirView<'s> {
     }
 
     /// The control for a path meeting the ground at `meet` within the
-    /// domain toward `up`, per band: its class's table plus, over the
-    /// water, the glint there (`glint` is scratch).
+    /// domain toward `up`, per band: its class's table (over the water,
+    /// times its depth bin's factor) plus, over the water, the glint there
+    /// (`glint` is scratch).
     fn control(&self, meet: DVec3, up: DVec3, glint: &mut [f64], out: &mut [f64]) {
         let nb = self.columns.len();
         let c = self.cell(up);
@@ -423,8 +424,9 @@ impl<'s> AirView<'s> {
 
     /// The control's excess over the pooled part's (the water's table
     /// plus the glint) for a path meeting the ground at `meet` toward
-    /// `up`, per band: within the domain, its class's table less the
-    /// water's (with the glint over the land); beyond it, for mean
+    /// `up`, per band: within the domain, its class's table (over the
+    /// water, times its depth bin's factor) less the water's (with the
+    /// glint over the land); beyond it, for mean
     /// surroundings, the land's share of that.
     fn excess(&self, meet: DVec3, up: DVec3, inside: bool, glint: &mut [f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
