@@ -275,11 +275,11 @@ impl<'s> AirView<'s> {
         };
         let nb = air.columns.len() as u64;
         let table = CELLS as u64 * nb * 8;
-        // The water's classes, the land's and their copies in the shared
-        // paths; the water's mean, the sea's and what lies beyond.
-        let tables = 2 * (air.classes.waters() as u64 + 1) + 3;
-        // Each water class's depth factors, and their copies.
-        let factors = 2 * air.classes.waters() as u64 * BINS as u64 * nb * 8;
+        // The water's classes and the land's; the water's mean, the sea's
+        // and what the shared paths see beyond.
+        let tables = air.classes.waters() as u64 + 1 + 3;
+        // Each water class's depth factors.
+        let factors = air.classes.waters() as u64 * BINS as u64 * nb * 8;
         let shared = if air.surround.is_some() {
             air.shared_kept() * (8 * nb + 20)
         } else {

@@ -59,16 +59,10 @@ pub(super) struct Shared {
     /// Per band: the sums over the paths of x and x^2.
     x_sum: Vec<f64>,
     x2_sum: Vec<f64>,
-    /// Per class (the water's by depth, then the land) and direction cell
-    /// and band (cell-major): its table, which times its depth bin's
-    /// factor (`factors`, per bin and band; the land's are 1) less `base`
-    /// (per cell and band: the water's table for mean surroundings, else
-    /// 0) is what a path meeting it within the domain sees, less the
-    /// glint term (`glint`: its weight in the class).
-    within: Vec<Vec<f64>>,
-    factors: Vec<Vec<f64>>,
-    base: Vec<f64>,
-    glint: Vec<f64>,
+    /// For mean surroundings: within the domain a path sees its class's
+    /// control less the water's table (the view's `env`), the glint
+    /// taken out over the land; otherwise its class's control.
+    mean: bool,
 }
 
 /// A sample's mean lookup and the variance of that mean, per band.
@@ -147,20 +141,6 @@ impl AirView<'_> {
             }
         }
         met.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
-        // Within the domain, per class: the water's by depth, then the land.
-        let mut within = self.water_env.clone();
-        let mut factors = self.water_bins.clone();
-        let mut glint = vec![if mean { 0.0 } else { 1.0 }; within.len()];
-        if self.land_share > 0.0 {
-            within.push(self.land_env.clone());
-            factors.push(vec![1.0; super::BINS * nb]);
-            glint.push(if mean { -1.0 } else { 0.0 });
-        }
-        let base = if mean {
-            self.env.clone()
-        } else {
-            vec![0.0; self.env.len()]
-        };
         Shared {
             drawn: SHARED_PATHS as f64,
             dx: met.iter().map(|m| m.0.x).collect(),
@@ -173,10 +153,7 @@ impl AirView<'_> {
             beyond_g,
             x_sum,
             x2_sum,
-            within,
-            factors,
-            base,
-            glint,
+            mean,
         }
     }
 
@@ -244,25 +221,30 @@ impl AirView<'_> {
             if !((0.0..sx).contains(&at.x) && (0.0..sy).contains(&at.y)) {
                 continue;
             }
-            let (k, j) = match self.classes.at(at) {
-                (Class::Water(k), j) => (k, j),
-                (Class::Land, _) => (shared.within.len() - 1, 0),
-            };
-            let table = &shared.within[k];
-            let factor = &shared.factors[k][j * nb..(j + 1) * nb];
-            let g = shared.glint[k];
             let c = shared.cell[i] as usize;
+            // The class's table, its depth bin's factors (none on land)
+            // and the glint's weight, as `control` and `excess` take them.
+            let (table, factor, g) = match self.classes.at(at) {
+                (Class::Water(k), j) => (
+                    &self.water_env[k],
+                    Some(&self.water_bins[k][j * nb..(j + 1) * nb]),
+                    if shared.mean { 0.0 } else { 1.0 },
+                ),
+                (Class::Land, _) => (&self.land_env, None, if shared.mean { -1.0 } else { 0.0 }),
+            };
             let row = i * nb..(i + 1) * nb;
             let (w, wg) = (&shared.w[row.clone()], &shared.wg[row]);
             let beyond = &shared.beyond[c * nb..(c + 1) * nb];
-            let (table, base) = (
+            let (table, env) = (
                 &table[c * nb..(c + 1) * nb],
-                &shared.base[c * nb..(c + 1) * nb],
+                &self.env[c * nb..(c + 1) * nb],
             );
             for b in 0..nb {
                 let (w, wg) = (f64::from(w[b]), f64::from(wg[b]));
                 let x = shared.beyond_w * w * beyond[b] + shared.beyond_g * wg;
-                let v = w * (table[b] * factor[b] - base[b]) + g * wg - x;
+                let base = if shared.mean { env[b] } else { 0.0 };
+                let f = factor.map_or(1.0, |f| f[b]);
+                let v = w * (table[b] * f - base) + g * wg - x;
                 y[b] += v;
                 yy[b] += v * v;
                 xy[b] += x * v;
