@@ -148,8 +148,7 @@ fn voxels_follow_the_photon_count() {
 /// Where the IOPs jump at a depth, a layer ends there and shapes are not
 /// blended across it: above a jump at 2 m every photon is band 0, below it
 /// band 1, and a site just above (or below) the jump gets its own side's
-/// shape exactly, where interpolation between the layer centres would mix
-/// the two.
+/// shape exactly, where a layer across the jump would mix the two.
 #[test]
 fn shapes_are_not_blended_across_an_iop_jump() {
     let photons = (0..4000).map(|i| {
@@ -173,8 +172,8 @@ fn shapes_are_not_blended_across_an_iop_jump() {
         let g = BandShapeGrid::build(&m, &plan(4, &[2.0], 2), &hemisphere).unwrap();
         assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert_eq!(out, want, "at z = {x_z}");
-        // Without the jump the site is between two centres and mixes them.
-        let blind = BandShapeGrid::build(&m, &plan(4, &[], 2), &hemisphere).unwrap();
+        // One layer without the jump mixes them.
+        let blind = BandShapeGrid::build(&m, &plan(1, &[], 2), &hemisphere).unwrap();
         assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
         assert!(out[0] > 0.0 && out[1] > 0.0, "{out:?}");
     }
@@ -199,7 +198,7 @@ fn each_view_holds_its_own_shares() {
     assert!(g.shape_and_groups_at(x, VIEW_UP_TARGET, &mut out, None));
     assert_eq!(out, [0.0, 0.0, 1.0, 0.0]);
     assert!(g.shape_and_groups_at(x, VIEW_UP, &mut out, None));
-    assert!(out.iter().all(|&s| s > 0.1), "{out:?}");
+    assert!(out.iter().all(|&s| s > 0.05), "{out:?}");
 }
 
 /// Cells end at a target's footprint and shapes are not blended across it:
@@ -347,4 +346,107 @@ fn binned_shapes_mix_by_weight() {
     // Each bin's shape is exact here, so no group moves it.
     assert!(groups.iter().all(|d| d.abs() < 1e-6), "{groups:?}");
     assert!(!g.mixed_shape_and_groups_at(x, &[(4, 1.0)], &mut out, None, &mut scratch));
+}
+
+/// The rate of an exponential profile across a layer is recovered from
+/// its mean place, and a profile averages 1 over its layer.
+#[test]
+fn a_layers_profile_is_found_from_its_mean_place() {
+    for x in [-30.0, -3.0, -0.5, -1e-5, 0.0, 1e-5, 0.7, 2.5, 12.0, 35.0] {
+        let found = rate_of_mean(mean_place(x));
+        assert!((found - x).abs() < 1e-6 * (1.0 + x.abs()), "{x}: {found}");
+        // Midpoint rule over 10 000 slices.
+        let n = 10_000;
+        let mean = (0..n)
+            .map(|i| profile(x, (i as f64 + 0.5) / n as f64))
+            .sum::<f64>()
+            / n as f64;
+        assert!((mean - 1.0).abs() < 1e-6, "{x}: {mean}");
+    }
+    assert_eq!(rate_of_mean(0.0), rate_of_mean(mean_place(MAX_RATE)));
+    assert_eq!(rate_pools(&[500.0, 507.5, 515.0]), [(0, 1), (1, 2), (2, 3)]);
+    assert_eq!(rate_pools(&[500.0, 503.0, 506.0, 509.0])[1], (0, 4));
+}
+
+/// Light falling with depth at each band's own rate (0.2, 0.8, 1.6 and
+/// 3 per m, as from the blue to the near infrared): the grid reads each
+/// band's share at a depth, not its mean over the depth's layer. Over
+/// eight independent maps the mean share is within four standard errors
+/// of the exact one, at depths near the surface, mid-layer and near a
+/// layer's edges; the layers' mean shares, which the grid read before,
+/// miss it by many.
+#[test]
+fn shares_follow_light_falling_at_each_bands_own_rate() {
+    const K: [f64; 4] = [0.2, 0.8, 1.6, 3.0];
+    const DEPTH: f64 = 8.0;
+    let exact = |d: f64| {
+        let rho = K.map(|k| k * (-k * d).exp() / -(-k * DEPTH).exp_m1());
+        let t: f64 = rho.iter().sum();
+        rho.map(|r| r / t)
+    };
+    let (maps, n) = (8u64, 200_000u64);
+    let depths = [0.05, 0.3, 0.6, 1.0, 1.5, 2.5];
+    let mut reads = vec![[[0.0f64; 4]; 6]; maps as usize];
+    let mut means = vec![[[0.0f64; 4]; 6]; maps as usize];
+    for (m, (read, mean)) in reads.iter_mut().zip(&mut means).enumerate() {
+        let photons = (0..n).map(|i| {
+            let mut rng = Pcg32::new(11 + m as u64, i);
+            let band = rng.below(4) as usize;
+            // Depth from exp(-k d) truncated at DEPTH, by inversion.
+            let u = rng.uniform_f64();
+            let d = -(1.0 + u * (-K[band] * DEPTH).exp_m1()).ln() / K[band];
+            let photon = Photon {
+                position: Vec3::new(
+                    10.0 * rng.uniform_f32(),
+                    10.0 * rng.uniform_f32(),
+                    -(d.min(DEPTH - 1e-3) as f32),
+                ),
+                direction: Vec3::Z,
+                band: band as u16,
+                power: 1.0,
+                group: 0,
+            };
+            (photon, volume_layer(photon.direction))
+        });
+        let map = box_map(photons, 4);
+        let layers = GridPlan {
+            layers_only: true,
+            ..plan(4, &[], 2)
+        };
+        let g = BandShapeGrid::build(&map, &layers, &hemisphere).unwrap();
+        assert_eq!(g.dims(), [1, 1, 4]);
+        for (j, &d) in depths.iter().enumerate() {
+            let x = Vec3::new(5.0, 5.0, -d as f32);
+            assert!(g.shape_at(x, true, &mut read[j]));
+            let v = g.voxel_of(x);
+            for (o, s) in mean[j].iter_mut().zip(&g.shapes[v * 2 * 4..][..4]) {
+                *o = f64::from(*s);
+            }
+        }
+    }
+    let stats = |all: &[[[f64; 4]; 6]], j: usize, b: usize| {
+        let v: Vec<f64> = all.iter().map(|r| r[j][b]).collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+        (mean, (var / v.len() as f64).sqrt())
+    };
+    let mut missed_before = 0;
+    for (j, &d) in depths.iter().enumerate() {
+        let want = exact(d);
+        for (b, &want) in want.iter().enumerate() {
+            let (got, se) = stats(&reads, j, b);
+            assert!(
+                (got - want).abs() <= 4.0 * se,
+                "depth {d} band {b}: {got:.5} +- {se:.5} against {want:.5}"
+            );
+            let (layer_mean, se_mean) = stats(&means, j, b);
+            if (layer_mean - want).abs() > 10.0 * (se + se_mean) {
+                missed_before += 1;
+            }
+        }
+    }
+    assert!(
+        missed_before >= 12,
+        "the layers' means miss in {missed_before} of 24"
+    );
 }
