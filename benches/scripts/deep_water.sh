@@ -11,19 +11,22 @@
 # Read: nadir radiometers at 0.5 m and 2 m (the centre of the domain) and
 # the 4 x 4 pixel camera's water-leaving radiance just above the surface.
 # The photon map (PHOTONS, once per seed) against the path integrator
-# (SPP paths per pixel, SPP x 1024 per radiometer), per 50 nm of bands:
-# the ratio of band sums - 1, with the standard error of the seeds' mean
-# combined with the reference's own (its heavy tails make that uncertain
-# in the red at 2 m, where it warns).
+# (SPP paths per pixel, SPP x 1024 per radiometer, once per seed), per 50
+# nm of bands: the ratio of band sums - 1, with the standard error of the
+# photon map's seeds' mean combined with that of the reference's. The
+# reference's error comes from the spread of its seeds, not from its own
+# standard error: its samples are heavy-tailed (it warns in the red at 2
+# m), and two runs of 8192 paths per pixel differed by 3-4 % in L_w where
+# each claimed 1 %.
 #
 # Usage: benches/scripts/deep_water.sh [OUTDIR] [PHOTONS] [SPP] [SEEDS]
-# (defaults: target/bench-deep-water, 4000000, 8192, "1 2 3 4"; about 8
+# (defaults: target/bench-deep-water, 4000000, 2048, "1 2 3 4"; about 8
 # minutes on two cores; needs python3 with numpy).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 out=${1:-target/bench-deep-water}
 photons=${2:-4000000}
-spp=${3:-8192}
+spp=${3:-2048}
 seeds=${4:-1 2 3 4}
 mkdir -p "$out"
 cargo build --release --quiet
@@ -91,42 +94,42 @@ view = "nadir"
 position_m = [100.0, 100.0]
 EOF
 
-"$bin" render "$out/deep.toml" --integrator path --spp "$spp" --out "$out/path" 2> "$out/path.log" >&2
+refs=()
 runs=()
 for seed in $seeds; do
+  "$bin" render "$out/deep.toml" --integrator path --spp "$spp" --seed "$seed" \
+    --out "$out/path-$seed" 2>> "$out/path.log" >&2
   "$bin" render "$out/deep.toml" --seed "$seed" --out "$out/pm-$seed" 2>> "$out/pm.log" >&2
+  refs+=("$out/path-$seed")
   runs+=("$out/pm-$seed")
 done
 
-python3 - "$out/path" "${runs[@]}" <<'PY'
+python3 - "${#refs[@]}" "${refs[@]}" "${runs[@]}" <<'PY'
 import json, re, sys
 import numpy as np
-ref, runs = sys.argv[1], sys.argv[2:]
+n_ref = int(sys.argv[1])
+refs, runs = sys.argv[2:2 + n_ref], sys.argv[2 + n_ref:]
 report = lambda d: json.load(open(f"{d}/deep.json"))
-hdr = open(f"{ref}/deep.hdr").read()
+hdr = open(f"{refs[0]}/deep.hdr").read()
 wl = np.array([float(x) for x in re.search(r"wavelength = \{([^}]*)\}", hdr).group(1).split(",")])
 groups = [(lo, lo + 50) for lo in range(400, 800, 50)]
-def line(name, m, sm, r, sr):
+def sums(values, sel):
+    """Each seed's band sum over `sel`: its mean and standard error."""
+    v = np.array(values)[:, sel].sum(1)
+    return v.mean(), (v.std(ddof=1) / np.sqrt(len(v)) if len(v) > 1 else 0.0)
+def line(name, pm, ref):
     cells = []
     for lo, hi in groups:
         sel = (wl >= lo) & (wl < hi)
-        d = m[sel].sum() / r[sel].sum() - 1
-        se = np.sqrt((sm[sel] ** 2).sum() + (sr[sel] ** 2).sum()) / r[sel].sum()
-        cells.append(f"{d:+.1%} ± {se:.1%}")
+        (m, sm), (r, sr) = sums(pm, sel), sums(ref, sel)
+        cells.append(f"{m / r - 1:+.1%} ± {np.hypot(sm, sr) / r:.1%}")
     print(f"| {name} | " + " | ".join(cells) + " |")
-print("| reading | " + " | ".join(f"{lo}-{hi}" for lo, hi in groups) + " |")
+print("| reading | " + " | ".join(f"{lo}-{hi} nm" for lo, hi in groups) + " |")
 print("|---" * (len(groups) + 1) + "|")
-path = report(ref)
-n = len(runs)
-for i, r in enumerate(path["radiometers"]):
-    m = np.array([report(d)["radiometers"][i]["L"] for d in runs])
-    sm = m.std(0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(m.shape[1])
-    line(f"nadir radiance {r['depth_m']} m deep", m.mean(0), sm, np.array(r["L"]), np.array(r["stderr"]))
-pixels = lambda d, name: np.fromfile(f"{d}/deep.{name}.bsq", dtype="<f4").reshape(len(wl), -1).astype(float)
-m = np.array([pixels(d, "lw").mean(1) for d in runs])
-sm = m.std(0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(m.shape[1])
-# The reference's L_t standard error stands for its L_w's: the surface's
-# reflected sky, the difference, is the same in every path.
-se = pixels(ref, "stderr")
-line("camera L_w (16 pixels)", m.mean(0), sm, pixels(ref, "lw").mean(1), np.sqrt((se ** 2).sum(1)) / se.shape[1])
+for i, r in enumerate(report(refs[0])["radiometers"]):
+    reading = lambda d: report(d)["radiometers"][i]["L"]
+    line(f"nadir radiance {r['depth_m']} m deep", [reading(d) for d in runs],
+         [reading(d) for d in refs])
+lw = lambda d: np.fromfile(f"{d}/deep.lw.bsq", dtype="<f4").reshape(len(wl), -1).astype(float).mean(1)
+line("camera L_w (16 pixels)", [lw(d) for d in runs], [lw(d) for d in refs])
 PY

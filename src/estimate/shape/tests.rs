@@ -171,7 +171,11 @@ fn shapes_are_not_blended_across_an_iop_jump() {
     for (x_z, want) in [(-1.95, [1.0, 0.0]), (-2.05, [0.0, 1.0])] {
         let g = BandShapeGrid::build(&m, &plan(4, &[2.0], 2), &hemisphere).unwrap();
         assert!(g.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
-        assert_eq!(out, want, "at z = {x_z}");
+        // Exact but for the rounding of the profile's scaling.
+        assert!(
+            out.iter().zip(want).all(|(o, w)| (o - w).abs() < 1e-12),
+            "at z = {x_z}: {out:?}"
+        );
         // One layer without the jump mixes them.
         let blind = BandShapeGrid::build(&m, &plan(1, &[], 2), &hemisphere).unwrap();
         assert!(blind.shape_at(Vec3::new(5.0, 5.0, x_z), false, &mut out));
@@ -349,7 +353,8 @@ fn binned_shapes_mix_by_weight() {
 }
 
 /// The rate of an exponential profile across a layer is recovered from
-/// its mean place, and a profile averages 1 over its layer.
+/// its mean place, and a profile averages 1 over its layer (within what
+/// its f32 rate and scale hold: 6e-8 of rates up to 40 in the exponent).
 #[test]
 fn a_layers_profile_is_found_from_its_mean_place() {
     for x in [-30.0, -3.0, -0.5, -1e-5, 0.0, 1e-5, 0.7, 2.5, 12.0, 35.0] {
@@ -358,10 +363,10 @@ fn a_layers_profile_is_found_from_its_mean_place() {
         // Midpoint rule over 10 000 slices.
         let n = 10_000;
         let mean = (0..n)
-            .map(|i| profile(x, (i as f64 + 0.5) / n as f64))
+            .map(|i| Profile::new(x).at((i as f64 + 0.5) / n as f64))
             .sum::<f64>()
             / n as f64;
-        assert!((mean - 1.0).abs() < 1e-6, "{x}: {mean}");
+        assert!((mean - 1.0).abs() < 1e-5, "{x}: {mean}");
     }
     assert_eq!(rate_of_mean(0.0), rate_of_mean(mean_place(MAX_RATE)));
     assert_eq!(rate_pools(&[500.0, 507.5, 515.0]), [(0, 1), (1, 2), (2, 3)]);
