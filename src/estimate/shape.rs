@@ -536,7 +536,7 @@ fn rate_of_mean(mean: f64) -> f64 {
 /// middle by sinh(K_i h/2)/(K_i h/2) over sinh(K h/2)/(K h/2). With the
 /// built-in grid's layers (about 1 m thick near the surface; 750 nm
 /// falls about 2.5 per m) the nadir radiance 2 m down in deep uniform
-/// water read +120 % at 750-800 nm and the water-leaving radiance 3-4 %
+/// water read +132 % at 750-800 nm and the water-leaving radiance 3-4 %
 /// off at 650-800 nm (`benches/scripts/deep_water.sh`).
 /// Each band's profile across the layer is taken as exponential, its rate
 /// from the mean place of its weight there (pooled over the bands within
