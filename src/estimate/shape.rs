@@ -217,8 +217,8 @@ impl BandShapeGrid {
             }
         }
         z_edges.push(depth);
-        // Layers also end where the IOPs jump, and shapes are not blended
-        // across such a depth (see `shape_and_groups_at`).
+        // Layers also end where the IOPs jump: an estimate reads only the
+        // layer holding it, so shapes are not blended across such a depth.
         let jumps: Vec<f32> = boundaries_m
             .iter()
             .map(|&d| d as f32)
@@ -231,7 +231,7 @@ impl BandShapeGrid {
             axes: [
                 Axis::across(size_m[0], nxy),
                 Axis::across(size_m[1], nxy),
-                Axis::new(z_edges, jumps),
+                Axis::new([z_edges, jumps].concat()),
             ],
             columns: columns.iter().map(|b| Column::over(b, size_m)).collect(),
             shapes: Vec::new(),
@@ -664,36 +664,28 @@ impl Column {
     }
 }
 
-/// One axis of the grid: ascending cell edges, their centres, and the
-/// walls (edges) that interpolation does not cross.
+/// One axis of the grid: ascending cell edges and their centres.
 struct Axis {
     edges: Vec<f32>,
     centres: Vec<f32>,
-    walls: Vec<f32>,
 }
 
 impl Axis {
-    /// Cells between the ascending `edges` (sorted and deduplicated here),
-    /// never blended across `walls`.
-    fn new(mut edges: Vec<f32>, walls: Vec<f32>) -> Axis {
-        edges.extend(&walls);
+    /// Cells between the `edges` (sorted and deduplicated here).
+    fn new(mut edges: Vec<f32>) -> Axis {
         edges.sort_by(f32::total_cmp);
         edges.dedup();
         if edges.len() < 2 {
             edges.push(edges.first().copied().unwrap_or(0.0) + 1.0);
         }
         let centres = edges.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
-        Axis {
-            edges,
-            centres,
-            walls,
-        }
+        Axis { edges, centres }
     }
 
     /// `n` even cells over `[0, size]`.
     fn across(size: f64, n: usize) -> Axis {
         let step = size as f32 / n as f32;
-        Axis::new((0..=n).map(|i| i as f32 * step).collect(), Vec::new())
+        Axis::new((0..=n).map(|i| i as f32 * step).collect())
     }
 
     fn cells(&self) -> usize {
@@ -716,8 +708,7 @@ impl Axis {
     }
 
     /// The two cells whose centres bracket `v` and the weight of the
-    /// second, clamped at the ends; where a wall lies between `v` and a
-    /// centre, only the cell on `v`'s side describes it.
+    /// second, clamped at the ends.
     fn bracket(&self, v: f32) -> (usize, usize, f32) {
         let c = &self.centres;
         let n = c.len();
@@ -729,13 +720,7 @@ impl Axis {
         }
         let k = c.partition_point(|&x| x <= v).clamp(1, n - 1);
         let (lo, hi) = (c[k - 1], c[k]);
-        if self.walls.iter().any(|&w| w > lo && w <= v) {
-            (k, k, 0.0)
-        } else if self.walls.iter().any(|&w| w > v && w < hi) {
-            (k - 1, k - 1, 0.0)
-        } else {
-            (k - 1, k, (v - lo) / (hi - lo))
-        }
+        (k - 1, k, (v - lo) / (hi - lo))
     }
 }
 
