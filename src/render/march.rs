@@ -12,7 +12,8 @@
 //! the sun is exact in uniform and layered water (cut at every layer
 //! boundary: four midpoint samples read a 2 m layer seen from 6 m below
 //! as 3 m) and by the midpoint rule at most 0.5 m apart in smoothly
-//! varying water; the surface seen from the air is
+//! varying water; steps lengthen as the light along the ray fades
+//! (`stretch`: 1 / T times the scene's step, at most 4 times); the surface seen from the air is
 //! `air_sea::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! ray looking up at the surface sees the sky through it and, marching on
 //! down, the light from below that it reflects (a rough surface's event
@@ -52,6 +53,33 @@ const TURN_SUN_MARGIN_RAD: f64 = 0.052;
 const GATHER_GUIDE: f64 = 0.3;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
+/// The longest step, as a multiple of the course's, where the ray's
+/// transmittance has fallen (see [`stretch`]).
+pub(crate) const STEP_STRETCH_MAX: f32 = 4.0;
+
+/// How many times its course's step a march's next step takes: 1 / T,
+/// for T the largest transmittance of any band so far (MIS weights of a
+/// hero band's turns included), from 1 up to `max`.
+///
+/// One jittered sample per step is unbiased for any partition of the
+/// ray, so the steps may follow what is left of the light: a step's part
+/// of the pixel falls as T, and with steps 1 / T long each step carries
+/// about as much of it as the first. On the built-in scene from 3 km
+/// (`max` 4) the render took 47.5 s instead of 65.5 s, band means over
+/// deep water, the shallow sand and the whole image within 0.03 %, and
+/// deep-water pixel noise at 444 / 526 / 561 / 649 / 671 nm 0.70 / 1.42
+/// / 1.66 / 0.48 / 0.47 % against 0.56 / 1.29 / 1.54 / 0.40 / 0.41 %.
+/// Steps 1 / sqrt(T) long took 53.0 s for 1.33 % at 526 nm, 1 / T^2
+/// (at most 8) 42.0 s for 1.98 %; a cap of 8 or 16 reads as 4 here,
+/// where rays meet the floor first.
+fn stretch(tr: &[f64], max: f32) -> f32 {
+    let t = tr.iter().fold(0.0f64, |m, &t| m.max(t));
+    if t > 0.0 {
+        (1.0 / t).clamp(1.0, f64::from(max)) as f32
+    } else {
+        max
+    }
+}
 
 /// Per-march buffers, one entry per band (`est` one per channel).
 struct MarchBuffers {
@@ -65,15 +93,19 @@ struct MarchBuffers {
     /// Turns into the particles' forward peak drawn for every band at once
     /// (rays looking down at a target): see [`PeakTurns`].
     turns: Option<PeakTurns>,
-    /// The march's step (m).
+    /// The march's step (m), and the most it stretches ([`stretch`]).
     step_m: f32,
+    stretch_max: f32,
 }
 
-/// How a march goes: its step (m), and whether it gathers at a target it
-/// meets (see [`RayMarcher::gather`]; gather rays do not gather again).
+/// How a march goes: its step (m) where every band's light is whole,
+/// the most that step stretches as the light fades ([`stretch`]), and
+/// whether it gathers at a target it meets (see [`RayMarcher::gather`];
+/// gather rays do not gather again).
 #[derive(Clone, Copy, Debug)]
 struct Course {
     step_m: f32,
+    stretch_max: f32,
     gather: bool,
 }
 
@@ -327,6 +359,7 @@ impl<'a> RayMarcher<'a> {
             out,
             Course {
                 step_m,
+                stretch_max: STEP_STRETCH_MAX,
                 gather: true,
             },
         )
@@ -383,6 +416,7 @@ impl<'a> RayMarcher<'a> {
             tmp: vec![Iop::default(); nb],
             turns: None,
             step_m: course.step_m,
+            stretch_max: course.stretch_max,
         };
         let (mut p, mut dir) = (p0, dir);
         let mut travelled = 0.0f32;
@@ -482,7 +516,7 @@ impl<'a> RayMarcher<'a> {
         let up_len_per_s = (-dir.z / -self.sun_w.z).max(0.0) as f64;
         let mut t0 = 0.0f32;
         while t0 < t_end {
-            let dt = step.min(t_end - t0);
+            let dt = (step * stretch(tr, buf.stretch_max)).min(t_end - t0);
             let mut s = dt * rng.uniform_f32();
             let mut x = p0 + dir * (t0 + s);
             scene.water.iops(x, iops);
@@ -724,6 +758,7 @@ impl<'a> RayMarcher<'a> {
             let step_m = self.scene.estimate.step_m as f32;
             let course = Course {
                 step_m,
+                stretch_max: STEP_STRETCH_MAX,
                 gather: false,
             };
             self.march_with(start, w, rng, scratch, &mut l, course)?;

@@ -1,8 +1,9 @@
 //! The march's turns into the particles' forward peak drawn at a hero
-//! band's rate, against each band's own law of turns; a march with
-//! longer steps against the march.
+//! band's rate, against each band's own law of turns; marches with
+//! longer steps, and with steps paced by the transmittance, against the
+//! march.
 
-use super::{PeakTurns, RayMarcher};
+use super::{Course, PeakTurns, RayMarcher};
 use crate::estimate::estimator::{with_scratch, Estimator};
 use crate::rng::Pcg32;
 use crate::scene::{Overrides, Scene};
@@ -76,15 +77,11 @@ fn hero_turns_give_every_band_its_own_law() {
     }
 }
 
-/// A march with steps four times the scene's (`march_coarse`, the air
-/// view's calls) has the march's expectation: water with a forward peak
-/// (Fournier–Forand particles, so that runs turn within steps) and a
-/// sand floor 6 m down; 4000 marches each from 0.5 m down looking down,
-/// every band's mean within 4 standard errors of their difference. A
-/// march that weighed its sources by at most the scene's step failed it
-/// by about a hundred of them (band 0: 106).
-#[test]
-fn longer_steps_keep_the_march_s_expectation() {
+/// Per-band mean and variance of the mean of 4000 marches from 0.5 m
+/// down looking down, in water with a forward peak (Fournier–Forand
+/// particles, so that runs turn within steps) over a sand floor 6 m down,
+/// each march on `course` (`stream` of the rng).
+fn march_moments(course: impl Fn(f32) -> Course, stream: u64) -> Vec<(f64, f64)> {
     let text = include_str!("../../../tests/scenes/minimal.toml")
         .replace(
             "iop = { a = 0.1, b = 0.2 }",
@@ -103,38 +100,81 @@ fn longer_steps_keep_the_march_s_expectation() {
     let marcher = RayMarcher::new(&scene, Estimator::new(&scene, &map).unwrap());
     let nb = scene.bands.len();
     let n = 4000;
-    let moments = |factor: f32, stream: u64| {
-        let mut rng = Pcg32::new(7, stream);
-        let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
-        let mut out = vec![0.0; nb];
-        with_scratch(nb, |s| {
-            for _ in 0..n {
-                let p = Vec3::new(5.0, 5.0, -0.5);
-                marcher
-                    .march_coarse(p, Vec3::NEG_Z, factor, &mut rng, s, &mut out)
-                    .unwrap();
-                for b in 0..nb {
-                    sum[b] += out[b];
-                    sum_sq[b] += out[b] * out[b];
-                }
+    let course = course(scene.estimate.step_m as f32);
+    let mut rng = Pcg32::new(7, stream);
+    let (mut sum, mut sum_sq) = (vec![0.0; nb], vec![0.0; nb]);
+    let mut out = vec![0.0; nb];
+    with_scratch(nb, |s| {
+        for _ in 0..n {
+            let p = Vec3::new(5.0, 5.0, -0.5);
+            marcher
+                .march_with(p, Vec3::NEG_Z, &mut rng, s, &mut out, course)
+                .unwrap();
+            for b in 0..nb {
+                sum[b] += out[b];
+                sum_sq[b] += out[b] * out[b];
             }
-        });
-        (0..nb)
-            .map(|b| {
-                let m = sum[b] / n as f64;
-                (m, (sum_sq[b] / n as f64 - m * m) / n as f64)
-            })
-            .collect::<Vec<_>>()
-    };
-    let (fine, coarse) = (moments(1.0, 1), moments(4.0, 2));
-    for b in 0..nb {
-        let ((a, va), (c, vc)) = (fine[b], coarse[b]);
+        }
+    });
+    (0..nb)
+        .map(|b| {
+            let m = sum[b] / n as f64;
+            (m, (sum_sq[b] / n as f64 - m * m) / n as f64)
+        })
+        .collect()
+}
+
+/// Every band's mean of `other` within 4 standard errors of its
+/// difference from `fine`'s.
+fn assert_same_expectation(fine: &[(f64, f64)], other: &[(f64, f64)], what: &str) {
+    for (b, (&(a, va), &(c, vc))) in fine.iter().zip(other).enumerate() {
         let se = (va + vc).sqrt();
         assert!(a > 0.0, "band {b}: no light");
         assert!(
             (c - a).abs() < 4.0 * se,
-            "band {b}: steps of 4 x {c} against {a} (+- {se}, {:.1} se)",
+            "band {b}: {what} {c} against {a} (+- {se}, {:.1} se)",
             (c - a).abs() / se
         );
     }
+}
+
+/// Fixed steps of the scene's length.
+fn fixed(step_m: f32) -> Course {
+    Course {
+        step_m,
+        stretch_max: 1.0,
+        gather: true,
+    }
+}
+
+/// A march with steps four times the scene's (`march_coarse`, the air
+/// view's calls) has the march's expectation, every band's mean within 4
+/// standard errors of their difference. A march that weighed its sources
+/// by at most the scene's step failed it by about a hundred of them
+/// (band 0: 106).
+#[test]
+fn longer_steps_keep_the_march_s_expectation() {
+    let coarse = |step_m: f32| Course {
+        step_m: 4.0 * step_m,
+        ..fixed(step_m)
+    };
+    let (fine, coarse) = (march_moments(fixed, 1), march_moments(coarse, 2));
+    assert_same_expectation(&fine, &coarse, "steps of 4 x");
+}
+
+/// Steps stretched as the light fades (`stretch`), here up to 16 times
+/// the scene's, keep the march's expectation, every band's mean within 4
+/// standard errors of their difference from fixed steps'. The stretch
+/// follows the largest transmittance so far, which each step's own
+/// weight carries; a march whose steps stretched without their weight
+/// (each sample weighed by at most the scene's step) failed it by 48
+/// standard errors (band 0).
+#[test]
+fn steps_paced_by_the_transmittance_keep_the_march_s_expectation() {
+    let paced = |step_m: f32| Course {
+        stretch_max: 16.0,
+        ..fixed(step_m)
+    };
+    let (fine, paced) = (march_moments(fixed, 1), march_moments(paced, 2));
+    assert_same_expectation(&fine, &paced, "steps paced by T");
 }
