@@ -640,9 +640,18 @@ impl<'a> Estimator<'a> {
         }
     }
 
+    /// Make `x` the point [`Self::inelastic_sun`] reads the water's
+    /// absorbers at, as a volume estimate there would (a march piece
+    /// without an estimate of its own).
+    pub fn absorbers_at(&self, x: Vec3, scratch: &mut Scratch) {
+        if self.inelastic.is_some_and(|i| i.fluoresces()) {
+            self.scene.water.absorbers(x, &mut scratch.parts);
+        }
+    }
+
     /// The direct sun's inelastic source toward a viewer (per band, into
     /// `out`) at the point of the last volume estimate made with
-    /// `scratch`: `m_ss` is 1 - cos of the angle between the sun's beam and
+    /// `scratch`, or of the last [`Self::absorbers_at`]: `m_ss` is 1 - cos of the angle between the sun's beam and
     /// the direction toward the viewer, `e_w[e] t[e]` the beam's
     /// irradiance there in band e (in the water, times its transmittance).
     pub fn inelastic_sun(

@@ -56,6 +56,8 @@ const MIN_TRANSMITTANCE: f64 = 1e-4;
 /// The longest step, as a multiple of the course's, where the ray's
 /// transmittance has fallen (see [`stretch`]).
 pub(crate) const STEP_STRETCH_MAX: f32 = 4.0;
+/// What is left of a step below this (m) is rounding: a new step starts.
+const STEP_REST_EPS_M: f32 = 1e-5;
 
 /// How many times its course's step a march's next step takes: 1 / T,
 /// for T the largest transmittance of any band so far (MIS weights of a
@@ -96,16 +98,42 @@ struct MarchBuffers {
     /// The march's step (m), and the most it stretches ([`stretch`]).
     step_m: f32,
     stretch_max: f32,
+    spans_turns: bool,
+    /// The step under way, which runs on across turns ([`Step`]).
+    step: Step,
+}
+
+/// A march step of arc length `len` along the ray, turns included: `rest`
+/// of it is still to be marched, and its photon estimate is taken `at`
+/// that far on (none once taken, or when the ray ended before it).
+///
+/// Why: the ray turns into the particles' forward peak about every 2 m
+/// in the built-in scene, and a step that ended at each turn made an
+/// estimate for every straight run however short. One jittered sample in
+/// each stretch of arc length is unbiased for the march's integral along
+/// the bent ray, as along a straight one; what a turn changes is which
+/// direction the sample looks along. Each straight piece still takes its
+/// own sample for the sun's single scattering (in closed form over the
+/// piece), which costs a hundredth of an estimate. Rays that turn at a
+/// hero band's rate ([`PeakTurns`]) end their step at a turn as before:
+/// their bands' weights change along the step.
+#[derive(Clone, Copy, Debug, Default)]
+struct Step {
+    len: f32,
+    rest: f32,
+    at: Option<f32>,
 }
 
 /// How a march goes: its step (m) where every band's light is whole,
-/// the most that step stretches as the light fades ([`stretch`]), and
-/// whether it gathers at a target it meets (see [`RayMarcher::gather`];
-/// gather rays do not gather again).
+/// the most that step stretches as the light fades ([`stretch`]), whether
+/// its steps run on across turns ([`Step`]; always but under a hero
+/// band's turns), and whether it gathers at a target it meets (see
+/// [`RayMarcher::gather`]; gather rays do not gather again).
 #[derive(Clone, Copy, Debug)]
 struct Course {
     step_m: f32,
     stretch_max: f32,
+    spans_turns: bool,
     gather: bool,
 }
 
@@ -360,6 +388,7 @@ impl<'a> RayMarcher<'a> {
             Course {
                 step_m,
                 stretch_max: STEP_STRETCH_MAX,
+                spans_turns: true,
                 gather: true,
             },
         )
@@ -417,6 +446,8 @@ impl<'a> RayMarcher<'a> {
             turns: None,
             step_m: course.step_m,
             stretch_max: course.stretch_max,
+            spans_turns: course.spans_turns,
+            step: Step::default(),
         };
         let (mut p, mut dir) = (p0, dir);
         let mut travelled = 0.0f32;
@@ -514,16 +545,30 @@ impl<'a> RayMarcher<'a> {
         // 0.35: the transmittance across a step varies by 30 %).
         let closed_form = !scene.water.is_layered();
         let up_len_per_s = (-dir.z / -self.sun_w.z).max(0.0) as f64;
+        // Steps run on across turns, except under a hero band's turns.
+        let spans = buf.spans_turns && hero.is_none();
         let mut t0 = 0.0f32;
         while t0 < t_end {
-            let dt = (step * stretch(tr, buf.stretch_max)).min(t_end - t0);
-            let mut s = dt * rng.uniform_f32();
+            if buf.step.rest <= STEP_REST_EPS_M || !spans {
+                let len = (step * stretch(tr, buf.stretch_max)).min(t_end - t0);
+                buf.step = Step {
+                    len,
+                    rest: len,
+                    at: Some(len * rng.uniform_f32()),
+                };
+            }
+            let dt = buf.step.rest.min(t_end - t0);
+            // The piece's sample: the step's own where it lies within reach.
+            let mut s = match buf.step.at {
+                Some(a) if a < dt => a,
+                _ => dt * rng.uniform_f32(),
+            };
             let mut x = p0 + dir * (t0 + s);
             scene.water.iops(x, iops);
-            // A scattering into the particles' forward peak within the step
-            // (at the rate of the IOPs at the sample, as the step takes
-            // them) ends the run there, and the step's sample is drawn again
-            // before it.
+            // A scattering into the particles' forward peak within the piece
+            // (at the rate of the IOPs at the sample, as the piece takes
+            // them) ends the piece there, and a sample beyond it is drawn
+            // again before it (the step's own goes on past the turn).
             let sigma = match hero {
                 Some(h) => {
                     for (s, i) in h.sigma.iter_mut().zip(iops.iter()) {
@@ -540,11 +585,22 @@ impl<'a> RayMarcher<'a> {
                 None
             };
             let len = turn.unwrap_or(dt);
-            if turn.is_some() {
+            if s >= len {
                 s = len * rng.uniform_f32();
                 x = p0 + dir * (t0 + s);
                 scene.water.iops(x, iops);
             }
+            // Whether the step's estimate is taken here, and its length.
+            let (estimate, est_len) = if spans {
+                (matches!(buf.step.at, Some(a) if a < len), buf.step.len)
+            } else {
+                (true, len)
+            };
+            buf.step.rest = if spans { buf.step.rest - len } else { 0.0 };
+            buf.step.at = match buf.step.at {
+                Some(a) if spans && a >= len => Some(a - len),
+                _ => None,
+            };
             // With turns at a hero band's rate, each band's MIS weight at
             // the sample (the run has not turned before it).
             if let Some(h) = hero.as_mut() {
@@ -552,12 +608,17 @@ impl<'a> RayMarcher<'a> {
                 h.advance(s as f64, false, false, &mut at);
                 h.at_sample = at;
             }
-            self.est
-                .volume_with_iops(x, -dir, at_target, iops, scratch, est)?;
+            if estimate {
+                self.est
+                    .volume_with_iops(x, -dir, at_target, iops, scratch, est)?;
+            }
             self.sun_transmittance(x, iops, tmp, sun_t);
             // The direct sun's inelastic source toward the viewer, at the
-            // step's sample (see `Estimator::add_inelastic`).
+            // piece's sample (see `Estimator::add_inelastic`).
             if inelastic {
+                if !estimate {
+                    self.est.absorbers_at(x, scratch);
+                }
                 self.est
                     .inelastic_sun(m_ss, &self.e_w, sun_t, scratch, inelastic_sun);
             }
@@ -569,7 +630,10 @@ impl<'a> RayMarcher<'a> {
                 let c = iop.c() - fw * iop.b_w - fp * iop.b_p;
                 let single = (iop.b_w * pw_ss + iop.b_p * pp_ss) * self.e_w[b] * sun_t[b];
                 let mis = hero.as_ref().map_or(1.0, |h| h.at_sample[b]);
-                let f = tr[b] * mis * (-c * s as f64).exp() * len as f64;
+                // The transmittance to the sample; times the piece's length
+                // for its own sources, the step's for the estimate.
+                let to_sample = tr[b] * mis * (-c * s as f64).exp();
+                let f = to_sample * len as f64;
                 // The closed form holds for the transmittance alone, not
                 // under a hero band's weights, which vary along the step.
                 let single_step = if closed_form && hero.is_none() {
@@ -585,9 +649,13 @@ impl<'a> RayMarcher<'a> {
                 } else {
                     f * single
                 };
-                out[b] += f * (est[b] + inelastic_sun[b]) + single_step;
-                for k in (nb + b..out.len()).step_by(nb) {
-                    out[k] += f * est[k];
+                out[b] += f * inelastic_sun[b] + single_step;
+                if estimate {
+                    let g = to_sample * est_len as f64;
+                    out[b] += g * est[b];
+                    for k in (nb + b..out.len()).step_by(nb) {
+                        out[k] += g * est[k];
+                    }
                 }
                 tr[b] *= (-c * len as f64).exp();
             }
@@ -759,6 +827,7 @@ impl<'a> RayMarcher<'a> {
             let course = Course {
                 step_m,
                 stretch_max: STEP_STRETCH_MAX,
+                spans_turns: true,
                 gather: false,
             };
             self.march_with(start, w, rng, scratch, &mut l, course)?;
