@@ -33,8 +33,10 @@ use crate::rng::Pcg32;
 use crate::scene::settings::TARGET_PEAK_MARGIN_M;
 use crate::scene::{Scene, FLOOR};
 use glam::{DVec3, Vec3};
+use steps::{stretch, PeakTurns, Step, STEP_REST_EPS_M, STEP_STRETCH_MAX};
 
 mod boundaries;
+mod steps;
 #[cfg(test)]
 mod tests;
 
@@ -53,39 +55,6 @@ const TURN_SUN_MARGIN_RAD: f64 = 0.052;
 const GATHER_GUIDE: f64 = 0.3;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
-/// The longest step, as a multiple of the course's, where the ray's
-/// transmittance has fallen (see [`stretch`]): reached at T = 1/16.
-pub(crate) const STEP_STRETCH_MAX: f32 = 4.0;
-/// What is left of a step below this (m) is rounding: a new step starts.
-const STEP_REST_EPS_M: f32 = 1e-5;
-
-/// How many times its course's step a march's next step takes: 1 /
-/// sqrt(T), for T the largest transmittance of any band so far (MIS
-/// weights of a hero band's turns included), from 1 up to `max`.
-///
-/// One jittered sample per step is unbiased for any partition of the
-/// ray, so the steps may follow what is left of the light. A step's part
-/// of the pixel falls as T, and the jitter's error in it as T times the
-/// square of its length (the source varies across the step about
-/// linearly): for the error of N steps over a given ray, sum T_i L_i^4
-/// with sum L_i fixed, the best steps are 1 / sqrt(T) long. Measured on
-/// the built-in scene from 3 km with a reused map (`max` 4), one run
-/// each, against fixed steps (65.5 s render, L_w pixel noise over deep
-/// water 2.62 / 3.00 / 3.57 % at 413 / 526 / 671 nm): 1 / sqrt(T) 53.0 s
-/// and 2.92 / 3.11 / 3.77 %, at least as little noise for the time in
-/// every band; 1 / T 47.5 s, but 3.35 / 3.28 / 4.02 %, more noise for
-/// the time in the blue; 1 / T^2 (at most 8) 42.0 s and 5.44 / 4.63 /
-/// 4.73 %. Band means over deep water, the shallow sand and the image
-/// stayed within 0.04 %.
-fn stretch(tr: &[f64], max: f32) -> f32 {
-    let t = tr.iter().fold(0.0f64, |m, &t| m.max(t));
-    if t > 0.0 {
-        (1.0 / t.sqrt()).clamp(1.0, f64::from(max)) as f32
-    } else {
-        max
-    }
-}
-
 /// Per-march buffers, one entry per band (`est` one per channel).
 struct MarchBuffers {
     est: Vec<f64>,
@@ -106,27 +75,6 @@ struct MarchBuffers {
     step: Step,
 }
 
-/// A march step of arc length `len` along the ray, turns included: `rest`
-/// of it is still to be marched, and its photon estimate is taken `at`
-/// that far on (none once taken, or when the ray ended before it).
-///
-/// Why: the ray turns into the particles' forward peak about every 2 m
-/// in the built-in scene, and a step that ended at each turn made an
-/// estimate for every straight run however short. One jittered sample in
-/// each stretch of arc length is unbiased for the march's integral along
-/// the bent ray, as along a straight one; what a turn changes is which
-/// direction the sample looks along. Each straight piece still takes its
-/// own sample for the sun's single scattering (in closed form over the
-/// piece), which costs a hundredth of an estimate. Rays that turn at a
-/// hero band's rate ([`PeakTurns`]) end their step at a turn as before:
-/// their bands' weights change along the step.
-#[derive(Clone, Copy, Debug, Default)]
-struct Step {
-    len: f32,
-    rest: f32,
-    at: Option<f32>,
-}
-
 /// How a march goes: its step (m) where every band's light is whole,
 /// the most that step stretches as the light fades ([`stretch`]), whether
 /// its steps run on across turns ([`Step`]; always but under a hero
@@ -138,78 +86,6 @@ struct Course {
     stretch_max: f32,
     spans_turns: bool,
     gather: bool,
-}
-
-/// Turns into the particles' forward peak drawn at one band's rate for
-/// all bands, on rays where the peak's delta would take the radiance
-/// inside its cone to be the ray's own (looking down at a target). Each
-/// march draws a hero band h uniformly and turns at its rate sigma_h =
-/// f_p b_p(h); band b weighs the run by one-sample MIS over the hero's
-/// choice (balance heuristic), p_b / mean_j p_j, where p_j = prod(sigma_j
-/// at the turns) exp(-integral sigma_j) is the probability density of the
-/// turns drawn so far at band j's own rate. So every band's particle peak
-/// is scattered into exactly, none is kept as a delta, and a band's weight
-/// stays within a small factor of 1 (drawn at the smallest rate instead,
-/// the weights' second moment reached e^7 for a band of twice that rate
-/// over seven turns; the mixture's stays below 2.1).
-struct PeakTurns {
-    hero: usize,
-    /// ln p_b, normalised so that mean_b p_b = 1: the run's MIS weight
-    /// for band b is exp(log_p[b]), already folded into the transmittance.
-    log_p: Vec<f64>,
-    /// Each band's rate of turning, f_p b_p, at the step's sample.
-    sigma: Vec<f64>,
-    /// Within a step: each band's weight at the sample relative to the
-    /// weight at the step's start.
-    at_sample: Vec<f64>,
-}
-
-impl PeakTurns {
-    fn new(nb: usize, rng: &mut Pcg32) -> Self {
-        PeakTurns {
-            hero: rng.below(nb as u32) as usize,
-            log_p: vec![0.0; nb],
-            sigma: vec![0.0; nb],
-            at_sample: vec![1.0; nb],
-        }
-    }
-
-    /// The factors by which each band's weight changes when the run goes
-    /// on `len` (m) without a turn, and with one at its end when `turned`,
-    /// into `factor`; with `commit`, `log_p` moves there too.
-    fn advance(&mut self, len: f64, turned: bool, commit: bool, factor: &mut [f64]) {
-        let step = |s: f64| {
-            let mut d = -s * len;
-            if turned {
-                d += s.ln();
-            }
-            d
-        };
-        let top = self
-            .log_p
-            .iter()
-            .zip(&self.sigma)
-            .fold(f64::NEG_INFINITY, |m, (l, &s)| m.max(l + step(s)));
-        let mean = self
-            .log_p
-            .iter()
-            .zip(&self.sigma)
-            .map(|(l, &s)| (l + step(s) - top).exp())
-            .sum::<f64>()
-            / self.log_p.len() as f64;
-        let q = top + mean.ln();
-        for ((f, l), &s) in factor
-            .iter_mut()
-            .zip(self.log_p.iter_mut())
-            .zip(&self.sigma)
-        {
-            let d = step(s) - q;
-            *f = d.exp();
-            if commit {
-                *l += d;
-            }
-        }
-    }
 }
 
 /// How a straight run of a march ended.
