@@ -27,7 +27,7 @@ pub(super) const STEP_REST_EPS_M: f32 = 1e-5;
 /// every band; 1 / T 47.5 s, but 3.35 / 3.28 / 4.02 %, more noise for
 /// the time in the blue; 1 / T^2 (at most 8) 42.0 s and 5.44 / 4.63 /
 /// 4.73 %. Band means over deep water, the shallow sand and the image
-/// stayed within 0.04 %.
+/// stayed within 0.08 % (`benches/README.md`, "Rendering").
 pub(super) fn stretch(tr: &[f64], max: f32) -> f32 {
     let t = tr.iter().fold(0.0f64, |m, &t| m.max(t));
     if t > 0.0 {
