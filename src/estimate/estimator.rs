@@ -651,9 +651,10 @@ impl<'a> Estimator<'a> {
 
     /// The direct sun's inelastic source toward a viewer (per band, into
     /// `out`) at the point of the last volume estimate made with
-    /// `scratch`, or of the last [`Self::absorbers_at`]: `m_ss` is 1 - cos of the angle between the sun's beam and
-    /// the direction toward the viewer, `e_w[e] t[e]` the beam's
-    /// irradiance there in band e (in the water, times its transmittance).
+    /// `scratch`, or of the last [`Self::absorbers_at`]: `m_ss` is 1 - cos
+    /// of the angle between the sun's beam and the direction toward the
+    /// viewer, `e_w[e] t[e]` the beam's irradiance there in band e (in
+    /// the water, times its transmittance).
     pub fn inelastic_sun(
         &self,
         m_ss: f64,

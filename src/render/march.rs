@@ -13,8 +13,9 @@
 //! boundary: four midpoint samples read a 2 m layer seen from 6 m below
 //! as 3 m) and by the midpoint rule at most 0.5 m apart in smoothly
 //! varying water; steps lengthen as the light along the ray fades
-//! (`stretch`: 1 / sqrt(T) times the scene's step, at most 4 times); the surface seen from the air is
-//! `air_sea::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
+//! (`steps::stretch`: 1 / sqrt(T) times the scene's step, at most 4
+//! times) and run on across turns (`steps::Step`); the surface seen from
+//! the air is `air_sea::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! ray looking up at the surface sees the sky through it and, marching on
 //! down, the light from below that it reflects (a rough surface's event
 //! drawn as the path integrator draws it); a target's face
@@ -55,6 +56,7 @@ const TURN_SUN_MARGIN_RAD: f64 = 0.052;
 const GATHER_GUIDE: f64 = 0.3;
 /// Stop marching when every band's transmittance is below this.
 const MIN_TRANSMITTANCE: f64 = 1e-4;
+
 /// Per-march buffers, one entry per band (`est` one per channel).
 struct MarchBuffers {
     est: Vec<f64>,
@@ -67,10 +69,8 @@ struct MarchBuffers {
     /// Turns into the particles' forward peak drawn for every band at once
     /// (rays looking down at a target): see [`PeakTurns`].
     turns: Option<PeakTurns>,
-    /// The march's step (m), and the most it stretches ([`stretch`]).
-    step_m: f32,
-    stretch_max: f32,
-    spans_turns: bool,
+    /// How the march goes: its step, stretch and turns.
+    course: Course,
     /// The step under way, which runs on across turns ([`Step`]).
     step: Step,
 }
@@ -86,6 +86,19 @@ struct Course {
     stretch_max: f32,
     spans_turns: bool,
     gather: bool,
+}
+
+impl Course {
+    /// Steps of `step_m` where the light is whole, stretched up to
+    /// [`STEP_STRETCH_MAX`] times and run on across turns.
+    fn paced(step_m: f32, gather: bool) -> Self {
+        Course {
+            step_m,
+            stretch_max: STEP_STRETCH_MAX,
+            spans_turns: true,
+            gather,
+        }
+    }
 }
 
 /// How a straight run of a march ended.
@@ -258,19 +271,7 @@ impl<'a> RayMarcher<'a> {
         out: &mut [f64],
     ) -> Result<()> {
         let step_m = self.scene.estimate.step_m as f32 * factor;
-        self.march_with(
-            p0,
-            dir,
-            rng,
-            scratch,
-            out,
-            Course {
-                step_m,
-                stretch_max: STEP_STRETCH_MAX,
-                spans_turns: true,
-                gather: true,
-            },
-        )
+        self.march_with(p0, dir, rng, scratch, out, Course::paced(step_m, true))
     }
 
     /// [`march`](Self::march) on its `course`.
@@ -323,9 +324,7 @@ impl<'a> RayMarcher<'a> {
             iops: vec![Iop::default(); nb],
             tmp: vec![Iop::default(); nb],
             turns: None,
-            step_m: course.step_m,
-            stretch_max: course.stretch_max,
-            spans_turns: course.spans_turns,
+            course,
             step: Step::default(),
         };
         let (mut p, mut dir) = (p0, dir);
@@ -404,7 +403,7 @@ impl<'a> RayMarcher<'a> {
         // An instrument may sit closer to the floor than the self-intersection epsilon.
         let hit = scene.geometry.intersect_from_point(p0, dir, limit);
         let t_end = hit.map_or(limit.max(0.0), |h| h.t);
-        let step = buf.step_m;
+        let step = buf.course.step_m;
         let (pw, pp) = (&scene.water_phase, &scene.particle_phase);
         let (fw, fp) = self.est.forward_fractions(dir, at_target);
         // 1 - cos of the single-scattering angle from |sun_w + dir|^2 / 2: a
@@ -425,11 +424,11 @@ impl<'a> RayMarcher<'a> {
         let closed_form = !scene.water.is_layered();
         let up_len_per_s = (-dir.z / -self.sun_w.z).max(0.0) as f64;
         // Steps run on across turns, except under a hero band's turns.
-        let spans = buf.spans_turns && hero.is_none();
+        let spans = buf.course.spans_turns && hero.is_none();
         let mut t0 = 0.0f32;
         while t0 < t_end {
             if buf.step.rest <= STEP_REST_EPS_M || !spans {
-                let len = (step * stretch(tr, buf.stretch_max)).min(t_end - t0);
+                let len = (step * stretch(tr, buf.course.stretch_max)).min(t_end - t0);
                 buf.step = Step {
                     len,
                     rest: len,
@@ -703,12 +702,7 @@ impl<'a> RayMarcher<'a> {
             // L cos / pdf over the rays is the irradiance; times R / pi.
             let k = lambert / pdf / rays as f64;
             let step_m = self.scene.estimate.step_m as f32;
-            let course = Course {
-                step_m,
-                stretch_max: STEP_STRETCH_MAX,
-                spans_turns: true,
-                gather: false,
-            };
+            let course = Course::paced(step_m, false);
             self.march_with(start, w, rng, scratch, &mut l, course)?;
             for (o, v) in out.iter_mut().zip(&l) {
                 *o += k * v;
