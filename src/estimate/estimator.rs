@@ -470,7 +470,7 @@ impl<'a> Estimator<'a> {
         let mut iops = std::mem::take(&mut scratch.iops);
         iops.resize(self.scene.bands.len(), Iop::default());
         self.scene.water.iops(x, &mut iops);
-        let r = self.volume_with_iops(x, toward_viewer, false, &iops, scratch, out);
+        let r = self.volume_with_iops(x, toward_viewer, false, 1.0, &iops, scratch, out);
         scratch.iops = iops;
         r
     }
@@ -478,12 +478,18 @@ impl<'a> Estimator<'a> {
     /// [`Estimator::volume`] with the IOPs at `x` (one per band) given;
     /// `at_target`: the viewer looks down at a target, and the phase
     /// functions' forward peak is `forward_peak_target_deg` wide (and the
-    /// band shapes of the `grid` mode weigh the photons alike).
+    /// band shapes of the `grid` mode weigh the photons alike). The
+    /// searches take `share` (in (0, 1]) of the scene's photons, k and
+    /// k_expanded, within the cube root of that share of its radii: a
+    /// march whose light has faded asks less of an estimate that weighs
+    /// little in its pixel (`render::march::steps::search_share`).
+    #[allow(clippy::too_many_arguments)]
     pub fn volume_with_iops(
         &self,
         x: Vec3,
         toward_viewer: Vec3,
         at_target: bool,
+        share: f64,
         iops: &[Iop],
         scratch: &mut Scratch,
         out: &mut [f64],
@@ -553,7 +559,7 @@ impl<'a> Estimator<'a> {
         } else {
             Classes::Union(&VOLUME_LAYERS)
         };
-        let r = self.estimate(x, classes, &weight, None, view, scratch, out);
+        let r = self.estimate(x, classes, &weight, None, view, share, scratch, out);
         scratch.mix = mix;
         r?;
         self.add_inelastic(x, iops, scratch, out);
@@ -714,6 +720,7 @@ impl<'a> Estimator<'a> {
             &weight,
             Some((normal, surface)),
             None,
+            1.0,
             scratch,
             out,
         )

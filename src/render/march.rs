@@ -34,7 +34,9 @@ use crate::rng::Pcg32;
 use crate::scene::settings::TARGET_PEAK_MARGIN_M;
 use crate::scene::{Scene, FLOOR};
 use glam::{DVec3, Vec3};
-use steps::{stretch, PeakTurns, Step, STEP_REST_EPS_M, STEP_STRETCH_MAX};
+use steps::{
+    search_share, stretch, PeakTurns, Step, SEARCH_SHARE_MIN, STEP_REST_EPS_M, STEP_STRETCH_MAX,
+};
 
 mod boundaries;
 mod steps;
@@ -76,25 +78,30 @@ struct MarchBuffers {
 }
 
 /// How a march goes: its step (m) where every band's light is whole,
-/// the most that step stretches as the light fades ([`stretch`]), whether
-/// its steps run on across turns ([`Step`]; always but under a hero
-/// band's turns), and whether it gathers at a target it meets (see
-/// [`RayMarcher::gather`]; gather rays do not gather again).
+/// the most that step stretches as the light fades ([`stretch`]), the
+/// least share of the scene's searches its estimates take as the light
+/// fades ([`search_share`]; 1: whole searches), whether its steps run on
+/// across turns ([`Step`]; always but under a hero band's turns), and
+/// whether it gathers at a target it meets (see [`RayMarcher::gather`];
+/// gather rays do not gather again).
 #[derive(Clone, Copy, Debug)]
 struct Course {
     step_m: f32,
     stretch_max: f32,
+    share_min: f64,
     spans_turns: bool,
     gather: bool,
 }
 
 impl Course {
     /// Steps of `step_m` where the light is whole, stretched up to
-    /// [`STEP_STRETCH_MAX`] times and run on across turns.
+    /// [`STEP_STRETCH_MAX`] times and run on across turns, with searches
+    /// down to [`SEARCH_SHARE_MIN`] of the scene's.
     fn paced(step_m: f32, gather: bool) -> Self {
         Course {
             step_m,
             stretch_max: STEP_STRETCH_MAX,
+            share_min: SEARCH_SHARE_MIN,
             spans_turns: true,
             gather,
         }
@@ -487,8 +494,9 @@ impl<'a> RayMarcher<'a> {
                 h.at_sample = at;
             }
             if estimate {
+                let share = search_share(tr, buf.course.share_min);
                 self.est
-                    .volume_with_iops(x, -dir, at_target, iops, scratch, est)?;
+                    .volume_with_iops(x, -dir, at_target, share, iops, scratch, est)?;
             }
             self.sun_transmittance(x, iops, tmp, sun_t);
             // The direct sun's inelastic source toward the viewer, at the

@@ -26,8 +26,10 @@ pub const POLICY_PHOTONS: f64 = 4.0e6;
 /// photons are added; a fixed k would leave the variance where it is.
 pub fn policy_k(photons: u64) -> usize {
     let k = DEFAULT_K as f64 * (photons as f64 / POLICY_PHOTONS).powf(4.0 / 7.0);
-    (k.round() as usize).clamp(16, 100_000)
+    (k.round() as usize).clamp(POLICY_K_MIN, 100_000)
 }
+/// The fewest photons the search-size policy gives a local search.
+pub const POLICY_K_MIN: usize = 16;
 /// Copies a photon path splits into when it first turns upward
 /// (`[photons] upward_split`; see `emit::trace`).
 pub const DEFAULT_UPWARD_SPLIT: u32 = 4;

@@ -5,27 +5,64 @@
 
 use super::*;
 use crate::estimate::boundary::vertical_linear_factor;
+use crate::scene::settings::POLICY_K_MIN;
+
+/// The sizes of one estimate's searches: the photons of the local search
+/// and of the expanded one, and the factor on the scene's radii (the
+/// largest of a nearest search, or the fixed one). A share s of the
+/// scene's searches takes s times their photons within s^(1/3) times
+/// their radii, the same density of photons in a smaller sphere.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Sizes {
+    pub(super) k: usize,
+    pub(super) k_big: usize,
+    /// Whether the estimate has an expanded search of its own size.
+    pub(super) two_sizes: bool,
+    reach: f32,
+}
 
 impl Estimator<'_> {
-    pub(super) fn search(&self, k: usize) -> Search {
+    /// The sizes of an estimate's searches: the scene's, times `share` (in
+    /// (0, 1]; exactly the scene's at 1), no count below the search-size
+    /// policy's least ([`POLICY_K_MIN`]) unless the scene's is. Without
+    /// `two_sizes` the expanded search is the local one.
+    pub(super) fn sizes(&self, share: f64, two_sizes: bool) -> Sizes {
+        let s = &self.scene.estimate;
+        let of = |n: usize| ((n as f64 * share).round() as usize).max(n.min(POLICY_K_MIN));
+        let k = of(s.k);
+        let k_big = if two_sizes {
+            of(s.k_expanded.max(s.k)).max(k)
+        } else {
+            k
+        };
+        Sizes {
+            k,
+            k_big,
+            two_sizes,
+            reach: share.cbrt() as f32,
+        }
+    }
+
+    /// The search for `k` photons (one of `sizes`' counts).
+    pub(super) fn search(&self, k: usize, sizes: Sizes) -> Search {
         match self.scene.estimate.radius_m {
             Some(r) => Search::Radius {
-                radius: r as f32 * (k as f32 / self.scene.estimate.k as f32).cbrt(),
+                radius: r as f32 * (k as f32 / sizes.k as f32).cbrt() * sizes.reach,
             },
             None => Search::Nearest {
                 k,
-                max_radius: Some(self.scene.estimate.max_radius_m as f32),
+                max_radius: Some(self.scene.estimate.max_radius_m as f32 * sizes.reach),
             },
         }
     }
 
-    /// The radius of the search region of `k` photons of which `found` were
-    /// found: the fixed radius, or the farthest photon — or the maximum
-    /// radius when fewer than k photons lie within it.
-    pub(super) fn region_radius(&self, found: &[Neighbour], k: usize) -> f32 {
-        match self.search(k) {
+    /// The radius of the region of `search` of which `found` were found:
+    /// the fixed radius, or the farthest photon — or the maximum radius
+    /// when fewer than k photons lie within it.
+    pub(super) fn region_radius(found: &[Neighbour], search: Search) -> f32 {
+        match search {
             Search::Radius { radius } => radius,
-            Search::Nearest { max_radius, .. } if found.len() < k => max_radius.unwrap_or(f32::MAX),
+            Search::Nearest { k, max_radius } if found.len() < k => max_radius.unwrap_or(f32::MAX),
             Search::Nearest { .. } => found
                 .iter()
                 .fold(0.0f32, |m, n| m.max(n.distance_sq))
@@ -34,25 +71,24 @@ impl Estimator<'_> {
         }
     }
 
-    /// Photons of `layers` for a search of `k` around `x`, in any order,
+    /// Photons of `layers` for `search` around `x`, in any order,
     /// continued across periodic edges, appended to `found`: with several
     /// layers, the search over their union.
     pub(super) fn find(
         &self,
         x: Vec3,
         layers: &[u16],
-        k: usize,
+        search: Search,
         found: &mut Vec<Neighbour>,
         part: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<()> {
         let start = found.len();
-        let search = self.search(k);
         for &layer in layers {
             self.map
                 .query_any_order_into(x, Some(layer), search, part)?;
             if self.scene.domain.periodic {
-                self.wrap_search(x, layer, k, search, part, extra)?;
+                self.wrap_search(x, layer, search, part, extra)?;
             }
             found.extend_from_slice(part);
         }
@@ -66,10 +102,11 @@ impl Estimator<'_> {
         Ok(())
     }
 
-    /// Move the photons of the local search (`k` nearest, or within the
-    /// local fixed radius) to the front of `found`; returns their count.
-    pub(super) fn take_local(&self, found: &mut [Neighbour], k: usize) -> usize {
-        match self.search(k) {
+    /// Move the photons of the local search `search` (the k nearest, or
+    /// those within its fixed radius) to the front of `found`; returns
+    /// their count.
+    pub(super) fn take_local(found: &mut [Neighbour], search: Search) -> usize {
+        match search {
             Search::Radius { radius } => {
                 let r_sq = radius * radius;
                 let mut n = 0;
@@ -81,7 +118,7 @@ impl Estimator<'_> {
                 }
                 n
             }
-            Search::Nearest { .. } => {
+            Search::Nearest { k, .. } => {
                 if found.len() > k {
                     found.select_nth_unstable_by(k - 1, |a, b| {
                         a.distance_sq.total_cmp(&b.distance_sq)
@@ -100,12 +137,11 @@ impl Estimator<'_> {
         &self,
         x: Vec3,
         layer: u16,
-        k: usize,
         search: Search,
         found: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<()> {
-        let r = self.region_radius(found, k);
+        let r = Self::region_radius(found, search);
         let [lx, ly] = self.scene.domain.size_m.map(|v| v as f32);
         let shift = |c: f32, l: f32| -> f32 {
             if c < r {
@@ -151,48 +187,44 @@ impl Estimator<'_> {
     /// The searches of an estimate into `found`: the local search is
     /// `found[..n_local]`, of radius `r_local`; the expanded search, of
     /// radius `r_big`, is all of `found` (one search) or `found[n_local..]`
-    /// (two layers). Returns (n_local, r_local, r_big).
+    /// (two layers; `sizes` then has two). Returns (n_local, r_local,
+    /// r_big).
     pub(super) fn searches(
         &self,
         x: Vec3,
         classes: Classes,
-        two_sizes: bool,
+        sizes: Sizes,
         found: &mut Vec<Neighbour>,
         part: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<(usize, f32, f32)> {
-        let k = self.scene.estimate.k;
-        let k_big = if two_sizes {
-            self.scene.estimate.k_expanded.max(k)
-        } else {
-            k
-        };
+        let (local, big) = (self.search(sizes.k, sizes), self.search(sizes.k_big, sizes));
         found.clear();
         Ok(match classes {
             Classes::Union(layers) => {
-                self.find(x, layers, k_big, found, part, extra)?;
-                let r_big = self.region_radius(found, k_big);
-                let n_local = if two_sizes {
-                    self.take_local(found, k)
+                self.find(x, layers, big, found, part, extra)?;
+                let r_big = Self::region_radius(found, big);
+                let n_local = if sizes.two_sizes {
+                    Self::take_local(found, local)
                 } else {
                     found.len()
                 };
-                let r_local = if two_sizes {
-                    self.region_radius(&found[..n_local], k)
+                let r_local = if sizes.two_sizes {
+                    Self::region_radius(&found[..n_local], local)
                 } else {
                     r_big
                 };
                 (n_local, r_local, r_big)
             }
             Classes::Split { light, heavy } => {
-                self.find(x, &[light], k, found, part, extra)?;
+                self.find(x, &[light], local, found, part, extra)?;
                 let n_local = found.len();
-                let r_local = self.region_radius(found, k);
-                self.find(x, &[heavy], k_big, found, part, extra)?;
+                let r_local = Self::region_radius(found, local);
+                self.find(x, &[heavy], big, found, part, extra)?;
                 (
                     n_local,
                     r_local,
-                    self.region_radius(&found[n_local..], k_big),
+                    Self::region_radius(&found[n_local..], big),
                 )
             }
         })
@@ -210,18 +242,13 @@ impl Estimator<'_> {
         &self,
         found: &[Neighbour],
         n_local: usize,
-        two_sizes: bool,
+        sizes: Sizes,
         by_layer: bool,
     ) -> (f32, f32) {
-        let Search::Nearest { .. } = self.search(self.scene.estimate.k) else {
+        let Search::Nearest { .. } = self.search(sizes.k, sizes) else {
             return (f32::INFINITY, f32::INFINITY);
         };
-        let k = self.scene.estimate.k;
-        let k_big = if two_sizes {
-            self.scene.estimate.k_expanded.max(k)
-        } else {
-            k
-        };
+        let Sizes { k, k_big, .. } = sizes;
         let edge = |set: &[Neighbour], k: usize| {
             if set.len() >= k {
                 set.iter().fold(0.0f32, |m, n| m.max(n.distance_sq))
@@ -272,7 +299,8 @@ impl Estimator<'_> {
     /// phase function's forward lobe a few photons travelling toward the
     /// viewer carry most of the in-scatter (upwelling light seen looking
     /// down rests on the few photons travelling up), and a local search of
-    /// k holds too few of them for a steady estimate.
+    /// k holds too few of them for a steady estimate. The searches take
+    /// `share` of the scene's ([`Sizes`]).
     ///
     /// One function of about 150 lines, the estimator's inner loop: one
     /// pass over the neighbours feeds six sums held in the scratch (local,
@@ -287,6 +315,7 @@ impl Estimator<'_> {
         weight: &impl PhotonWeight,
         surface: Option<(Vec3, SurfaceId)>,
         view: Option<ShapeView>,
+        share: f64,
         scratch: &mut Scratch,
         out: &mut [f64],
     ) -> Result<()> {
@@ -325,8 +354,9 @@ impl Estimator<'_> {
         let split = surface.is_none();
         let by_layer = matches!(classes, Classes::Split { .. });
         let two_sizes = compensated || split;
-        let (n_local, r_local, r_big) = self.searches(x, classes, two_sizes, found, part, extra)?;
-        let (local_edge, big_edge) = self.search_edges(found, n_local, two_sizes, by_layer);
+        let sizes = self.sizes(share, two_sizes);
+        let (n_local, r_local, r_big) = self.searches(x, classes, sizes, found, part, extra)?;
+        let (local_edge, big_edge) = self.search_edges(found, n_local, sizes, by_layer);
         if found.is_empty() {
             out.iter_mut().for_each(|o| *o = 0.0);
             return Ok(());

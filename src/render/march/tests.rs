@@ -143,6 +143,7 @@ fn fixed(step_m: f32) -> Course {
     Course {
         step_m,
         stretch_max: 1.0,
+        share_min: 1.0,
         spans_turns: false,
         gather: true,
     }
