@@ -212,6 +212,7 @@ impl AirView<'_> {
         let mut y = vec![0.0; nb];
         let mut yy = vec![0.0; nb];
         let mut xy = vec![0.0; nb];
+        let (ones, zeros) = (vec![1.0; nb], vec![0.0; nb]);
         // The offsets whose x lands within [0, sx), with a margin for
         // rounding: each is tested again below.
         let lo = shared.dx.partition_point(|&d| d < -ground.x - 1e-6);
@@ -235,16 +236,27 @@ impl AirView<'_> {
             let row = i * nb..(i + 1) * nb;
             let (w, wg) = (&shared.w[row.clone()], &shared.wg[row]);
             let beyond = &shared.beyond[c * nb..(c + 1) * nb];
-            let (table, env) = (
-                &table[c * nb..(c + 1) * nb],
-                &self.env[c * nb..(c + 1) * nb],
+            let table = &table[c * nb..(c + 1) * nb];
+            // Ones and zeros where there is no factor or base: the same
+            // values, in a loop without branches over the bands.
+            let f = factor.unwrap_or(&ones);
+            let base = if shared.mean {
+                &self.env[c * nb..(c + 1) * nb]
+            } else {
+                &zeros[..]
+            };
+            let (bw, bg) = (shared.beyond_w, shared.beyond_g);
+            let (f, base, y, yy, xy) = (
+                &f[..nb],
+                &base[..nb],
+                &mut y[..nb],
+                &mut yy[..nb],
+                &mut xy[..nb],
             );
             for b in 0..nb {
                 let (w, wg) = (f64::from(w[b]), f64::from(wg[b]));
-                let x = shared.beyond_w * w * beyond[b] + shared.beyond_g * wg;
-                let base = if shared.mean { env[b] } else { 0.0 };
-                let f = factor.map_or(1.0, |f| f[b]);
-                let v = w * (table[b] * f - base) + g * wg - x;
+                let x = bw * w * beyond[b] + bg * wg;
+                let v = w * (table[b] * f[b] - base[b]) + g * wg - x;
                 y[b] += v;
                 yy[b] += v * v;
                 xy[b] += x * v;
