@@ -522,6 +522,94 @@ impl WaterModel {
         true
     }
 
+    /// Optical depth per band (c integrated, into `out`) along the segment
+    /// from `x` along unit `dir` for `len` m, exactly, in a gradient of
+    /// constituents with chlorophyll above zero at both ends: the segment
+    /// is cut where it leaves the gradient's span (beyond it the
+    /// concentrations hold their end values), and across each piece the
+    /// concentrations change linearly, so that the mean of chl^E (the
+    /// phytoplankton's absorption, and the particles' scattering without a
+    /// fixed `bp_550`) over a piece from chl_0 to chl_1 is chl_0^E times
+    /// expm1((E + 1) l) / ((E + 1) expm1(l)), l = ln(chl_1 / chl_0). False
+    /// (and `out` untouched) for other fields.
+    ///
+    /// Why: the sun's transmittance from every sample of a march was the
+    /// midpoint rule at most 0.5 m apart, at least four samples of every
+    /// band's IOPs (a power of chlorophyll each); this is two per band
+    /// for the whole way, with no error of the rule.
+    pub fn gradient_optical_depth(&self, x: Vec3, dir: Vec3, len: f32, out: &mut [f64]) -> bool {
+        let WaterModel::Constituents {
+            spectra: s,
+            field:
+                ConstituentField::Gradient {
+                    axis,
+                    size_m,
+                    from,
+                    to,
+                },
+            bp_550,
+        } = self
+        else {
+            return false;
+        };
+        if !(from.chl > 0.0 && to.chl > 0.0) {
+            return false;
+        }
+        out.iter_mut().for_each(|o| *o = 0.0);
+        // The gradient's coordinate at the start and its change along the
+        // segment; the pieces end where it crosses 0 or 1.
+        let len = f64::from(len);
+        let (t0, dt) = (
+            f64::from(x[*axis]) / size_m,
+            f64::from(dir[*axis]) * len / size_m,
+        );
+        let mut cuts = [0.0, 1.0, 1.0, 1.0];
+        if dt != 0.0 {
+            for (c, edge) in cuts[1..3].iter_mut().zip([0.0, 1.0]) {
+                let f = (edge - t0) / dt;
+                if f > 0.0 && f < 1.0 {
+                    *c = f;
+                }
+            }
+        }
+        cuts.sort_by(f64::total_cmp);
+        let at = |f: f64| from.lerp(to, (t0 + dt * f).clamp(0.0, 1.0));
+        for w in cuts.windows(2) {
+            let piece = (w[1] - w[0]) * len;
+            if piece <= 0.0 {
+                continue;
+            }
+            let (a, b) = (at(w[0]), at(w[1]));
+            let (ln_a, l) = (a.chl.ln(), (b.chl / a.chl).ln());
+            // The mean of chl^e over the piece.
+            let mean_pow = |e: f64| {
+                let ratio = if l == 0.0 {
+                    1.0
+                } else if e + 1.0 == 0.0 {
+                    l / l.exp_m1()
+                } else {
+                    (l * (e + 1.0)).exp_m1() / ((e + 1.0) * l.exp_m1())
+                };
+                (e * ln_a).exp() * ratio
+            };
+            let bp550 = bp_550.unwrap_or_else(|| 0.30 * mean_pow(0.62));
+            let (cdom, nap) = (
+                0.5 * (a.cdom_440 + b.cdom_440),
+                0.5 * (a.nap_440 + b.nap_440),
+            );
+            for (band, o) in out.iter_mut().enumerate() {
+                let c = s.a_w[band]
+                    + s.a_phi_a[band] * mean_pow(s.a_phi_e[band])
+                    + cdom * s.cdom_shape[band]
+                    + nap * s.nap_shape[band]
+                    + s.b_w[band]
+                    + bp550 * s.bp_shape[band];
+                *o += c * piece;
+            }
+        }
+        true
+    }
+
     /// Depths (m, positive down) where the IOPs jump: the tops and bottoms
     /// of depth layers; empty for every other field.
     pub fn depth_boundaries(&self) -> Vec<f64> {

@@ -230,7 +230,9 @@ impl<'a> RayMarcher<'a> {
             }
             return;
         }
-        if !water.layered_optical_depth(x, up, len, tmp, out) {
+        if !(water.layered_optical_depth(x, up, len, tmp, out)
+            || water.gradient_optical_depth(x, up, len, out))
+        {
             // Smooth fields (gradients, grids): midpoint samples at most
             // `SUN_STEP_M` apart.
             let samples = ((len / SUN_STEP_M).ceil() as usize).max(4);
