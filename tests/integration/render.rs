@@ -192,6 +192,20 @@ fn nearest_searches_read_uniform_density_without_the_edge_photon() {
     let est = Estimator::new(&scene, &map).unwrap();
     let mut scratch = Scratch::new(1);
     let mut out = [0.0f64; CHANNELS];
+    let (mean, se) = over_interior_sites(|x| {
+        est.volume(x, Vec3::Z, &mut scratch, &mut out).unwrap();
+        out[0] / truth
+    });
+    eprintln!("k = 16: {mean:.4} of the truth, se {se:.4}");
+    assert!(
+        (mean - 1.0).abs() < 4.0 * se,
+        "{mean} of the truth, se {se}"
+    );
+}
+
+/// The mean of `ratio` over 2023 interior sites of the uniform box 0.1 m
+/// apart, and its standard error from the sites' spread.
+fn over_interior_sites(mut ratio: impl FnMut(Vec3) -> f64) -> (f64, f64) {
     let mut ratios = Vec::new();
     for i in 0..17 {
         for j in 0..17 {
@@ -201,20 +215,14 @@ fn nearest_searches_read_uniform_density_without_the_edge_photon() {
                     0.2 + 0.1 * j as f32,
                     -0.2 - 0.1 * l as f32,
                 );
-                est.volume(x, Vec3::Z, &mut scratch, &mut out).unwrap();
-                ratios.push(out[0] / truth);
+                ratios.push(ratio(x));
             }
         }
     }
     let n = ratios.len() as f64;
     let mean = ratios.iter().sum::<f64>() / n;
     let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    let se = (var / n).sqrt();
-    eprintln!("k = 16: {mean:.4} of the truth, se {se:.4}");
-    assert!(
-        (mean - 1.0).abs() < 4.0 * se,
-        "{mean} of the truth, se {se}"
-    );
+    (mean, (var / n).sqrt())
 }
 
 /// A share of the scene's searches (`Estimator::volume_with_iops`, as a
@@ -237,26 +245,12 @@ fn a_share_of_the_searches_reads_uniform_density() {
     let mut scratch = Scratch::new(1);
     let mut out = [0.0f64; CHANNELS];
     let mut iops = vec![littoral::optics::iop::Iop::default(); 1];
-    let mut ratios = Vec::new();
-    for i in 0..17 {
-        for j in 0..17 {
-            for l in 0..7 {
-                let x = Vec3::new(
-                    0.2 + 0.1 * i as f32,
-                    0.2 + 0.1 * j as f32,
-                    -0.2 - 0.1 * l as f32,
-                );
-                scene.water.iops(x, &mut iops);
-                est.volume_with_iops(x, Vec3::Z, false, 0.1, &iops, &mut scratch, &mut out)
-                    .unwrap();
-                ratios.push(out[0] / truth);
-            }
-        }
-    }
-    let n = ratios.len() as f64;
-    let mean = ratios.iter().sum::<f64>() / n;
-    let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    let se = (var / n).sqrt();
+    let (mean, se) = over_interior_sites(|x| {
+        scene.water.iops(x, &mut iops);
+        est.volume_with_iops(x, Vec3::Z, false, 0.1, &iops, &mut scratch, &mut out)
+            .unwrap();
+        out[0] / truth
+    });
     eprintln!("k = 160, share 0.1: {mean:.4} of the truth, se {se:.4}");
     assert!(
         (mean - 1.0).abs() < 4.0 * se,
