@@ -502,16 +502,31 @@ impl Cells {
         down: bool,
     ) {
         let sign = if down { -1.0 } else { 1.0 };
+        let (mut cos, mut aerosol) = ([0.0; AZIMUTH_BINS], [0.0; AZIMUTH_BINS]);
         for (iz, &(mu, sz)) in self.rows.iter().enumerate() {
             let a = w * atten(mu);
             if a == 0.0 {
                 continue;
             }
             let row = &mut out[iz * AZIMUTH_BINS..(iz + 1) * AZIMUTH_BINS];
-            for (o, &(c, s)) in row.iter_mut().zip(&self.cols) {
+            for (cos, &(c, s)) in cos.iter_mut().zip(&self.cols) {
                 // The travel direction: sign * (sz cos, sz sin, mu).
-                let cos = sign * (dir.x * sz * c + dir.y * sz * s + dir.z * mu);
-                *o += a * mixture(column, share, cos);
+                *cos = sign * (dir.x * sz * c + dir.y * sz * s + dir.z * mu);
+            }
+            // Rayleigh and the aerosol's lookup, a row at a time: the
+            // values of `mixture`.
+            if let (PhaseFunction::Rayleigh { q }, Some(lookup)) =
+                (&column.rayleigh_phase, &column.aerosol_lookup)
+            {
+                lookup.eval_each(&cos, &mut aerosol);
+                for ((o, &c), &p) in row.iter_mut().zip(&cos).zip(&aerosol) {
+                    let rayleigh = rayleigh_density(*q, c.clamp(-1.0, 1.0));
+                    *o += a * (share * rayleigh + (1.0 - share) * p);
+                }
+            } else {
+                for (o, &c) in row.iter_mut().zip(&cos) {
+                    *o += a * mixture(column, share, c);
+                }
             }
         }
     }
