@@ -63,9 +63,9 @@ pub(super) const SEARCH_SHARE_MIN: f64 = 0.1;
 /// T^0.5 (floor 0.1) 0.90 x the render time, L_w noise over deep water
 /// 3.08 / 3.20 / 3.86 % at 413 / 526 / 671 nm against 3.00 / 3.11 /
 /// 3.85 %; T^0.75 0.85 x, 3.12 / 3.27 / 3.87 %; T 0.80 x, 3.19 / 3.39 /
-/// 3.87 % (noise squared times time 0.91 / 0.95 / 0.80 of whole
-/// searches'); T^1.5 (floor 0.05) 0.75 x, 3.35 / 3.72 / 3.89 %, more
-/// noise for the time at 526 nm. The floor keeps 20 photons in the
+/// 3.87 % (noise squared times the paired time, 0.95 / 0.99 / 0.85 of
+/// whole searches'); T^1.5 (floor 0.05) 0.75 x, 3.35 / 3.72 / 3.89 %,
+/// more noise for the time at 526 nm. The floor keeps 20 photons in the
 /// local search at the default k of 200. A smaller search is a
 /// sharper kernel over the same density, so the estimate's expectation
 /// changes only by its smoothing. In the same runs, which share their
