@@ -27,6 +27,7 @@ mod publication;
 mod render;
 mod roundtrip;
 mod scenes;
+mod searches;
 mod sharding;
 mod sky;
 mod slurm;
