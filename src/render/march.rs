@@ -11,10 +11,12 @@
 //! event estimation, also under a rough surface; the transmittance toward
 //! the sun is exact in uniform and layered water (cut at every layer
 //! boundary: four midpoint samples read a 2 m layer seen from 6 m below
-//! as 3 m) and by the midpoint rule at most 0.5 m apart in smoothly
-//! varying water; steps lengthen as the light along the ray fades
+//! as 3 m) and in a gradient of constituents (`WaterModel::
+//! gradient_optical_depth`), and by the midpoint rule at most 0.5 m apart
+//! in gridded water; steps lengthen as the light along the ray fades
 //! (`steps::stretch`: 1 / sqrt(T) times the scene's step, at most 4
-//! times) and run on across turns (`steps::Step`); the surface seen from
+//! times), run on across turns (`steps::Step`), and their estimates'
+//! searches shrink with it (`steps::search_share`); the surface seen from
 //! the air is `air_sea::from_air`, shared with the path integrator; camera rays are not wrapped at periodic edges; a
 //! ray looking up at the surface sees the sky through it and, marching on
 //! down, the light from below that it reflects (a rough surface's event
@@ -46,7 +48,7 @@ mod tests;
 /// Longest march through water without a hit (m).
 const MAX_MARCH_M: f32 = 500.0;
 /// Longest step of the midpoint rule for the sun's transmittance through
-/// smoothly varying water (m).
+/// gridded water (m).
 const SUN_STEP_M: f32 = 0.5;
 /// Share of turns into the forward peak drawn around the refracted sun
 /// where the sun is near the peak's cone (see `RayMarcher::turn`).
@@ -233,7 +235,7 @@ impl<'a> RayMarcher<'a> {
         if !(water.layered_optical_depth(x, up, len, tmp, out)
             || water.gradient_optical_depth(x, up, len, out))
         {
-            // Smooth fields (gradients, grids): midpoint samples at most
+            // Other smooth fields (grids): midpoint samples at most
             // `SUN_STEP_M` apart.
             let samples = ((len / SUN_STEP_M).ceil() as usize).max(4);
             out.iter_mut().for_each(|o| *o = 0.0);
