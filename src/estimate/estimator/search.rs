@@ -7,18 +7,16 @@ use super::*;
 use crate::estimate::boundary::vertical_linear_factor;
 use crate::scene::settings::POLICY_K_MIN;
 
-/// The sizes of one estimate's searches: the photons of the local search
-/// and of the expanded one, and the factor on the scene's radii (the
-/// largest of a nearest search, or the fixed one). A share s of the
-/// scene's searches takes s times their photons within s^(1/3) times
-/// their radii, the same density of photons in a smaller sphere.
+/// The two searches of one estimate: the local one and the expanded one.
+/// A share s of the scene's searches takes s times their photons within
+/// s^(1/3) times their radii (the largest of a nearest search, or the
+/// fixed one), the same density of photons in a smaller sphere.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Sizes {
-    pub(super) k: usize,
-    pub(super) k_big: usize,
+    pub(super) local: Search,
+    pub(super) big: Search,
     /// Whether the estimate has an expanded search of its own size.
     pub(super) two_sizes: bool,
-    reach: f32,
 }
 
 impl Estimator<'_> {
@@ -35,24 +33,22 @@ impl Estimator<'_> {
         } else {
             k
         };
-        Sizes {
-            k,
-            k_big,
-            two_sizes,
-            reach: share.cbrt() as f32,
-        }
-    }
-
-    /// The search for `k` photons (one of `sizes`' counts).
-    pub(super) fn search(&self, k: usize, sizes: Sizes) -> Search {
-        match self.scene.estimate.radius_m {
+        let reach = share.cbrt() as f32;
+        // The expanded search of a fixed radius holds k_big / k times the
+        // local one's volume.
+        let search = |n: usize| match s.radius_m {
             Some(r) => Search::Radius {
-                radius: r as f32 * (k as f32 / sizes.k as f32).cbrt() * sizes.reach,
+                radius: r as f32 * (n as f32 / k as f32).cbrt() * reach,
             },
             None => Search::Nearest {
-                k,
-                max_radius: Some(self.scene.estimate.max_radius_m as f32 * sizes.reach),
+                k: n,
+                max_radius: Some(s.max_radius_m as f32 * reach),
             },
+        };
+        Sizes {
+            local: search(k),
+            big: search(k_big),
+            two_sizes,
         }
     }
 
@@ -198,7 +194,7 @@ impl Estimator<'_> {
         part: &mut Vec<Neighbour>,
         extra: &mut Vec<Neighbour>,
     ) -> Result<(usize, f32, f32)> {
-        let (local, big) = (self.search(sizes.k, sizes), self.search(sizes.k_big, sizes));
+        let Sizes { local, big, .. } = sizes;
         found.clear();
         Ok(match classes {
             Classes::Union(layers) => {
@@ -245,10 +241,11 @@ impl Estimator<'_> {
         sizes: Sizes,
         by_layer: bool,
     ) -> (f32, f32) {
-        let Search::Nearest { .. } = self.search(sizes.k, sizes) else {
+        let (Search::Nearest { k, .. }, Search::Nearest { k: k_big, .. }) =
+            (sizes.local, sizes.big)
+        else {
             return (f32::INFINITY, f32::INFINITY);
         };
-        let Sizes { k, k_big, .. } = sizes;
         let edge = |set: &[Neighbour], k: usize| {
             if set.len() >= k {
                 set.iter().fold(0.0f32, |m, n| m.max(n.distance_sq))
