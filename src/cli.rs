@@ -25,11 +25,23 @@ pub fn remove_temporaries_on_signals(program: &'static str) {
     let installed = ctrlc::set_handler(move || {
         let removed = crate::output::remove_temporaries();
         eprintln!("{program}: interrupted; {removed} temporary files removed");
+        if let Some(pause) = exit_pause() {
+            std::thread::sleep(pause);
+        }
         std::process::exit(130);
     });
     if let Err(e) = installed {
         eprintln!("{program}: warning: no signal handler ({e}): an interrupted run may leave temporary files");
     }
+}
+
+/// `LITTORAL_EXIT_PAUSE_MS`: a pause between removing the temporaries and
+/// exiting on a signal, so that tests can give the threads still running
+/// time to make or publish a file (which they must not). Unset (the normal
+/// case), there is none.
+fn exit_pause() -> Option<std::time::Duration> {
+    let ms: u64 = std::env::var("LITTORAL_EXIT_PAUSE_MS").ok()?.parse().ok()?;
+    Some(std::time::Duration::from_millis(ms.min(10_000)))
 }
 
 /// The exit status of `program` after `result`: success, or one line

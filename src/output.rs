@@ -31,10 +31,24 @@ pub fn owner_tag() -> &'static str {
 }
 
 fn record_temporary(path: &Path) {
-    TEMPORARIES
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .push(path.to_path_buf());
+    temporaries().push(path.to_path_buf());
+}
+
+fn temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Make a temporary with `make` and record the path `path_of` gives, both
+/// under the list's lock: a signal handler ([`remove_temporaries`]) sees
+/// the temporary recorded or not yet made, never made and unrecorded.
+pub(crate) fn make_temporary<T>(
+    make: impl FnOnce() -> std::io::Result<T>,
+    path_of: impl FnOnce(&T) -> &Path,
+) -> std::io::Result<T> {
+    let mut list = temporaries();
+    let made = make()?;
+    list.push(path_of(&made).to_path_buf());
+    Ok(made)
 }
 
 /// A temporary file in `dir` named `PREFIX`, [`owner_tag`], `.`, random
@@ -42,28 +56,41 @@ fn record_temporary(path: &Path) {
 /// [`remove_temporaries`] finds it when a signal ends the process before
 /// it is dropped or published.
 pub fn temp_in(dir: &Path, prefix: &str, suffix: &str) -> std::io::Result<tempfile::NamedTempFile> {
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!("{prefix}{}.", owner_tag()))
-        .suffix(suffix)
-        .tempfile_in(dir)?;
-    record_temporary(tmp.path());
-    Ok(tmp)
+    make_temporary(
+        || {
+            tempfile::Builder::new()
+                .prefix(&format!("{prefix}{}.", owner_tag()))
+                .suffix(suffix)
+                .tempfile_in(dir)
+        },
+        |t| t.path(),
+    )
 }
 
 /// Remove the temporary files and directories of [`temp_in`] and
 /// [`set::Staging`] that still exist: what a SIGINT or SIGTERM handler
 /// calls before the process exits without running destructors. Waits for
 /// a publication in progress to finish. Returns how many it removed.
+///
+/// The process must exit after it: it keeps the locks of the temporaries'
+/// list and of publication ([`PUBLISHING`], which [`publish`] takes too),
+/// so that the threads still running can neither make a temporary nor
+/// rename one into place (over a scratch file already removed, say)
+/// before the exit.
 pub fn remove_temporaries() -> usize {
-    let _publishing = PUBLISHING.lock().unwrap_or_else(|e| e.into_inner());
-    let list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
-    list.iter()
+    let publishing = PUBLISHING.lock().unwrap_or_else(|e| e.into_inner());
+    let list = temporaries();
+    let removed = list
+        .iter()
         .filter(|p| match std::fs::symlink_metadata(p) {
             Ok(m) if m.is_dir() => std::fs::remove_dir_all(p).is_ok(),
             Ok(_) => std::fs::remove_file(p).is_ok(),
             Err(_) => false,
         })
-        .count()
+        .count();
+    std::mem::forget(list);
+    std::mem::forget(publishing);
+    removed
 }
 
 /// The directory a file at `path` lives in (`.` for a bare name).
@@ -134,6 +161,14 @@ impl LateFile {
 /// readable like a normal output file, and rename it to `path`.
 pub fn publish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
     finalize(&tmp, path)?;
+    rename_into_place(tmp, path)
+}
+
+/// Rename a finalized temporary file to `path`, unless a signal handler
+/// has begun removing the temporaries ([`remove_temporaries`]), in which
+/// case this waits for the process's exit.
+pub fn rename_into_place(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
+    let _publishing = PUBLISHING.lock().unwrap_or_else(|e| e.into_inner());
     tmp.persist(path)
         .map_err(|e| Error::io(path, "rename into place", e.error))?;
     Ok(())

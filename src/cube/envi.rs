@@ -487,13 +487,11 @@ impl EnviWriter {
         for (temp, path) in [(&bsq, &bsq_path), (&hdr, &hdr_path)] {
             crate::output::finalize(temp, path)?;
         }
-        bsq.persist(&bsq_path)
-            .map_err(|e| Error::io(&bsq_path, "rename into place", e.error))?;
+        crate::output::rename_into_place(bsq, &bsq_path)?;
         let mut sidecar = bsq_path.clone().into_os_string();
         sidecar.push(".aux.xml");
         crate::output::write_atomic(Path::new(&sidecar), spec.gdal_sidecar().as_bytes())?;
-        hdr.persist(&hdr_path)
-            .map_err(|e| Error::io(&hdr_path, "rename into place", e.error))?;
+        crate::output::rename_into_place(hdr, &hdr_path)?;
         Ok(CubeFiles {
             hdr: hdr_path,
             bsq: bsq_path,

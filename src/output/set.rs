@@ -313,11 +313,15 @@ pub struct Staging {
 impl Staging {
     /// A new, empty staging directory in `out_dir` (which must exist).
     pub fn new(out_dir: &Path) -> Result<Staging> {
-        let dir = tempfile::Builder::new()
-            .prefix(&format!(".littoral-stage.{}.", super::owner_tag()))
-            .tempdir_in(out_dir)
-            .map_err(|e| Error::io(out_dir, "create staging directory", e))?;
-        super::record_temporary(dir.path());
+        let dir = super::make_temporary(
+            || {
+                tempfile::Builder::new()
+                    .prefix(&format!(".littoral-stage.{}.", super::owner_tag()))
+                    .tempdir_in(out_dir)
+            },
+            |d| d.path(),
+        )
+        .map_err(|e| Error::io(out_dir, "create staging directory", e))?;
         Ok(Staging {
             dir: Some(dir),
             out_dir: out_dir.to_path_buf(),

@@ -268,9 +268,7 @@ impl ShardWriter {
         out.write_all(SHARD_END).map_err(io)?;
         out.flush().map_err(io)?;
         drop(out);
-        crate::output::finalize(&temp, &path)?;
-        temp.persist(&path)
-            .map_err(|e| Error::io(&path, "rename into place", e.error))?;
+        crate::output::publish(temp, &path)?;
         Ok(header)
     }
 }

@@ -305,6 +305,9 @@ fn full_disk_leaves_nothing_behind() {
 /// SIGTERM or SIGINT mid-run removes the run's temporary files: the
 /// partial map of `emit`, and the scratch map and partial cubes of
 /// `render`; the exit status is 130 and nothing is left under a final name.
+/// The handler pauses before it exits (`LITTORAL_EXIT_PAUSE_MS`), so that
+/// the run's other threads, still going, would leave a temporary they make
+/// or publish after the removal.
 #[test]
 fn signals_leave_no_temporary_files() {
     use std::process::{Command, Stdio};
@@ -343,6 +346,7 @@ fn signals_leave_no_temporary_files() {
         std::fs::create_dir_all(&out).unwrap();
         let mut child = Command::new(env!("CARGO_BIN_EXE_littoral"))
             .args(&args)
+            .env("LITTORAL_EXIT_PAUSE_MS", "300")
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
