@@ -316,3 +316,42 @@ fn unwritten_pixels_and_misfit_tiles_are_errors() {
     assert!(e.contains("part.exr") && e.contains("never written"), "{e}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// A ZIP block that deflate cannot shrink (float noise down to the
+/// exponent) is stored raw, as OpenEXR requires: readers take a block of
+/// the raw size for an uncompressed one. A smooth one is deflated and
+/// reads back through miniz's inflate and the inverse of the byte split
+/// and differences.
+#[test]
+fn zip_blocks_are_raw_where_deflate_does_not_shrink_them() {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let noise: Vec<f32> = (0..16 * 16 * 8)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            f32::from_bits((state >> 32) as u32)
+        })
+        .collect();
+    let raw: Vec<u8> = noise.iter().flat_map(|v| v.to_le_bytes()).collect();
+    assert_eq!(zip_block(&noise), raw);
+
+    let smooth: Vec<f32> = (0..16 * 16 * 8).map(|i| 0.01 + 1e-6 * i as f32).collect();
+    let block = zip_block(&smooth);
+    let raw: Vec<u8> = smooth.iter().flat_map(|v| v.to_le_bytes()).collect();
+    assert!(
+        block.len() < raw.len() / 2,
+        "{} of {} bytes",
+        block.len(),
+        raw.len()
+    );
+    let mut split = miniz_oxide::inflate::decompress_to_vec_zlib(&block).unwrap();
+    for i in 1..split.len() {
+        split[i] = split[i].wrapping_add(split[i - 1]).wrapping_sub(128);
+    }
+    let half = raw.len().div_ceil(2);
+    let back: Vec<u8> = (0..raw.len())
+        .map(|i| split[(i % 2) * half + i / 2])
+        .collect();
+    assert_eq!(back, raw);
+}
