@@ -19,11 +19,7 @@ use std::path::Path;
 #[test]
 fn nearest_searches_read_uniform_density_without_the_edge_photon() {
     let (map, truth) = uniform_box_map();
-    let text = BOX_SCENE.replace(
-        "radius_m = 0.25",
-        "k = 16\nk_expanded = 16\nmax_radius_m = 1.0",
-    );
-    let scene = Scene::parse(&text, Path::new("box.toml"), &Overrides::default()).unwrap();
+    let scene = box_scene_with_k(16);
     let est = Estimator::new(&scene, &map).unwrap();
     let mut scratch = Scratch::new(1);
     let mut out = [0.0f64; CHANNELS];
@@ -36,6 +32,16 @@ fn nearest_searches_read_uniform_density_without_the_edge_photon() {
         (mean - 1.0).abs() < 4.0 * se,
         "{mean} of the truth, se {se}"
     );
+}
+
+/// The uniform box's scene with k nearest photons in both searches (at
+/// most 1 m away) instead of its fixed radius.
+fn box_scene_with_k(k: usize) -> Scene {
+    let text = BOX_SCENE.replace(
+        "radius_m = 0.25",
+        &format!("k = {k}\nk_expanded = {k}\nmax_radius_m = 1.0"),
+    );
+    Scene::parse(&text, Path::new("box.toml"), &Overrides::default()).unwrap()
 }
 
 /// The mean of `ratio` over 2023 interior sites of the uniform box 0.1 m
@@ -71,11 +77,7 @@ fn over_interior_sites(mut ratio: impl FnMut(Vec3) -> f64) -> (f64, f64) {
 #[test]
 fn a_share_of_the_searches_reads_uniform_density() {
     let (map, truth) = uniform_box_map();
-    let text = BOX_SCENE.replace(
-        "radius_m = 0.25",
-        "k = 160\nk_expanded = 160\nmax_radius_m = 1.0",
-    );
-    let scene = Scene::parse(&text, Path::new("box.toml"), &Overrides::default()).unwrap();
+    let scene = box_scene_with_k(160);
     let est = Estimator::new(&scene, &map).unwrap();
     let mut scratch = Scratch::new(1);
     let mut out = [0.0f64; CHANNELS];
